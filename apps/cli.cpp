@@ -1,0 +1,103 @@
+#include "cli.h"
+
+#include <charconv>
+#include <cmath>
+
+#include "isowave/core/error.h"
+
+namespace isowave::cli {
+namespace {
+
+[[noreturn]] void usage_error(const std::string& message) { throw Error(ErrorKind::InvalidArgument, message); }
+
+const OptionSpec* find_option(const CommandSpec& spec, const std::string& name) {
+  for (const OptionSpec& option : spec.options)
+    if (option.name == name) return &option;
+  return nullptr;
+}
+
+}  // namespace
+
+Arguments::Arguments(const CommandSpec& spec, const std::vector<std::string>& args) {
+  for (std::size_t i = 0; i < args.size(); ++i) {
+    const std::string& arg = args[i];
+    if (arg == "-h" || arg == "--help") {
+      help_ = true;
+      return;
+    }
+    if (arg.size() > 1 && arg[0] == '-' && !(arg.size() > 1 && (std::isdigit(static_cast<unsigned char>(arg[1])) || arg[1] == '.'))) {
+      std::string name = arg.substr(arg[1] == '-' ? 2 : 1);
+      std::string value;
+      bool inline_value = false;
+      if (const auto eq = name.find('='); eq != std::string::npos) {
+        value = name.substr(eq + 1);
+        name = name.substr(0, eq);
+        inline_value = true;
+      }
+      if (name == "o") name = "output";
+      const OptionSpec* option = find_option(spec, name);
+      if (!option) usage_error("unknown option '" + arg + "' (see 'isowave " + spec.name + " --help')");
+      if (option->takes_value && !inline_value) {
+        if (i + 1 >= args.size()) usage_error("option --" + name + " needs a value");
+        value = args[++i];
+      } else if (!option->takes_value && inline_value) {
+        usage_error("option --" + name + " takes no value");
+      }
+      values_[name] = value;
+    } else {
+      positional_.push_back(arg);
+    }
+  }
+  const int count = static_cast<int>(positional_.size());
+  if (count < spec.min_positional || (spec.max_positional >= 0 && count > spec.max_positional))
+    usage_error("wrong number of arguments (usage: isowave " + spec.name + " " + spec.synopsis + ")");
+}
+
+std::string Arguments::get(const std::string& name, const std::string& fallback) const {
+  const auto it = values_.find(name);
+  return it == values_.end() ? fallback : it->second;
+}
+
+std::string Arguments::require(const std::string& name) const {
+  const auto it = values_.find(name);
+  if (it == values_.end()) usage_error("missing required option --" + (name == "output" ? std::string("output (-o)") : name));
+  return it->second;
+}
+
+int Arguments::get_int(const std::string& name, int fallback, int min, int max) const {
+  if (!has(name)) return fallback;
+  const std::string text = get(name);
+  int value = 0;
+  const auto result = std::from_chars(text.data(), text.data() + text.size(), value);
+  if (result.ec != std::errc() || result.ptr != text.data() + text.size())
+    usage_error("--" + name + " expects an integer, got '" + text + "'");
+  if (value < min || value > max)
+    usage_error("--" + name + " must be in " + std::to_string(min) + ".." + std::to_string(max) + ", got " + text);
+  return value;
+}
+
+double Arguments::get_double(const std::string& name, double fallback) const {
+  if (!has(name)) return fallback;
+  const std::string text = get(name);
+  double value = 0;
+  const auto result = std::from_chars(text.data(), text.data() + text.size(), value);
+  if (result.ec != std::errc() || result.ptr != text.data() + text.size() || !std::isfinite(value))
+    usage_error("--" + name + " expects a number, got '" + text + "'");
+  return value;
+}
+
+std::string usage(const CommandSpec& spec) {
+  std::string text = "usage: isowave " + spec.name + " " + spec.synopsis + "\n\n" + spec.description + "\n";
+  if (!spec.options.empty()) text += "\noptions:\n";
+  for (const OptionSpec& option : spec.options) {
+    std::string left = "  --" + option.name + (option.takes_value ? " " + option.value_name : "");
+    if (option.name == "output") left = "  -o, --output " + option.value_name;
+    if (left.size() < 30) left.resize(30, ' ');
+    else left += "  ";
+    text += left + option.help + "\n";
+  }
+  text += "  -h, --help                  show this help\n";
+  return text;
+}
+
+}  // namespace isowave::cli

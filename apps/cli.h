@@ -1,0 +1,49 @@
+#pragma once
+// Command-line parsing shared by the isowave subcommands: options of the form
+// --name VALUE or --name=VALUE, flags, and positional arguments. Usage errors
+// are isowave::Error(InvalidArgument); main() prints them on one line.
+#include <map>
+#include <string>
+#include <vector>
+
+namespace isowave::cli {
+
+struct OptionSpec {
+  std::string name;        // without the leading dashes, e.g. "levels"
+  bool takes_value;        // false for flags
+  std::string help;        // one line
+  std::string value_name;  // e.g. "L"
+};
+
+struct CommandSpec {
+  std::string name;
+  std::string synopsis;     // e.g. "MESH --levels L [--limit] -o OUT"
+  std::string description;  // a few lines
+  std::vector<OptionSpec> options;
+  int min_positional = 0;
+  int max_positional = 0;  // -1 for any number
+};
+
+class Arguments {
+ public:
+  // Throws Error(InvalidArgument) on an unknown option, a missing value or a
+  // wrong number of positional arguments. Sets help_requested() on -h/--help.
+  Arguments(const CommandSpec& spec, const std::vector<std::string>& args);
+
+  bool help_requested() const { return help_; }
+  bool has(const std::string& name) const { return values_.count(name) != 0; }
+  std::string get(const std::string& name, const std::string& fallback = {}) const;
+  std::string require(const std::string& name) const;
+  int get_int(const std::string& name, int fallback, int min, int max) const;
+  double get_double(const std::string& name, double fallback) const;
+  const std::vector<std::string>& positional() const { return positional_; }
+
+ private:
+  std::map<std::string, std::string> values_;
+  std::vector<std::string> positional_;
+  bool help_ = false;
+};
+
+std::string usage(const CommandSpec& spec);
+
+}  // namespace isowave::cli

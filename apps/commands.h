@@ -1,0 +1,13 @@
+#pragma once
+// One function per subcommand; each returns the process exit code and may
+// throw isowave::Error, which main() reports on one line.
+#include <string>
+#include <vector>
+
+namespace isowave::commands {
+
+using Args = std::vector<std::string>;
+
+int subdivide(const Args& args);
+
+}  // namespace isowave::commands

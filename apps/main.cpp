@@ -1,0 +1,58 @@
+// isowave: compress isosurfaces with bicubic subdivision-surface wavelets.
+#include <cstdio>
+#include <exception>
+#include <new>
+#include <string>
+#include <vector>
+
+#include "commands.h"
+#include "isowave/core/error.h"
+
+namespace {
+
+struct Subcommand {
+  const char* name;
+  int (*run)(const isowave::commands::Args&);
+  const char* summary;
+};
+
+const Subcommand kSubcommands[] = {
+    {"subdivide", isowave::commands::subdivide, "apply the wavelet subdivision operator S to a control mesh"},
+};
+
+void print_overview() {
+  std::printf("usage: isowave COMMAND [ARGS...]\n\ncommands:\n");
+  for (const Subcommand& command : kSubcommands) std::printf("  %-12s %s\n", command.name, command.summary);
+  std::printf("\n'isowave COMMAND --help' describes a command.\n");
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 2) {
+    print_overview();
+    return 2;
+  }
+  const std::string name = argv[1];
+  if (name == "-h" || name == "--help" || name == "help") {
+    print_overview();
+    return 0;
+  }
+  for (const Subcommand& command : kSubcommands) {
+    if (name != command.name) continue;
+    try {
+      return command.run(isowave::commands::Args(argv + 2, argv + argc));
+    } catch (const isowave::Error& error) {
+      std::fprintf(stderr, "isowave %s: %s\n", command.name, error.what());
+      return error.kind() == isowave::ErrorKind::InvalidArgument ? 2 : 1;
+    } catch (const std::bad_alloc&) {
+      std::fprintf(stderr, "isowave %s: out of memory\n", command.name);
+      return 1;
+    } catch (const std::exception& error) {
+      std::fprintf(stderr, "isowave %s: internal error: %s\n", command.name, error.what());
+      return 1;
+    }
+  }
+  std::fprintf(stderr, "isowave: unknown command '%s' (see 'isowave --help')\n", name.c_str());
+  return 2;
+}

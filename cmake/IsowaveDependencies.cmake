@@ -1,0 +1,23 @@
+# Every dependency is a Debian 12 package installed by scripts/setup.
+find_package(Threads REQUIRED)
+find_package(TBB REQUIRED)
+find_package(Eigen3 3.3 REQUIRED NO_MODULE)
+
+# Debian's OpenSubdivConfig.cmake names a static library that is not shipped,
+# so locate the shared CPU library and the headers directly.
+find_path(ISOWAVE_OPENSUBDIV_INCLUDE_DIR opensubdiv/far/topologyRefiner.h REQUIRED)
+find_library(ISOWAVE_OPENSUBDIV_LIBRARY NAMES osdCPU REQUIRED)
+if(NOT TARGET isowave_opensubdiv)
+  add_library(isowave_opensubdiv INTERFACE IMPORTED)
+  target_include_directories(isowave_opensubdiv SYSTEM INTERFACE "${ISOWAVE_OPENSUBDIV_INCLUDE_DIR}")
+  target_link_libraries(isowave_opensubdiv INTERFACE "${ISOWAVE_OPENSUBDIV_LIBRARY}")
+endif()
+
+find_package(OpenMesh REQUIRED)
+
+if(ISOWAVE_BUILD_TESTS)
+  find_package(GTest REQUIRED)
+endif()
+if(ISOWAVE_BUILD_BENCHMARKS)
+  find_package(benchmark REQUIRED)
+endif()

@@ -1,0 +1,21 @@
+# Compile settings shared by every isowave target, attached as an interface
+# library so that nothing is set globally.
+add_library(isowave_build_settings INTERFACE)
+target_compile_features(isowave_build_settings INTERFACE cxx_std_17)
+target_compile_options(isowave_build_settings INTERFACE
+  $<$<CXX_COMPILER_ID:GNU,Clang>:-Wall -Wextra -Wpedantic -Wshadow -Wno-unused-parameter>)
+if(ISOWAVE_SANITIZE)
+  target_compile_options(isowave_build_settings INTERFACE -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined)
+  target_link_options(isowave_build_settings INTERFACE -fsanitize=address,undefined)
+endif()
+
+# isowave_add_stage(NAME SOURCES... LINKS ...): one library per pipeline stage
+# with its public headers in NAME/include/isowave/NAME/.
+function(isowave_add_stage name)
+  cmake_parse_arguments(ARG "" "" "SOURCES;LINKS;PRIVATE_LINKS" ${ARGN})
+  add_library(isowave_${name} STATIC ${ARG_SOURCES})
+  add_library(isowave::${name} ALIAS isowave_${name})
+  target_include_directories(isowave_${name} PUBLIC "${CMAKE_CURRENT_SOURCE_DIR}/include")
+  target_link_libraries(isowave_${name} PUBLIC ${ARG_LINKS} PRIVATE isowave_build_settings ${ARG_PRIVATE_LINKS})
+  target_compile_features(isowave_${name} PUBLIC cxx_std_17)
+endfunction()

@@ -1,0 +1,34 @@
+#pragma once
+// Writes a file so that readers never see it half-written: the data goes to a
+// temporary file in the same directory, which replaces the target by rename()
+// only on commit(). Destroying an uncommitted writer removes the temporary.
+#include <cstdio>
+#include <string>
+
+namespace isowave {
+
+class AtomicFileWriter {
+ public:
+  // Throws Error(Io) if the temporary file cannot be created. If `overwrite`
+  // is false, commit() refuses to replace an existing file.
+  explicit AtomicFileWriter(std::string path, bool overwrite = true);
+  ~AtomicFileWriter();
+  AtomicFileWriter(const AtomicFileWriter&) = delete;
+  AtomicFileWriter& operator=(const AtomicFileWriter&) = delete;
+
+  // Throws Error(Io) on a short write (disk full, ...).
+  void write(const void* data, std::size_t bytes);
+  void write(const std::string& text) { write(text.data(), text.size()); }
+  // Flushes, closes and renames onto the target; throws Error(Io) on failure.
+  void commit();
+
+  const std::string& path() const { return path_; }
+
+ private:
+  std::string path_;
+  std::string temporary_path_;
+  std::FILE* file_ = nullptr;
+  bool overwrite_ = true;
+};
+
+}  // namespace isowave

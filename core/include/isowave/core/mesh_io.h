@@ -1,0 +1,39 @@
+#pragma once
+// Polygon mesh files: PLY (ASCII, binary little- and big-endian), OBJ and OFF,
+// chosen by extension (case-insensitive).
+//
+// These readers are our own rather than OpenMesh's IO layer because OpenMesh's
+// importer silently drops faces it cannot add to a halfedge mesh (non-manifold
+// or mis-oriented ones) and reports problems only by printing; isowave must
+// load such files unchanged and say exactly what is wrong with them. Every
+// byte is treated as hostile: counts are checked against the file size before
+// anything is allocated.
+#include <string>
+
+#include "isowave/core/mesh.h"
+
+namespace isowave {
+
+enum class MeshFormat { Ply, Obj, Off };
+
+// Throws Error(InvalidArgument) for an extension other than .ply, .obj, .off.
+MeshFormat mesh_format_from_path(const std::string& path);
+
+// Reads a mesh; the PLY vertex property `sharp` (any numeric type, non-zero =
+// sharp) fills PolygonMesh::sharp. Throws Error(Io) if the file cannot be read
+// and Error(Format), naming the file and the problem, if it is malformed:
+// truncated, counts that do not match, indices out of range, non-finite
+// coordinates, faces with fewer than 3 vertices. Topology is not checked here
+// (see require_manifold()).
+PolygonMesh read_mesh(const std::string& path);
+
+struct MeshWriteOptions {
+  bool ascii = false;             // PLY only; OBJ and OFF are always text
+  bool double_precision = false;  // coordinates as double instead of float
+};
+
+// Writes atomically (temporary file, then rename). PLY gets the uchar vertex
+// property `sharp` when any vertex is sharp; OBJ and OFF cannot carry it.
+void write_mesh(const std::string& path, const PolygonMesh& mesh, const MeshWriteOptions& options = {});
+
+}  // namespace isowave

@@ -1,0 +1,52 @@
+#include "isowave/core/atomic_file.h"
+
+#include <cerrno>
+#include <cstdlib>
+#include <cstring>
+#include <unistd.h>
+
+#include "isowave/core/error.h"
+
+namespace isowave {
+
+AtomicFileWriter::AtomicFileWriter(std::string path, bool overwrite) : path_(std::move(path)), overwrite_(overwrite) {
+  if (path_.empty()) throw Error(ErrorKind::InvalidArgument, "empty output path");
+  std::string pattern = path_ + ".tmp-XXXXXX";
+  const int fd = mkstemp(pattern.data());
+  if (fd < 0) throw Error(ErrorKind::Io, path_ + ": cannot create a temporary file: " + std::strerror(errno));
+  temporary_path_ = pattern;
+  file_ = fdopen(fd, "wb");
+  if (!file_) {
+    ::close(fd);
+    std::remove(temporary_path_.c_str());
+    throw Error(ErrorKind::Io, path_ + ": cannot open a temporary file: " + std::strerror(errno));
+  }
+  static thread_local char buffer[1 << 16];
+  std::setvbuf(file_, buffer, _IOFBF, sizeof buffer);
+}
+
+AtomicFileWriter::~AtomicFileWriter() {
+  if (file_) std::fclose(file_);
+  if (!temporary_path_.empty()) std::remove(temporary_path_.c_str());
+}
+
+void AtomicFileWriter::write(const void* data, std::size_t bytes) {
+  if (!file_) throw Error(ErrorKind::Io, path_ + ": write after commit");
+  if (bytes && std::fwrite(data, 1, bytes, file_) != bytes)
+    throw Error(ErrorKind::Io, path_ + ": write failed: " + std::strerror(errno));
+}
+
+void AtomicFileWriter::commit() {
+  if (!file_) throw Error(ErrorKind::Io, path_ + ": committed twice");
+  const bool flushed = std::fflush(file_) == 0 && fsync(fileno(file_)) == 0;
+  const bool closed = std::fclose(file_) == 0;
+  file_ = nullptr;
+  if (!flushed || !closed) throw Error(ErrorKind::Io, path_ + ": write failed: " + std::strerror(errno));
+  if (!overwrite_ && access(path_.c_str(), F_OK) == 0)
+    throw Error(ErrorKind::Io, path_ + ": already exists (not overwritten)");
+  if (std::rename(temporary_path_.c_str(), path_.c_str()) != 0)
+    throw Error(ErrorKind::Io, path_ + ": cannot rename the temporary file into place: " + std::strerror(errno));
+  temporary_path_.clear();
+}
+
+}  // namespace isowave

@@ -1,0 +1,64 @@
+#include "isowave/core/mesh.h"
+
+#include <algorithm>
+
+#include "isowave/core/error.h"
+
+namespace isowave {
+
+std::size_t PolygonMesh::sharp_count() const {
+  return static_cast<std::size_t>(std::count_if(sharp.begin(), sharp.end(), [](std::uint8_t s) { return s != 0; }));
+}
+
+void PolygonMesh::add_face(const std::uint32_t* vertices, std::size_t count) {
+  face_vertices.insert(face_vertices.end(), vertices, vertices + count);
+  face_offsets.push_back(static_cast<std::uint32_t>(face_vertices.size()));
+}
+
+void PolygonMesh::clear() {
+  positions.clear();
+  face_offsets.assign(1, 0);
+  face_vertices.clear();
+  sharp.clear();
+}
+
+void validate_indices(const PolygonMesh& mesh, const std::string& source) {
+  const auto fail = [&](const std::string& what) { throw Error(ErrorKind::Format, source + ": " + what); };
+  if (mesh.face_offsets.empty() || mesh.face_offsets.front() != 0 ||
+      mesh.face_offsets.back() != mesh.face_vertices.size())
+    fail("inconsistent face offsets");
+  if (!mesh.sharp.empty() && mesh.sharp.size() != mesh.vertex_count())
+    fail("sharp flags do not match the vertex count");
+  for (std::size_t v = 0; v < mesh.vertex_count(); ++v)
+    if (!is_finite(mesh.positions[v])) fail("vertex " + std::to_string(v) + " has a non-finite coordinate");
+  for (std::size_t f = 0; f < mesh.face_count(); ++f) {
+    if (mesh.face_offsets[f + 1] < mesh.face_offsets[f]) fail("inconsistent face offsets");
+    if (mesh.face_size(f) < 3)
+      fail("face " + std::to_string(f) + " has " + std::to_string(mesh.face_size(f)) + " vertices (at least 3 needed)");
+  }
+  for (std::size_t i = 0; i < mesh.face_vertices.size(); ++i)
+    if (mesh.face_vertices[i] >= mesh.vertex_count())
+      fail("face vertex index " + std::to_string(mesh.face_vertices[i]) + " is out of range (" +
+           std::to_string(mesh.vertex_count()) + " vertices)");
+}
+
+std::size_t remove_unreferenced_vertices(PolygonMesh& mesh) {
+  constexpr std::uint32_t kUnused = ~std::uint32_t{0};
+  std::vector<std::uint32_t> new_index(mesh.vertex_count(), kUnused);
+  for (std::uint32_t v : mesh.face_vertices) new_index[v] = 0;
+  std::uint32_t next = 0;
+  for (std::size_t v = 0; v < new_index.size(); ++v) {
+    if (new_index[v] == kUnused) continue;
+    new_index[v] = next;
+    mesh.positions[next] = mesh.positions[v];
+    if (!mesh.sharp.empty()) mesh.sharp[next] = mesh.sharp[v];
+    ++next;
+  }
+  const std::size_t removed = mesh.vertex_count() - next;
+  mesh.positions.resize(next);
+  if (!mesh.sharp.empty()) mesh.sharp.resize(next);
+  for (std::uint32_t& v : mesh.face_vertices) v = new_index[v];
+  return removed;
+}
+
+}  // namespace isowave

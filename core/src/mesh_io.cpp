@@ -1,0 +1,564 @@
+#include "isowave/core/mesh_io.h"
+
+#include <algorithm>
+#include <cctype>
+#include <charconv>
+#include <cerrno>
+#include <cstring>
+#include <fstream>
+#include <limits>
+
+#include "isowave/core/atomic_file.h"
+#include "isowave/core/error.h"
+
+namespace isowave {
+namespace {
+
+[[noreturn]] void fail(const std::string& path, const std::string& what) {
+  throw Error(ErrorKind::Format, path + ": " + what);
+}
+
+std::string lower_extension(const std::string& path) {
+  const auto dot = path.find_last_of('.');
+  const auto slash = path.find_last_of('/');
+  if (dot == std::string::npos || (slash != std::string::npos && dot < slash)) return {};
+  std::string ext = path.substr(dot + 1);
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  return ext;
+}
+
+std::string read_whole_file(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw Error(ErrorKind::Io, path + ": cannot open: " + std::strerror(errno));
+  in.seekg(0, std::ios::end);
+  const std::streamoff size = in.tellg();
+  if (size < 0) throw Error(ErrorKind::Io, path + ": cannot read (not a regular file?)");
+  in.seekg(0);
+  std::string data(static_cast<std::size_t>(size), '\0');
+  if (size > 0 && !in.read(data.data(), size)) throw Error(ErrorKind::Io, path + ": read failed");
+  return data;
+}
+
+// Cursor over text: whitespace-separated tokens, line-aware.
+class TextCursor {
+ public:
+  TextCursor(const char* begin, const char* end) : p_(begin), end_(end) {}
+  bool at_end() const { return p_ >= end_; }
+  const char* position() const { return p_; }
+  void skip_spaces() {  // within a line
+    while (p_ < end_ && (*p_ == ' ' || *p_ == '\t' || *p_ == '\r')) ++p_;
+  }
+  void skip_whitespace() {
+    while (p_ < end_ && std::isspace(static_cast<unsigned char>(*p_))) ++p_;
+  }
+  bool at_line_end() {
+    skip_spaces();
+    return p_ >= end_ || *p_ == '\n';
+  }
+  void next_line() {
+    while (p_ < end_ && *p_ != '\n') ++p_;
+    if (p_ < end_) ++p_;
+  }
+  std::string_view token() {
+    skip_whitespace();
+    const char* start = p_;
+    while (p_ < end_ && !std::isspace(static_cast<unsigned char>(*p_))) ++p_;
+    return {start, static_cast<std::size_t>(p_ - start)};
+  }
+  std::string_view token_in_line() {
+    skip_spaces();
+    const char* start = p_;
+    while (p_ < end_ && !std::isspace(static_cast<unsigned char>(*p_))) ++p_;
+    return {start, static_cast<std::size_t>(p_ - start)};
+  }
+
+ private:
+  const char* p_;
+  const char* end_;
+};
+
+bool parse_double(std::string_view s, double& value) {
+  if (s.empty()) return false;
+  const char* first = s.data();
+  if (*first == '+') ++first;
+  const auto result = std::from_chars(first, s.data() + s.size(), value);
+  return result.ec == std::errc() && result.ptr == s.data() + s.size();
+}
+
+template <class Int>
+bool parse_integer(std::string_view s, Int& value) {
+  if (s.empty()) return false;
+  const char* first = s.data();
+  if (*first == '+') ++first;
+  const auto result = std::from_chars(first, s.data() + s.size(), value);
+  return result.ec == std::errc() && result.ptr == s.data() + s.size();
+}
+
+// ---------------------------------------------------------------- PLY
+
+enum class PlyType { Int8, UInt8, Int16, UInt16, Int32, UInt32, Float32, Float64 };
+
+bool ply_type_from_name(std::string_view name, PlyType& type) {
+  static const std::pair<const char*, PlyType> kNames[] = {
+      {"char", PlyType::Int8},     {"int8", PlyType::Int8},       {"uchar", PlyType::UInt8},
+      {"uint8", PlyType::UInt8},   {"short", PlyType::Int16},     {"int16", PlyType::Int16},
+      {"ushort", PlyType::UInt16}, {"uint16", PlyType::UInt16},   {"int", PlyType::Int32},
+      {"int32", PlyType::Int32},   {"uint", PlyType::UInt32},     {"uint32", PlyType::UInt32},
+      {"float", PlyType::Float32}, {"float32", PlyType::Float32}, {"double", PlyType::Float64},
+      {"float64", PlyType::Float64}};
+  for (const auto& entry : kNames)
+    if (name == entry.first) {
+      type = entry.second;
+      return true;
+    }
+  return false;
+}
+
+std::size_t ply_type_size(PlyType type) {
+  switch (type) {
+    case PlyType::Int8: case PlyType::UInt8: return 1;
+    case PlyType::Int16: case PlyType::UInt16: return 2;
+    case PlyType::Int32: case PlyType::UInt32: case PlyType::Float32: return 4;
+    case PlyType::Float64: return 8;
+  }
+  return 1;
+}
+
+struct PlyProperty {
+  std::string name;
+  PlyType type = PlyType::Float32;
+  bool is_list = false;
+  PlyType count_type = PlyType::UInt8;
+};
+
+struct PlyElement {
+  std::string name;
+  std::uint64_t count = 0;
+  std::vector<PlyProperty> properties;
+};
+
+enum class PlyEncoding { Ascii, BinaryLittle, BinaryBig };
+
+// Reads scalar values from the body, binary or ASCII.
+class PlyBody {
+ public:
+  PlyBody(const std::string& path, const char* begin, const char* end, PlyEncoding encoding)
+      : path_(path), p_(begin), end_(end), text_(begin, end), encoding_(encoding) {}
+
+  std::size_t remaining() const { return static_cast<std::size_t>(end_ - (encoding_ == PlyEncoding::Ascii ? text_.position() : p_)); }
+
+  double read(PlyType type, const char* what) {
+    if (encoding_ == PlyEncoding::Ascii) {
+      const std::string_view token = text_.token();
+      double value = 0;
+      if (token.empty()) fail(path_, std::string("unexpected end of file while reading ") + what);
+      if (!parse_double(token, value)) fail(path_, std::string("malformed number '") + std::string(token) + "' in " + what);
+      return value;
+    }
+    const std::size_t size = ply_type_size(type);
+    if (static_cast<std::size_t>(end_ - p_) < size) fail(path_, std::string("file is truncated while reading ") + what);
+    unsigned char bytes[8];
+    std::memcpy(bytes, p_, size);
+    p_ += size;
+    if (encoding_ == PlyEncoding::BinaryBig) std::reverse(bytes, bytes + size);
+    switch (type) {
+      case PlyType::Int8: { std::int8_t v; std::memcpy(&v, bytes, 1); return v; }
+      case PlyType::UInt8: return bytes[0];
+      case PlyType::Int16: { std::int16_t v; std::memcpy(&v, bytes, 2); return v; }
+      case PlyType::UInt16: { std::uint16_t v; std::memcpy(&v, bytes, 2); return v; }
+      case PlyType::Int32: { std::int32_t v; std::memcpy(&v, bytes, 4); return v; }
+      case PlyType::UInt32: { std::uint32_t v; std::memcpy(&v, bytes, 4); return v; }
+      case PlyType::Float32: { float v; std::memcpy(&v, bytes, 4); return v; }
+      case PlyType::Float64: { double v; std::memcpy(&v, bytes, 8); return v; }
+    }
+    return 0;
+  }
+
+  bool is_ascii() const { return encoding_ == PlyEncoding::Ascii; }
+
+ private:
+  const std::string& path_;
+  const char* p_;
+  const char* end_;
+  TextCursor text_;
+  PlyEncoding encoding_;
+};
+
+std::size_t minimum_element_bytes(const PlyElement& element, bool ascii) {
+  std::size_t bytes = 0;
+  for (const PlyProperty& property : element.properties)
+    bytes += ascii ? 2 : (property.is_list ? ply_type_size(property.count_type) : ply_type_size(property.type));
+  return std::max<std::size_t>(bytes, 1);
+}
+
+PolygonMesh read_ply(const std::string& path, const std::string& data) {
+  // Header: lines up to "end_header".
+  const std::size_t header_end = data.find("end_header");
+  if (data.compare(0, 3, "ply") != 0) fail(path, "not a PLY file (missing 'ply' magic)");
+  if (header_end == std::string::npos) fail(path, "PLY header has no end_header line");
+  std::size_t body_start = data.find('\n', header_end);
+  body_start = body_start == std::string::npos ? data.size() : body_start + 1;
+
+  TextCursor header(data.data(), data.data() + header_end);
+  header.next_line();
+  PlyEncoding encoding = PlyEncoding::Ascii;
+  bool have_format = false;
+  std::vector<PlyElement> elements;
+  while (!header.at_end()) {
+    const std::string_view keyword = header.token_in_line();
+    if (keyword == "format") {
+      const std::string_view name = header.token_in_line();
+      if (name == "ascii") encoding = PlyEncoding::Ascii;
+      else if (name == "binary_little_endian") encoding = PlyEncoding::BinaryLittle;
+      else if (name == "binary_big_endian") encoding = PlyEncoding::BinaryBig;
+      else fail(path, "unknown PLY format '" + std::string(name) + "'");
+      have_format = true;
+    } else if (keyword == "element") {
+      PlyElement element;
+      element.name = std::string(header.token_in_line());
+      if (!parse_integer(header.token_in_line(), element.count)) fail(path, "malformed element count for '" + element.name + "'");
+      elements.push_back(std::move(element));
+    } else if (keyword == "property") {
+      if (elements.empty()) fail(path, "PLY property before any element");
+      PlyProperty property;
+      std::string_view type_name = header.token_in_line();
+      if (type_name == "list") {
+        property.is_list = true;
+        if (!ply_type_from_name(header.token_in_line(), property.count_type)) fail(path, "unknown PLY list count type");
+        type_name = header.token_in_line();
+      }
+      if (!ply_type_from_name(type_name, property.type)) fail(path, "unknown PLY property type '" + std::string(type_name) + "'");
+      property.name = std::string(header.token_in_line());
+      elements.back().properties.push_back(property);
+    } else if (!keyword.empty() && keyword != "comment" && keyword != "obj_info") {
+      fail(path, "unknown PLY header line '" + std::string(keyword) + "'");
+    }
+    header.next_line();
+  }
+  if (!have_format) fail(path, "PLY header has no format line");
+
+  PlyBody body(path, data.data() + body_start, data.data() + data.size(), encoding);
+  PolygonMesh mesh;
+  bool have_vertices = false;
+  bool have_faces = false;
+  for (const PlyElement& element : elements) {
+    // Every element needs at least a few bytes per entry: reject counts the
+    // file cannot hold before allocating anything for them.
+    if (element.count > body.remaining() / minimum_element_bytes(element, body.is_ascii()))
+      fail(path, "element '" + element.name + "' claims " + std::to_string(element.count) +
+                     " entries, more than the file can hold (truncated?)");
+    if (element.name == "vertex") {
+      int x = -1, y = -1, z = -1, sharp = -1;
+      for (int i = 0; i < static_cast<int>(element.properties.size()); ++i) {
+        const PlyProperty& property = element.properties[i];
+        if (property.is_list) continue;
+        if (property.name == "x") x = i;
+        else if (property.name == "y") y = i;
+        else if (property.name == "z") z = i;
+        else if (property.name == "sharp") sharp = i;
+      }
+      if (x < 0 || y < 0 || z < 0) fail(path, "vertex element lacks x, y or z");
+      mesh.positions.resize(element.count);
+      if (sharp >= 0) mesh.sharp.assign(element.count, 0);
+      for (std::uint64_t v = 0; v < element.count; ++v) {
+        double xyz[3] = {0, 0, 0};
+        for (int i = 0; i < static_cast<int>(element.properties.size()); ++i) {
+          const PlyProperty& property = element.properties[i];
+          if (property.is_list) {
+            const double n = body.read(property.count_type, "a vertex list");
+            if (n < 0 || n > 1e6) fail(path, "malformed list length in vertex " + std::to_string(v));
+            for (int k = 0; k < static_cast<int>(n); ++k) body.read(property.type, "a vertex list");
+            continue;
+          }
+          const double value = body.read(property.type, "vertex data");
+          if (i == x) xyz[0] = value;
+          else if (i == y) xyz[1] = value;
+          else if (i == z) xyz[2] = value;
+          else if (i == sharp) mesh.sharp[v] = value != 0;
+        }
+        mesh.positions[v] = {xyz[0], xyz[1], xyz[2]};
+      }
+      have_vertices = true;
+    } else if (element.name == "face") {
+      int list = -1;
+      for (int i = 0; i < static_cast<int>(element.properties.size()); ++i)
+        if (element.properties[i].is_list &&
+            (element.properties[i].name == "vertex_indices" || element.properties[i].name == "vertex_index"))
+          list = i;
+      if (list < 0) fail(path, "face element lacks a vertex_indices list");
+      mesh.face_offsets.reserve(element.count + 1);
+      mesh.face_vertices.reserve(element.count * 3);
+      std::vector<std::uint32_t> corners;
+      for (std::uint64_t f = 0; f < element.count; ++f) {
+        for (int i = 0; i < static_cast<int>(element.properties.size()); ++i) {
+          const PlyProperty& property = element.properties[i];
+          if (!property.is_list) {
+            body.read(property.type, "face data");
+            continue;
+          }
+          const double n = body.read(property.count_type, "a face's vertex count");
+          if (n < 0 || n != static_cast<double>(static_cast<std::int64_t>(n)) || n > body.remaining() + 1.0)
+            fail(path, "malformed vertex count in face " + std::to_string(f));
+          corners.clear();
+          for (std::int64_t k = 0; k < static_cast<std::int64_t>(n); ++k) {
+            const double index = body.read(property.type, "face indices");
+            if (i != list) continue;
+            if (index < 0 || index != static_cast<double>(static_cast<std::int64_t>(index)) || index >= 4294967295.0)
+              fail(path, "invalid vertex index in face " + std::to_string(f));
+            corners.push_back(static_cast<std::uint32_t>(index));
+          }
+          if (i == list) mesh.add_face(corners.data(), corners.size());
+        }
+      }
+      have_faces = true;
+    } else {
+      for (std::uint64_t e = 0; e < element.count; ++e)
+        for (const PlyProperty& property : element.properties) {
+          if (!property.is_list) {
+            body.read(property.type, element.name.c_str());
+            continue;
+          }
+          const double n = body.read(property.count_type, element.name.c_str());
+          if (n < 0 || n > body.remaining() + 1.0) fail(path, "malformed list length in element '" + element.name + "'");
+          for (std::int64_t k = 0; k < static_cast<std::int64_t>(n); ++k) body.read(property.type, element.name.c_str());
+        }
+    }
+  }
+  if (!have_vertices) fail(path, "PLY file has no vertex element");
+  if (!have_faces) fail(path, "PLY file has no face element");
+  return mesh;
+}
+
+// ---------------------------------------------------------------- OBJ
+
+PolygonMesh read_obj(const std::string& path, const std::string& data) {
+  PolygonMesh mesh;
+  TextCursor cursor(data.data(), data.data() + data.size());
+  std::vector<std::int64_t> raw;
+  std::vector<std::pair<std::size_t, std::int64_t>> faces;  // (corner count, first raw index)
+  std::vector<std::uint32_t> corners;
+  std::size_t line = 1;
+  for (; !cursor.at_end(); cursor.next_line(), ++line) {
+    const std::string_view keyword = cursor.token_in_line();
+    if (keyword == "v") {
+      double xyz[3];
+      for (double& c : xyz)
+        if (!parse_double(cursor.token_in_line(), c)) fail(path, "line " + std::to_string(line) + ": malformed vertex");
+      mesh.positions.push_back({xyz[0], xyz[1], xyz[2]});
+    } else if (keyword == "f") {
+      corners.clear();
+      while (!cursor.at_line_end()) {
+        std::string_view token = cursor.token_in_line();
+        token = token.substr(0, token.find('/'));
+        std::int64_t index = 0;
+        if (!parse_integer(token, index) || index == 0)
+          fail(path, "line " + std::to_string(line) + ": malformed face index");
+        // Negative indices count back from the vertices read so far.
+        const std::int64_t resolved = index > 0 ? index - 1 : static_cast<std::int64_t>(mesh.positions.size()) + index;
+        // Positive indices may point past the vertices read so far; validate_indices() checks them at the end.
+        if (resolved < 0 || resolved >= std::numeric_limits<std::uint32_t>::max())
+          fail(path, "line " + std::to_string(line) + ": face index " + std::to_string(index) + " is out of range");
+        corners.push_back(static_cast<std::uint32_t>(resolved));
+      }
+      if (corners.size() < 3) fail(path, "line " + std::to_string(line) + ": face with fewer than 3 vertices");
+      mesh.add_face(corners.data(), corners.size());
+    }
+  }
+  return mesh;
+}
+
+// ---------------------------------------------------------------- OFF
+
+PolygonMesh read_off(const std::string& path, const std::string& data) {
+  // Strip comments first so that tokens can be read freely.
+  std::string text = data;
+  for (std::size_t i = 0; i < text.size(); ++i)
+    if (text[i] == '#')
+      while (i < text.size() && text[i] != '\n') text[i++] = ' ';
+  TextCursor cursor(text.data(), text.data() + text.size());
+  std::string_view magic = cursor.token();
+  const bool has_colors = magic == "COFF";
+  const bool has_normals = magic == "NOFF";
+  if (magic != "OFF" && !has_colors && !has_normals) fail(path, "not an OFF file (missing 'OFF' magic)");
+  std::uint64_t vertex_count = 0, face_count = 0, edge_count = 0;
+  if (!parse_integer(cursor.token(), vertex_count) || !parse_integer(cursor.token(), face_count) ||
+      !parse_integer(cursor.token(), edge_count))
+    fail(path, "malformed OFF counts line");
+  // At least "x y z\n" per vertex and "3 a b c\n" per face.
+  if (vertex_count > text.size() / 6 || face_count > text.size() / 8)
+    fail(path, "OFF counts exceed what the file can hold (truncated?)");
+  PolygonMesh mesh;
+  mesh.positions.resize(vertex_count);
+  const int extra = has_colors ? 4 : (has_normals ? 3 : 0);
+  for (std::uint64_t v = 0; v < vertex_count; ++v) {
+    double xyz[3];
+    for (double& c : xyz) {
+      const std::string_view token = cursor.token();
+      if (token.empty()) fail(path, "file is truncated in vertex " + std::to_string(v));
+      if (!parse_double(token, c)) fail(path, "malformed coordinate in vertex " + std::to_string(v));
+    }
+    for (int k = 0; k < extra; ++k) cursor.token();
+    mesh.positions[v] = {xyz[0], xyz[1], xyz[2]};
+  }
+  std::vector<std::uint32_t> corners;
+  for (std::uint64_t f = 0; f < face_count; ++f) {
+    std::uint64_t n = 0;
+    const std::string_view count_token = cursor.token();
+    if (count_token.empty()) fail(path, "file is truncated in face " + std::to_string(f));
+    if (!parse_integer(count_token, n) || n > text.size()) fail(path, "malformed vertex count in face " + std::to_string(f));
+    corners.clear();
+    for (std::uint64_t k = 0; k < n; ++k) {
+      std::uint64_t index = 0;
+      const std::string_view token = cursor.token_in_line();
+      if (token.empty()) fail(path, "face " + std::to_string(f) + " has fewer indices than its count says");
+      if (!parse_integer(token, index)) fail(path, "malformed index in face " + std::to_string(f));
+      if (index >= vertex_count)
+        fail(path, "face " + std::to_string(f) + " references vertex " + std::to_string(index) + " of " +
+                       std::to_string(vertex_count));
+      corners.push_back(static_cast<std::uint32_t>(index));
+    }
+    cursor.next_line();  // optional face colour
+    mesh.add_face(corners.data(), corners.size());
+  }
+  return mesh;
+}
+
+// ---------------------------------------------------------------- writers
+
+void append_number(std::string& out, double value, bool double_precision) {
+  char buffer[32];
+  const int n = std::snprintf(buffer, sizeof buffer, double_precision ? "%.17g" : "%.9g", value);
+  out.append(buffer, static_cast<std::size_t>(n));
+}
+
+void write_ply(AtomicFileWriter& file, const PolygonMesh& mesh, const MeshWriteOptions& options) {
+  const bool with_sharp = mesh.sharp_count() > 0;
+  const char* scalar = options.double_precision ? "double" : "float";
+  std::string header = "ply\nformat ";
+  header += options.ascii ? "ascii 1.0\n" : "binary_little_endian 1.0\n";
+  header += "comment written by isowave\n";
+  header += "element vertex " + std::to_string(mesh.vertex_count()) + "\n";
+  for (const char* axis : {"x", "y", "z"}) header += std::string("property ") + scalar + " " + axis + "\n";
+  if (with_sharp) header += "property uchar sharp\n";
+  header += "element face " + std::to_string(mesh.face_count()) + "\n";
+  header += "property list uchar int vertex_indices\nend_header\n";
+  file.write(header);
+
+  std::string out;
+  out.reserve(1 << 20);
+  const auto flush_if_large = [&] {
+    if (out.size() > (1 << 20)) {
+      file.write(out);
+      out.clear();
+    }
+  };
+  const auto put = [&](const void* p, std::size_t n) { out.append(static_cast<const char*>(p), n); };
+  for (std::size_t v = 0; v < mesh.vertex_count(); ++v) {
+    const Vec3& p = mesh.positions[v];
+    if (options.ascii) {
+      for (int k = 0; k < 3; ++k) {
+        append_number(out, p[k], options.double_precision);
+        out += k < 2 ? ' ' : (with_sharp ? ' ' : '\n');
+      }
+      if (with_sharp) out += mesh.is_sharp(v) ? "1\n" : "0\n";
+    } else {
+      for (int k = 0; k < 3; ++k) {
+        if (options.double_precision) {
+          const double value = p[k];
+          put(&value, 8);
+        } else {
+          const float value = static_cast<float>(p[k]);
+          put(&value, 4);
+        }
+      }
+      if (with_sharp) out += static_cast<char>(mesh.is_sharp(v) ? 1 : 0);
+    }
+    flush_if_large();
+  }
+  for (std::size_t f = 0; f < mesh.face_count(); ++f) {
+    const std::uint32_t n = mesh.face_size(f);
+    if (n > 255) throw Error(ErrorKind::Unsupported, file.path() + ": PLY faces are limited to 255 vertices");
+    if (options.ascii) {
+      out += std::to_string(n);
+      for (std::uint32_t k = 0; k < n; ++k) out += ' ' + std::to_string(mesh.face_begin(f)[k]);
+      out += '\n';
+    } else {
+      out += static_cast<char>(n);
+      for (std::uint32_t k = 0; k < n; ++k) {
+        const std::int32_t index = static_cast<std::int32_t>(mesh.face_begin(f)[k]);
+        put(&index, 4);
+      }
+    }
+    flush_if_large();
+  }
+  file.write(out);
+}
+
+void write_text_mesh(AtomicFileWriter& file, const PolygonMesh& mesh, const MeshWriteOptions& options, MeshFormat format) {
+  std::string out;
+  out.reserve(1 << 20);
+  if (format == MeshFormat::Off)
+    out += "OFF\n" + std::to_string(mesh.vertex_count()) + " " + std::to_string(mesh.face_count()) + " 0\n";
+  else
+    out += "# written by isowave\n";
+  for (const Vec3& p : mesh.positions) {
+    out += format == MeshFormat::Obj ? "v " : "";
+    for (int k = 0; k < 3; ++k) {
+      append_number(out, p[k], options.double_precision);
+      out += k < 2 ? ' ' : '\n';
+    }
+    if (out.size() > (1 << 20)) {
+      file.write(out);
+      out.clear();
+    }
+  }
+  for (std::size_t f = 0; f < mesh.face_count(); ++f) {
+    if (format == MeshFormat::Obj) {
+      out += 'f';
+      for (std::uint32_t k = 0; k < mesh.face_size(f); ++k) out += ' ' + std::to_string(mesh.face_begin(f)[k] + 1);
+    } else {
+      out += std::to_string(mesh.face_size(f));
+      for (std::uint32_t k = 0; k < mesh.face_size(f); ++k) out += ' ' + std::to_string(mesh.face_begin(f)[k]);
+    }
+    out += '\n';
+    if (out.size() > (1 << 20)) {
+      file.write(out);
+      out.clear();
+    }
+  }
+  file.write(out);
+}
+
+}  // namespace
+
+MeshFormat mesh_format_from_path(const std::string& path) {
+  const std::string ext = lower_extension(path);
+  if (ext == "ply") return MeshFormat::Ply;
+  if (ext == "obj") return MeshFormat::Obj;
+  if (ext == "off") return MeshFormat::Off;
+  throw Error(ErrorKind::InvalidArgument, path + ": unknown mesh format (use .ply, .obj or .off)");
+}
+
+PolygonMesh read_mesh(const std::string& path) {
+  const MeshFormat format = mesh_format_from_path(path);
+  const std::string data = read_whole_file(path);
+  PolygonMesh mesh;
+  switch (format) {
+    case MeshFormat::Ply: mesh = read_ply(path, data); break;
+    case MeshFormat::Obj: mesh = read_obj(path, data); break;
+    case MeshFormat::Off: mesh = read_off(path, data); break;
+  }
+  validate_indices(mesh, path);
+  return mesh;
+}
+
+void write_mesh(const std::string& path, const PolygonMesh& mesh, const MeshWriteOptions& options) {
+  const MeshFormat format = mesh_format_from_path(path);
+  validate_indices(mesh, path);
+  AtomicFileWriter file(path);
+  if (format == MeshFormat::Ply) write_ply(file, mesh, options);
+  else write_text_mesh(file, mesh, options, format);
+  file.commit();
+}
+
+}  // namespace isowave

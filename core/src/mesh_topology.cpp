@@ -1,0 +1,181 @@
+#include "isowave/core/mesh_topology.h"
+
+#include <algorithm>
+#include <numeric>
+
+#include "isowave/core/error.h"
+
+namespace isowave {
+namespace {
+
+constexpr std::uint32_t kNone = ~std::uint32_t{0};
+
+// Half-edge view of a polygon mesh built from flat arrays: corner c of the
+// face list is the half-edge from face_vertices[c] to the next corner's vertex.
+struct HalfEdges {
+  const PolygonMesh& mesh;
+  std::vector<std::uint32_t> face_of;    // per corner
+  std::vector<std::uint32_t> opposite;   // per corner, kNone on the boundary
+  std::vector<std::uint32_t> outgoing;   // per vertex: one outgoing corner (a boundary one if any)
+  std::vector<std::uint32_t> out_degree; // per vertex
+
+  explicit HalfEdges(const PolygonMesh& m) : mesh(m) {}
+
+  std::uint32_t next(std::uint32_t c) const {
+    const std::uint32_t f = face_of[c];
+    return c + 1 == mesh.face_offsets[f + 1] ? mesh.face_offsets[f] : c + 1;
+  }
+  std::uint32_t prev(std::uint32_t c) const {
+    const std::uint32_t f = face_of[c];
+    return c == mesh.face_offsets[f] ? mesh.face_offsets[f + 1] - 1 : c - 1;
+  }
+  std::uint32_t origin(std::uint32_t c) const { return mesh.face_vertices[c]; }
+  std::uint32_t target(std::uint32_t c) const { return mesh.face_vertices[next(c)]; }
+};
+
+std::uint64_t edge_key(std::uint32_t a, std::uint32_t b) { return (std::uint64_t{a} << 32) | b; }
+
+std::string edge_name(std::uint32_t a, std::uint32_t b) {
+  return "(" + std::to_string(a) + ", " + std::to_string(b) + ")";
+}
+
+// Builds face_of, opposite, outgoing and out_degree; throws on repeated
+// directed edges and on edges with more than two faces.
+HalfEdges build_half_edges(const PolygonMesh& mesh, const std::string& source) {
+  HalfEdges he(mesh);
+  const std::size_t corners = mesh.face_vertices.size();
+  he.face_of.resize(corners);
+  for (std::uint32_t f = 0; f < mesh.face_count(); ++f)
+    std::fill(he.face_of.begin() + mesh.face_offsets[f], he.face_of.begin() + mesh.face_offsets[f + 1], f);
+
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> directed(corners);
+  for (std::uint32_t c = 0; c < corners; ++c) directed[c] = {edge_key(he.origin(c), he.target(c)), c};
+  std::sort(directed.begin(), directed.end());
+  for (std::size_t i = 1; i < corners; ++i) {
+    if (directed[i].first != directed[i - 1].first) continue;
+    const std::uint32_t a = static_cast<std::uint32_t>(directed[i].first >> 32);
+    const std::uint32_t b = static_cast<std::uint32_t>(directed[i].first);
+    const auto count_of = [&](std::uint64_t key) {
+      const auto range = std::equal_range(directed.begin(), directed.end(), std::make_pair(key, 0u),
+                                          [](const auto& x, const auto& y) { return x.first < y.first; });
+      return static_cast<std::size_t>(range.second - range.first);
+    };
+    if (count_of(edge_key(a, b)) + count_of(edge_key(b, a)) > 2)
+      throw Error(ErrorKind::Topology,
+                  source + ": non-manifold edge " + edge_name(a, b) + " is shared by more than two faces");
+    throw Error(ErrorKind::Topology, source + ": inconsistent face orientation: edge " + edge_name(a, b) +
+                                         " is traversed twice in the same direction (faces " +
+                                         std::to_string(he.face_of[directed[i - 1].second]) + " and " +
+                                         std::to_string(he.face_of[directed[i].second]) + ")");
+  }
+  he.opposite.assign(corners, kNone);
+  for (std::uint32_t c = 0; c < corners; ++c) {
+    const std::uint64_t key = edge_key(he.target(c), he.origin(c));
+    const auto it = std::lower_bound(directed.begin(), directed.end(), std::make_pair(key, 0u));
+    if (it != directed.end() && it->first == key) he.opposite[c] = it->second;
+  }
+  he.outgoing.assign(mesh.vertex_count(), kNone);
+  he.out_degree.assign(mesh.vertex_count(), 0);
+  for (std::uint32_t c = 0; c < corners; ++c) {
+    const std::uint32_t v = he.origin(c);
+    ++he.out_degree[v];
+    if (he.outgoing[v] == kNone || he.opposite[c] == kNone) he.outgoing[v] = c;
+  }
+  return he;
+}
+
+struct UnionFind {
+  std::vector<std::uint32_t> parent;
+  explicit UnionFind(std::size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0u); }
+  std::uint32_t find(std::uint32_t x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  }
+  void unite(std::uint32_t a, std::uint32_t b) {
+    a = find(a);
+    b = find(b);
+    if (a != b) parent[std::max(a, b)] = std::min(a, b);
+  }
+};
+
+}  // namespace
+
+void require_manifold(const PolygonMesh& mesh, const std::string& source) {
+  validate_indices(mesh, source);
+  if (mesh.face_count() == 0) throw Error(ErrorKind::Topology, source + ": the mesh has no faces");
+  for (std::size_t f = 0; f < mesh.face_count(); ++f) {
+    std::vector<std::uint32_t> corners(mesh.face_begin(f), mesh.face_begin(f) + mesh.face_size(f));
+    std::sort(corners.begin(), corners.end());
+    const auto repeated = std::adjacent_find(corners.begin(), corners.end());
+    if (repeated != corners.end())
+      throw Error(ErrorKind::Topology,
+                  source + ": face " + std::to_string(f) + " uses vertex " + std::to_string(*repeated) + " twice");
+  }
+  const HalfEdges he = build_half_edges(mesh, source);
+  for (std::uint32_t v = 0; v < mesh.vertex_count(); ++v) {
+    const std::uint32_t start = he.outgoing[v];
+    if (start == kNone)
+      throw Error(ErrorKind::Topology, source + ": vertex " + std::to_string(v) + " is used by no face");
+    // Walk the fan clockwise from the boundary half-edge (or any half-edge if
+    // the vertex is interior); a manifold vertex reaches all its out-edges.
+    std::uint32_t visited = 1;
+    for (std::uint32_t c = he.opposite[he.prev(start)]; c != kNone && c != start; c = he.opposite[he.prev(c)]) {
+      if (++visited > he.out_degree[v]) break;
+    }
+    if (visited != he.out_degree[v])
+      throw Error(ErrorKind::Topology, source + ": non-manifold vertex " + std::to_string(v) +
+                                           " (its faces form more than one fan)");
+  }
+}
+
+std::vector<std::uint32_t> face_components(const PolygonMesh& mesh, std::size_t* component_count) {
+  UnionFind sets(mesh.vertex_count());
+  for (std::size_t f = 0; f < mesh.face_count(); ++f) {
+    const std::uint32_t* face = mesh.face_begin(f);
+    for (std::uint32_t i = 1; i < mesh.face_size(f); ++i) sets.unite(face[0], face[i]);
+  }
+  std::vector<std::uint32_t> label(mesh.vertex_count(), kNone);
+  std::vector<std::uint32_t> result(mesh.face_count());
+  std::uint32_t count = 0;
+  for (std::size_t f = 0; f < mesh.face_count(); ++f) {
+    const std::uint32_t root = sets.find(mesh.face_begin(f)[0]);
+    if (label[root] == kNone) label[root] = count++;
+    result[f] = label[root];
+  }
+  if (component_count) *component_count = count;
+  return result;
+}
+
+TopologySummary summarize_topology(const PolygonMesh& mesh) {
+  TopologySummary s;
+  const HalfEdges he = build_half_edges(mesh, "mesh");
+  s.vertices = mesh.vertex_count();
+  s.faces = mesh.face_count();
+  std::size_t interior_half_edges = 0;
+  for (std::uint32_t c = 0; c < he.opposite.size(); ++c) {
+    if (he.opposite[c] == kNone) ++s.boundary_edges;
+    else ++interior_half_edges;
+  }
+  s.edges = s.boundary_edges + interior_half_edges / 2;
+  // Boundary loops: follow boundary half-edges through each vertex's unique
+  // outgoing boundary half-edge.
+  std::vector<std::uint8_t> seen(he.opposite.size(), 0);
+  for (std::uint32_t c = 0; c < he.opposite.size(); ++c) {
+    if (he.opposite[c] != kNone || seen[c]) continue;
+    ++s.boundary_loops;
+    for (std::uint32_t b = c; b != kNone && !seen[b];) {
+      seen[b] = 1;
+      const std::uint32_t next_vertex = he.target(b);
+      const std::uint32_t out = he.outgoing[next_vertex];
+      b = (out != kNone && he.opposite[out] == kNone) ? out : kNone;
+    }
+  }
+  face_components(mesh, &s.components);
+  s.euler_characteristic = static_cast<long long>(s.vertices) - static_cast<long long>(s.edges) +
+                           static_cast<long long>(s.faces);
+  s.genus = (2 * static_cast<long long>(s.components) - s.euler_characteristic -
+             static_cast<long long>(s.boundary_loops)) / 2;
+  return s;
+}
+
+}  // namespace isowave

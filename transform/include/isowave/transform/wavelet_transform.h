@@ -1,0 +1,36 @@
+#pragma once
+// The lifted bicubic subdivision-surface wavelet transform (Bertram et al.
+// 2000, Sec. 3.3-3.4), in place over the coarse-to-fine layout of
+// SubdivisionHierarchy: one array whose first vertex_count(0) entries are base
+// control points and whose entries [vertex_count(l-1), vertex_count(l)) are
+// the level-l wavelet coefficients (f details, then e details).
+//
+// Both directions run level by level, each lifting step split across threads
+// (TBB); every output is a fixed-order gather, so results are bit-identical
+// for any thread count. Cost per direction: O(fine vertices).
+#include <vector>
+
+#include "isowave/core/vec3.h"
+#include "isowave/transform/hierarchy.h"
+
+namespace isowave {
+
+// Analysis (decomposition rules 3.10): `data` holds the level-L control points
+// on entry (at least vertex_count(L) entries) and the base control points plus
+// all wavelet coefficients on return.
+void analyze(const SubdivisionHierarchy& hierarchy, std::vector<Vec3>& data);
+
+// Synthesis (reconstruction rules 3.8) from the base up to `to_level` (default
+// the finest): on entry `data` holds base control points and coefficients (at
+// least vertex_count(to_level) entries; coefficients of finer levels are left
+// untouched), on return its first vertex_count(to_level) entries are the
+// control points of level `to_level`.
+void synthesize(const SubdivisionHierarchy& hierarchy, std::vector<Vec3>& data, int to_level = -1);
+
+// The subdivision operator S applied `to_level` times (synthesis with every
+// wavelet coefficient zero): control points of level `to_level` from the base
+// control points (vertex_count(0) entries).
+std::vector<Vec3> subdivide(const SubdivisionHierarchy& hierarchy, const std::vector<Vec3>& base_points,
+                            int to_level = -1);
+
+}  // namespace isowave

@@ -1,0 +1,150 @@
+#include "isowave/transform/wavelet_transform.h"
+
+#include <cassert>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include "isowave/core/error.h"
+#include "isowave/transform/lifting_rules.h"
+
+namespace isowave {
+namespace {
+
+using lifting::Rule;
+using lifting::Step;
+using lifting::VertexType;
+
+enum class Direction { Synthesis, Analysis };
+
+// Splits [0, n) across threads in chunks large enough to amortize scheduling.
+template <class Body>
+void for_range(std::uint32_t n, const Body& body) {
+  constexpr std::uint32_t kGrain = 8192;
+  if (n <= kGrain) {
+    body(0u, n);
+    return;
+  }
+  tbb::parallel_for(tbb::blocked_range<std::uint32_t>(0, n, kGrain),
+                    [&](const tbb::blocked_range<std::uint32_t>& r) { body(r.begin(), r.end()); });
+}
+
+// target <- self*target + sum  (synthesis) or (target - sum)/self (analysis).
+template <Direction D>
+inline Vec3 apply(const Rule& rule, const Vec3& target, const Vec3& weighted_sum) {
+  if constexpr (D == Direction::Synthesis) return rule.self * target + weighted_sum;
+  else return (target - weighted_sum) * (1.0 / rule.self);
+}
+
+// Average of data[indices[begin..end)].
+inline Vec3 average(const Vec3* data, const std::uint32_t* indices, std::uint32_t begin, std::uint32_t end) {
+  Vec3 sum;
+  for (std::uint32_t k = begin; k < end; ++k) sum += data[indices[k]];
+  return sum * (1.0 / static_cast<double>(end - begin));
+}
+
+template <Direction D>
+void lift_e_vertices(const RefinementStep& s, Vec3* data, const Step& step) {
+  const Rule& r = step.smooth;
+  const std::uint32_t first = s.first_edge_vertex();
+  for_range(s.parent_edge_count, [&](std::uint32_t begin, std::uint32_t end) {
+    for (std::uint32_t e = begin; e < end; ++e) {
+      if (step.skipped_on_sharp_edges && !s.edge_smooth[e]) continue;
+      Vec3 sum;
+      if (r.f != 0) sum += (0.5 * r.f) * (data[s.edge_faces[2 * e]] + data[s.edge_faces[2 * e + 1]]);
+      if (r.v != 0) sum += (0.5 * r.v) * (data[s.edge_vertices[2 * e]] + data[s.edge_vertices[2 * e + 1]]);
+      data[first + e] = apply<D>(r, data[first + e], sum);
+    }
+  });
+}
+
+template <Direction D>
+void lift_f_vertices(const RefinementStep& s, Vec3* data, const Step& step) {
+  const Rule& r = step.smooth;
+  const std::uint32_t first = s.first_face_vertex();
+  for_range(s.parent_face_count, [&](std::uint32_t begin, std::uint32_t end) {
+    for (std::uint32_t f = begin; f < end; ++f) {
+      const std::uint32_t row = s.face_offsets[f], row_end = s.face_offsets[f + 1];
+      Vec3 sum;
+      if (r.v != 0) sum += r.v * average(data, s.face_vertices.data(), row, row_end);
+      if (r.e != 0) sum += r.e * average(data, s.face_edges.data(), row, row_end);
+      data[first + f] = apply<D>(r, data[first + f], sum);
+    }
+  });
+}
+
+template <Direction D>
+void lift_v_vertices(const RefinementStep& s, Vec3* data, const Step& step) {
+  const Rule& r = step.smooth;
+  for_range(s.parent_vertex_count, [&](std::uint32_t begin, std::uint32_t end) {
+    for (std::uint32_t v = begin; v < end; ++v) {
+      if (s.vertex_rule[v] != VertexRule::Smooth) continue;
+      Vec3 sum;
+      if (r.f != 0) sum += r.f * average(data, s.vertex_faces.data(), s.vertex_face_offsets[v], s.vertex_face_offsets[v + 1]);
+      if (r.e != 0) sum += r.e * average(data, s.vertex_edges.data(), s.vertex_edge_offsets[v], s.vertex_edge_offsets[v + 1]);
+      data[v] = apply<D>(r, data[v], sum);
+    }
+  });
+  const Rule& c = step.crease;
+  const auto creases = static_cast<std::uint32_t>(s.crease_vertices.size());
+  for_range(creases, [&](std::uint32_t begin, std::uint32_t end) {
+    for (std::uint32_t k = begin; k < end; ++k) {
+      const std::uint32_t v = s.crease_vertices[k];
+      const Vec3 sum = (0.5 * c.e) * (data[s.crease_edges[2 * k]] + data[s.crease_edges[2 * k + 1]]);
+      data[v] = apply<D>(c, data[v], sum);
+    }
+  });
+}
+
+template <Direction D>
+void lift(const RefinementStep& s, Vec3* data, const Step& step) {
+  switch (step.target) {
+    case VertexType::E: lift_e_vertices<D>(s, data, step); break;
+    case VertexType::F: lift_f_vertices<D>(s, data, step); break;
+    case VertexType::V: lift_v_vertices<D>(s, data, step); break;
+  }
+}
+
+void require_size(const SubdivisionHierarchy& h, const std::vector<Vec3>& data, int level) {
+  if (data.size() < h.vertex_count(level))
+    throw Error(ErrorKind::InvalidArgument, "wavelet transform needs " + std::to_string(h.vertex_count(level)) +
+                                                " points for level " + std::to_string(level) + ", got " +
+                                                std::to_string(data.size()));
+}
+
+}  // namespace
+
+void analyze(const SubdivisionHierarchy& hierarchy, std::vector<Vec3>& data) {
+  require_size(hierarchy, data, hierarchy.levels());
+  for (int level = hierarchy.levels(); level >= 1; --level) {
+    const RefinementStep& s = hierarchy.step(level);
+    for (auto step = lifting::kSynthesisSteps.rbegin(); step != lifting::kSynthesisSteps.rend(); ++step)
+      lift<Direction::Analysis>(s, data.data(), *step);
+  }
+}
+
+void synthesize(const SubdivisionHierarchy& hierarchy, std::vector<Vec3>& data, int to_level) {
+  if (to_level < 0) to_level = hierarchy.levels();
+  if (to_level > hierarchy.levels())
+    throw Error(ErrorKind::InvalidArgument, "level " + std::to_string(to_level) + " exceeds the hierarchy's " +
+                                                std::to_string(hierarchy.levels()) + " levels");
+  require_size(hierarchy, data, to_level);
+  for (int level = 1; level <= to_level; ++level) {
+    const RefinementStep& s = hierarchy.step(level);
+    for (const Step& step : lifting::kSynthesisSteps) lift<Direction::Synthesis>(s, data.data(), step);
+  }
+}
+
+std::vector<Vec3> subdivide(const SubdivisionHierarchy& hierarchy, const std::vector<Vec3>& base_points, int to_level) {
+  if (to_level < 0) to_level = hierarchy.levels();
+  require_size(hierarchy, base_points, 0);
+  if (to_level > hierarchy.levels())
+    throw Error(ErrorKind::InvalidArgument, "level " + std::to_string(to_level) + " exceeds the hierarchy's " +
+                                                std::to_string(hierarchy.levels()) + " levels");
+  std::vector<Vec3> data(hierarchy.vertex_count(to_level));
+  std::copy(base_points.begin(), base_points.begin() + static_cast<std::ptrdiff_t>(hierarchy.vertex_count(0)), data.begin());
+  synthesize(hierarchy, data, to_level);
+  return data;
+}
+
+}  // namespace isowave
