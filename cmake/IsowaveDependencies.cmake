@@ -14,6 +14,17 @@ if(NOT TARGET isowave_opensubdiv)
 endif()
 
 find_package(OpenMesh REQUIRED)
+find_package(ZLIB REQUIRED)
+
+# CGAL is header-only; keep its headers out of widely included headers.
+set(CGAL_DO_NOT_WARN_ABOUT_CMAKE_BUILD_TYPE TRUE)
+find_package(CGAL REQUIRED)
+
+# Debian ships FindOpenVDB.cmake outside the default module path; it needs
+# Boost iostreams.
+list(APPEND CMAKE_MODULE_PATH "/usr/lib/x86_64-linux-gnu/cmake/OpenVDB")
+find_package(Boost REQUIRED COMPONENTS iostreams)
+find_package(OpenVDB REQUIRED)
 
 if(ISOWAVE_BUILD_TESTS)
   find_package(GTest REQUIRED)

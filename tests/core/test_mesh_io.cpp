@@ -1,0 +1,208 @@
+// Mesh files: exact round trips, agreement with OpenMesh's readers on the real
+// meshes, and hostile input (truncation at every byte, byte flips, bad counts
+// and indices) that must give a clear error and never a crash.
+#include <OpenMesh/Core/IO/MeshIO.hh>
+#include <OpenMesh/Core/Mesh/PolyMesh_ArrayKernelT.hh>
+
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "isowave/core/error.h"
+#include "isowave/core/mesh_io.h"
+#include "support/test_meshes.h"
+
+namespace isowave {
+namespace {
+
+namespace fs = std::filesystem;
+
+class MeshIoTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    directory_ = fs::temp_directory_path() / ("isowave_mesh_io_" + std::to_string(::getpid()) + "_" +
+                                              ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::create_directories(directory_);
+  }
+  void TearDown() override { fs::remove_all(directory_); }
+  std::string path(const std::string& name) const { return (directory_ / name).string(); }
+  void write_text(const std::string& name, const std::string& text) const {
+    std::ofstream(path(name), std::ios::binary) << text;
+  }
+  std::string read_bytes(const std::string& name) const {
+    std::ifstream in(path(name), std::ios::binary);
+    return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+  }
+  fs::path directory_;
+};
+
+PolygonMesh sample_mesh() {
+  PolygonMesh mesh = test::mixed_disk();
+  mesh.sharp.assign(mesh.vertex_count(), 0);
+  mesh.sharp[0] = mesh.sharp[7] = 1;
+  mesh.positions[3] = {1.0 / 3.0, -2.5e-7, 12345.678901234567};
+  return mesh;
+}
+
+void expect_same_topology(const PolygonMesh& a, const PolygonMesh& b) {
+  EXPECT_EQ(a.face_offsets, b.face_offsets);
+  EXPECT_EQ(a.face_vertices, b.face_vertices);
+}
+
+TEST_F(MeshIoTest, RoundTripsEveryFormat) {
+  const PolygonMesh mesh = sample_mesh();
+  for (const char* name : {"a.ply", "b.obj", "c.off"})
+    for (bool ascii : {false, true})
+      for (bool exact : {false, true}) {
+        MeshWriteOptions options;
+        options.ascii = ascii;
+        options.double_precision = exact;
+        write_mesh(path(name), mesh, options);
+        const PolygonMesh back = read_mesh(path(name));
+        SCOPED_TRACE(std::string(name) + (ascii ? " ascii" : " binary") + (exact ? " double" : " float"));
+        expect_same_topology(mesh, back);
+        ASSERT_EQ(back.vertex_count(), mesh.vertex_count());
+        for (std::size_t v = 0; v < mesh.vertex_count(); ++v)
+          for (int k = 0; k < 3; ++k) {
+            const double tolerance = exact ? 0.0 : 1e-7 * std::max(1.0, std::abs(mesh.positions[v][k]));
+            EXPECT_NEAR(back.positions[v][k], mesh.positions[v][k], tolerance);
+          }
+        if (std::string(name) == "a.ply") {
+          EXPECT_EQ(back.sharp, mesh.sharp);
+        }
+      }
+}
+
+TEST_F(MeshIoTest, WritesAtomicallyAndLeavesNoTemporaryFiles) {
+  write_mesh(path("m.ply"), sample_mesh());
+  write_mesh(path("m.ply"), test::cube());  // replaces
+  EXPECT_EQ(read_mesh(path("m.ply")).vertex_count(), 8u);
+  std::size_t files = 0;
+  for (const auto& entry : fs::directory_iterator(directory_)) {
+    ++files;
+    EXPECT_EQ(entry.path().filename(), "m.ply");
+  }
+  EXPECT_EQ(files, 1u);
+  EXPECT_THROW(write_mesh(path("missing_dir/m.ply"), test::cube()), Error);
+  EXPECT_THROW(write_mesh(path("m.stl"), test::cube()), Error);
+}
+
+// Reads a file with OpenMesh and returns its faces as index lists rotated to
+// start at the smallest index (OpenMesh may start a face elsewhere).
+std::vector<std::vector<std::uint32_t>> canonical_faces(const PolygonMesh& mesh) {
+  std::vector<std::vector<std::uint32_t>> faces;
+  for (std::size_t f = 0; f < mesh.face_count(); ++f) {
+    std::vector<std::uint32_t> face(mesh.face_begin(f), mesh.face_begin(f) + mesh.face_size(f));
+    std::rotate(face.begin(), std::min_element(face.begin(), face.end()), face.end());
+    faces.push_back(face);
+  }
+  std::sort(faces.begin(), faces.end());
+  return faces;
+}
+
+TEST(MeshIoSharedData, AgreesWithOpenMeshOnRealMeshes) {
+  for (const char* name : {"meshes/armadillo.off", "meshes/double_torus_quads.off", "meshes/rocker_arm_genus1.obj",
+                           "meshes/elephant_106holes.off"}) {
+    ISOWAVE_REQUIRE_SHARED_FILE(file, name);
+    SCOPED_TRACE(name);
+    const PolygonMesh ours = read_mesh(file);
+    OpenMesh::PolyMesh_ArrayKernelT<> reference;
+    ASSERT_TRUE(OpenMesh::IO::read_mesh(reference, file));
+    ASSERT_EQ(ours.vertex_count(), reference.n_vertices());
+    ASSERT_EQ(ours.face_count(), reference.n_faces());
+    for (auto vh : reference.vertices()) {
+      const auto p = reference.point(vh);
+      for (int k = 0; k < 3; ++k) EXPECT_NEAR(ours.positions[vh.idx()][k], p[k], 1e-6 * std::max(1.0, std::abs(double(p[k]))));
+    }
+    PolygonMesh reference_faces;
+    for (auto fh : reference.faces()) {
+      std::vector<std::uint32_t> face;
+      for (auto vh : reference.fv_range(fh)) face.push_back(static_cast<std::uint32_t>(vh.idx()));
+      reference_faces.add_face(face.data(), face.size());
+    }
+    EXPECT_EQ(canonical_faces(ours), canonical_faces(reference_faces));
+  }
+}
+
+// Every prefix of a valid file, and random single-byte corruptions, must load
+// as a valid mesh or raise isowave::Error; never crash or over-allocate.
+void expect_hostile_input_is_safe(const std::string& file_path, const std::string& bytes) {
+  const auto try_read = [&](const std::string& data) {
+    std::ofstream(file_path, std::ios::binary | std::ios::trunc).write(data.data(), static_cast<std::streamsize>(data.size()));
+    try {
+      const PolygonMesh mesh = read_mesh(file_path);
+      for (std::uint32_t v : mesh.face_vertices) ASSERT_LT(v, mesh.vertex_count());
+    } catch (const Error& error) {
+      EXPECT_NE(std::string(error.what()).find(file_path), std::string::npos) << error.what();
+    }
+  };
+  for (std::size_t length = 0; length < bytes.size(); ++length) try_read(bytes.substr(0, length));
+  std::mt19937 rng(7);
+  for (int trial = 0; trial < 400; ++trial) {
+    std::string corrupted = bytes;
+    corrupted[rng() % corrupted.size()] = static_cast<char>(rng());
+    try_read(corrupted);
+  }
+}
+
+TEST_F(MeshIoTest, TruncatedAndCorruptedFilesFailCleanly) {
+  const PolygonMesh mesh = sample_mesh();
+  for (const char* name : {"t.ply", "t.obj", "t.off"})
+    for (bool ascii : {false, true}) {
+      MeshWriteOptions options;
+      options.ascii = ascii;
+      write_mesh(path(name), mesh, options);
+      const std::string bytes = read_bytes(name);
+      expect_hostile_input_is_safe(path(std::string("hostile_") + name), bytes);
+    }
+}
+
+TEST_F(MeshIoTest, MalformedFilesNameTheProblem) {
+  const auto error_of = [&](const std::string& name, const std::string& text) -> std::string {
+    write_text(name, text);
+    try {
+      read_mesh(path(name));
+    } catch (const Error& error) {
+      return error.what();
+    }
+    return "no error";
+  };
+  const std::string ply_header = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                                 "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n";
+  EXPECT_NE(error_of("a.ply", ply_header + "0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n").find("out of range"), std::string::npos);
+  EXPECT_NE(error_of("b.ply", ply_header + "0 0 0\n1 nan 0\n0 1 0\n3 0 1 2\n").find("non-finite"), std::string::npos);
+  EXPECT_NE(error_of("c.ply", ply_header + "0 0 0\n1 0 0\n").find("c.ply"), std::string::npos);
+  EXPECT_NE(error_of("d.ply", "ply\nformat binary_little_endian 1.0\nelement vertex 4000000000\nproperty float x\n"
+                              "property float y\nproperty float z\nend_header\n")
+                .find("more than the file can hold"),
+            std::string::npos);
+  EXPECT_NE(error_of("e.ply", ply_header + "0 0 0\n1 0 0\n0 1 0\n2 0 1\n").find("at least 3"), std::string::npos);
+  EXPECT_NE(error_of("f.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 5\n").find("references vertex 5"),
+            std::string::npos);
+  EXPECT_NE(error_of("g.off", "OFF\n3 2 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n").find("truncated"), std::string::npos);
+  EXPECT_NE(error_of("h.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 x\n").find("line 4"), std::string::npos);
+  EXPECT_NE(error_of("i.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n").find("out of range"), std::string::npos);
+  EXPECT_NE(error_of("j.off", "PLY\n").find("not an OFF file"), std::string::npos);
+  try {
+    read_mesh(path("does_not_exist.ply"));
+    ADD_FAILURE() << "no error for a missing file";
+  } catch (const Error& error) {
+    EXPECT_EQ(error.kind(), ErrorKind::Io);
+  }
+}
+
+TEST_F(MeshIoTest, ReadsObjVariants) {
+  // Slashes, negative indices and unrelated lines.
+  write_text("v.obj", "# comment\nmtllib x.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nvn 0 0 1\nv 0 1 0\n"
+                      "f 1/1/1 2//1 3/2\nf -4 -2 -1\n");
+  const PolygonMesh mesh = read_mesh(path("v.obj"));
+  ASSERT_EQ(mesh.face_count(), 2u);
+  EXPECT_EQ(std::vector<std::uint32_t>(mesh.face_begin(1), mesh.face_begin(1) + 3), (std::vector<std::uint32_t>{0, 2, 3}));
+}
+
+}  // namespace
+}  // namespace isowave

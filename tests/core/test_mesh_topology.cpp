@@ -1,0 +1,105 @@
+// Topology checks: require_manifold accepts exactly the consistently oriented
+// 2-manifolds, and summarize_topology's counts satisfy Euler's formula on
+// meshes whose genus and boundary are known by construction.
+#include <gtest/gtest.h>
+
+#include "isowave/core/error.h"
+#include "isowave/core/mesh_topology.h"
+#include "support/test_meshes.h"
+
+namespace isowave {
+namespace {
+
+TEST(MeshTopology, GeneratedCorpusIsManifoldWithKnownCounts) {
+  struct Expected {
+    const char* name;
+    long long genus;
+    std::size_t boundary_loops;
+    std::size_t components;
+  };
+  const Expected expected[] = {{"cube", 0, 0, 1},           {"octahedron", 0, 0, 1},
+                               {"pentagonal_prism", 0, 0, 1}, {"mixed_disk", 0, 1, 1},
+                               {"grid_with_boundary", 0, 1, 1}, {"cylinder", 0, 2, 1},
+                               {"torus", 1, 0, 1},           {"genus2_slab", 2, 0, 1},
+                               {"genus3_slab", 3, 0, 1},     {"two_components", 0, 0, 2}};
+  const auto corpus = test::generated_corpus();
+  for (const Expected& e : expected) {
+    const auto it = std::find_if(corpus.begin(), corpus.end(), [&](const auto& m) { return m.name == e.name; });
+    ASSERT_NE(it, corpus.end()) << e.name;
+    EXPECT_NO_THROW(require_manifold(it->mesh, e.name));
+    const TopologySummary s = summarize_topology(it->mesh);
+    EXPECT_EQ(s.genus, e.genus) << e.name;
+    EXPECT_EQ(s.boundary_loops, e.boundary_loops) << e.name;
+    EXPECT_EQ(s.components, e.components) << e.name;
+    // Euler: V - E + F = sum over components (2 - 2g - b).
+    EXPECT_EQ(s.euler_characteristic,
+              2 * static_cast<long long>(s.components) - 2 * s.genus - static_cast<long long>(s.boundary_loops))
+        << e.name;
+    // Every edge counted once: 2E = corners + boundary edges.
+    EXPECT_EQ(2 * s.edges, it->mesh.face_vertices.size() + s.boundary_edges) << e.name;
+  }
+}
+
+std::string topology_error(const PolygonMesh& mesh) {
+  try {
+    require_manifold(mesh, "test mesh");
+  } catch (const Error& error) {
+    EXPECT_TRUE(error.kind() == ErrorKind::Topology || error.kind() == ErrorKind::Format);
+    return error.what();
+  }
+  return {};
+}
+
+TEST(MeshTopology, RejectsNonManifoldEdge) {
+  PolygonMesh mesh;
+  mesh.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}};
+  mesh.add_face({0, 1, 2});
+  mesh.add_face({1, 0, 3});
+  mesh.add_face({0, 1, 4});  // third face on edge (0, 1)
+  EXPECT_NE(topology_error(mesh).find("non-manifold edge"), std::string::npos) << topology_error(mesh);
+}
+
+TEST(MeshTopology, RejectsInconsistentOrientation) {
+  PolygonMesh mesh;
+  mesh.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}};
+  mesh.add_face({0, 1, 2});
+  mesh.add_face({0, 1, 3});  // same direction on edge (0, 1)
+  EXPECT_NE(topology_error(mesh).find("orientation"), std::string::npos) << topology_error(mesh);
+}
+
+TEST(MeshTopology, RejectsNonManifoldVertex) {
+  // Two triangles touching at vertex 0 only: a bow tie.
+  PolygonMesh mesh;
+  mesh.positions = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {-1, 0, 0}, {-1, -1, 0}};
+  mesh.add_face({0, 1, 2});
+  mesh.add_face({0, 3, 4});
+  EXPECT_NE(topology_error(mesh).find("non-manifold vertex"), std::string::npos) << topology_error(mesh);
+}
+
+TEST(MeshTopology, RejectsRepeatedVertexEmptyMeshAndUnusedVertex) {
+  PolygonMesh repeated;
+  repeated.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+  repeated.add_face({0, 1, 1, 2});
+  EXPECT_NE(topology_error(repeated).find("twice"), std::string::npos);
+
+  PolygonMesh empty;
+  EXPECT_NE(topology_error(empty).find("no faces"), std::string::npos);
+
+  PolygonMesh unused = test::cube();
+  unused.positions.push_back({5, 5, 5});
+  EXPECT_NE(topology_error(unused).find("used by no face"), std::string::npos);
+  EXPECT_EQ(remove_unreferenced_vertices(unused), 1u);
+  EXPECT_EQ(topology_error(unused), "");
+}
+
+TEST(MeshTopology, RejectsBadIndicesAndNonFinitePositions) {
+  PolygonMesh out_of_range = test::cube();
+  out_of_range.face_vertices[3] = 99;
+  EXPECT_NE(topology_error(out_of_range).find("out of range"), std::string::npos);
+  PolygonMesh not_finite = test::cube();
+  not_finite.positions[2].y = std::nan("");
+  EXPECT_NE(topology_error(not_finite).find("non-finite"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace isowave
