@@ -3,6 +3,7 @@
 #include <cerrno>
 #include <cstdlib>
 #include <cstring>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include "isowave/core/error.h"
@@ -15,6 +16,10 @@ AtomicFileWriter::AtomicFileWriter(std::string path, bool overwrite) : path_(std
   const int fd = mkstemp(pattern.data());
   if (fd < 0) throw Error(ErrorKind::Io, path_ + ": cannot create a temporary file: " + std::strerror(errno));
   temporary_path_ = pattern;
+  // mkstemp creates the file 0600; give it the permissions a plain create would.
+  const mode_t mask = umask(0);
+  umask(mask);
+  fchmod(fd, 0666 & ~mask);
   file_ = fdopen(fd, "wb");
   if (!file_) {
     ::close(fd);

@@ -1,5 +1,6 @@
 #include "isowave/transform/wavelet_transform.h"
 
+#include <algorithm>
 #include <cassert>
 
 #include <tbb/blocked_range.h>
@@ -135,15 +136,24 @@ void synthesize(const SubdivisionHierarchy& hierarchy, std::vector<Vec3>& data, 
   }
 }
 
+void subdivide_level(const SubdivisionHierarchy& hierarchy, int level, std::vector<Vec3>& data) {
+  if (level < 1 || level > hierarchy.levels())
+    throw Error(ErrorKind::InvalidArgument, "level " + std::to_string(level) + " is not in 1.." +
+                                                std::to_string(hierarchy.levels()));
+  require_size(hierarchy, data, level - 1);
+  data.resize(std::max(data.size(), hierarchy.vertex_count(level)));
+  std::fill(data.begin() + static_cast<std::ptrdiff_t>(hierarchy.vertex_count(level - 1)),
+            data.begin() + static_cast<std::ptrdiff_t>(hierarchy.vertex_count(level)), Vec3{});
+  const RefinementStep& s = hierarchy.step(level);
+  for (const Step& step : lifting::kSynthesisSteps) lift<Direction::Synthesis>(s, data.data(), step);
+}
+
 std::vector<Vec3> subdivide(const SubdivisionHierarchy& hierarchy, const std::vector<Vec3>& base_points, int to_level) {
   if (to_level < 0) to_level = hierarchy.levels();
   require_size(hierarchy, base_points, 0);
-  if (to_level > hierarchy.levels())
-    throw Error(ErrorKind::InvalidArgument, "level " + std::to_string(to_level) + " exceeds the hierarchy's " +
-                                                std::to_string(hierarchy.levels()) + " levels");
-  std::vector<Vec3> data(hierarchy.vertex_count(to_level));
-  std::copy(base_points.begin(), base_points.begin() + static_cast<std::ptrdiff_t>(hierarchy.vertex_count(0)), data.begin());
-  synthesize(hierarchy, data, to_level);
+  std::vector<Vec3> data(base_points.begin(), base_points.begin() + static_cast<std::ptrdiff_t>(hierarchy.vertex_count(0)));
+  for (int level = 1; level <= to_level; ++level) subdivide_level(hierarchy, level, data);
+  data.resize(hierarchy.vertex_count(to_level));
   return data;
 }
 

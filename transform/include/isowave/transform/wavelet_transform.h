@@ -33,4 +33,10 @@ void synthesize(const SubdivisionHierarchy& hierarchy, std::vector<Vec3>& data, 
 std::vector<Vec3> subdivide(const SubdivisionHierarchy& hierarchy, const std::vector<Vec3>& base_points,
                             int to_level = -1);
 
+// One level of S: on entry the first vertex_count(level - 1) entries of `data`
+// are control points of level - 1; on return the first vertex_count(level)
+// entries are those of `level` (its wavelet coefficients taken as zero).
+// Shrink-wrap fitting refines with this, level by level.
+void subdivide_level(const SubdivisionHierarchy& hierarchy, int level, std::vector<Vec3>& data);
+
 }  // namespace isowave
