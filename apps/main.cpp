@@ -1,11 +1,14 @@
 // isowave: compress isosurfaces with bicubic subdivision-surface wavelets.
+#include <csignal>
 #include <cstdio>
+#include <unistd.h>
 #include <exception>
 #include <new>
 #include <string>
 #include <vector>
 
 #include "commands.h"
+#include "isowave/core/atomic_file.h"
 #include "isowave/core/error.h"
 
 namespace {
@@ -18,7 +21,21 @@ struct Subcommand {
 
 const Subcommand kSubcommands[] = {
     {"subdivide", isowave::commands::subdivide, "apply the wavelet subdivision operator S to a control mesh"},
+    {"extract", isowave::commands::extract, "extract a manifold isosurface from a volume"},
+    {"simplify", isowave::commands::simplify, "build a base mesh by edge collapse and edge removal (paper Sec. 4.1)"},
+    {"fit", isowave::commands::fit, "shrink-wrap a base mesh's subdivision hierarchy onto an isosurface"},
+    {"convert", isowave::commands::convert, "convert volumes' isosurfaces into wavelet-compressed .isw files"},
+    {"decode", isowave::commands::decode, "reconstruct a mesh from an .isw file at a chosen coefficient percentage"},
+    {"stats", isowave::commands::stats, "rate-distortion table of an .isw file (the paper's Table 1)"},
+    {"info", isowave::commands::info, "header, counts and bytes per section of an .isw file"},
 };
+
+// An interrupted run leaves no half-written output: uncommitted temporary
+// files are removed before the process ends.
+extern "C" void remove_temporaries_and_exit(int signal_number) {
+  isowave::remove_uncommitted_temporary_files();
+  _exit(128 + signal_number);
+}
 
 void print_overview() {
   std::printf("usage: isowave COMMAND [ARGS...]\n\ncommands:\n");
@@ -29,6 +46,8 @@ void print_overview() {
 }  // namespace
 
 int main(int argc, char** argv) {
+  std::signal(SIGINT, remove_temporaries_and_exit);
+  std::signal(SIGTERM, remove_temporaries_and_exit);
   if (argc < 2) {
     print_overview();
     return 2;

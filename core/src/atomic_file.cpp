@@ -1,5 +1,7 @@
 #include "isowave/core/atomic_file.h"
 
+#include <array>
+#include <atomic>
 #include <cerrno>
 #include <cstdlib>
 #include <cstring>
@@ -9,6 +11,32 @@
 #include "isowave/core/error.h"
 
 namespace isowave {
+namespace {
+
+// Temporary paths of uncommitted writers, readable from a signal handler.
+constexpr std::size_t kMaxPending = 256;
+std::array<std::atomic<char*>, kMaxPending> pending_temporaries{};
+
+void register_temporary(char* path) {
+  for (auto& slot : pending_temporaries) {
+    char* expected = nullptr;
+    if (slot.compare_exchange_strong(expected, path)) return;
+  }
+}
+
+void unregister_temporary(const char* path) {
+  for (auto& slot : pending_temporaries) {
+    char* expected = const_cast<char*>(path);
+    if (slot.compare_exchange_strong(expected, nullptr)) return;
+  }
+}
+
+}  // namespace
+
+void remove_uncommitted_temporary_files() noexcept {
+  for (auto& slot : pending_temporaries)
+    if (char* path = slot.load()) unlink(path);
+}
 
 AtomicFileWriter::AtomicFileWriter(std::string path, bool overwrite) : path_(std::move(path)), overwrite_(overwrite) {
   if (path_.empty()) throw Error(ErrorKind::InvalidArgument, "empty output path");
@@ -16,6 +44,8 @@ AtomicFileWriter::AtomicFileWriter(std::string path, bool overwrite) : path_(std
   const int fd = mkstemp(pattern.data());
   if (fd < 0) throw Error(ErrorKind::Io, path_ + ": cannot create a temporary file: " + std::strerror(errno));
   temporary_path_ = pattern;
+  registered_path_ = strdup(temporary_path_.c_str());
+  if (registered_path_) register_temporary(registered_path_);
   // mkstemp creates the file 0600; give it the permissions a plain create would.
   const mode_t mask = umask(0);
   umask(mask);
@@ -33,6 +63,14 @@ AtomicFileWriter::AtomicFileWriter(std::string path, bool overwrite) : path_(std
 AtomicFileWriter::~AtomicFileWriter() {
   if (file_) std::fclose(file_);
   if (!temporary_path_.empty()) std::remove(temporary_path_.c_str());
+  release_registration();
+}
+
+void AtomicFileWriter::release_registration() {
+  if (!registered_path_) return;
+  unregister_temporary(registered_path_);
+  std::free(registered_path_);
+  registered_path_ = nullptr;
 }
 
 void AtomicFileWriter::write(const void* data, std::size_t bytes) {
@@ -52,6 +90,7 @@ void AtomicFileWriter::commit() {
   if (std::rename(temporary_path_.c_str(), path_.c_str()) != 0)
     throw Error(ErrorKind::Io, path_ + ": cannot rename the temporary file into place: " + std::strerror(errno));
   temporary_path_.clear();
+  release_registration();
 }
 
 }  // namespace isowave

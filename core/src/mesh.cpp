@@ -61,4 +61,30 @@ std::size_t remove_unreferenced_vertices(PolygonMesh& mesh) {
   return removed;
 }
 
+PolygonMesh triangulate(const PolygonMesh& mesh) {
+  PolygonMesh result;
+  result.positions = mesh.positions;
+  result.sharp = mesh.sharp;
+  result.face_offsets.reserve(mesh.face_vertices.size());
+  result.face_vertices.reserve(3 * mesh.face_vertices.size());
+  for (std::size_t f = 0; f < mesh.face_count(); ++f) {
+    const std::uint32_t* v = mesh.face_begin(f);
+    const std::uint32_t n = mesh.face_size(f);
+    if (n == 4) {
+      const double d02 = squared_norm(mesh.positions[v[0]] - mesh.positions[v[2]]);
+      const double d13 = squared_norm(mesh.positions[v[1]] - mesh.positions[v[3]]);
+      if (d02 <= d13) {
+        result.add_face({v[0], v[1], v[2]});
+        result.add_face({v[0], v[2], v[3]});
+      } else {
+        result.add_face({v[0], v[1], v[3]});
+        result.add_face({v[1], v[2], v[3]});
+      }
+      continue;
+    }
+    for (std::uint32_t k = 1; k + 1 < n; ++k) result.add_face({v[0], v[k], v[k + 1]});
+  }
+  return result;
+}
+
 }  // namespace isowave

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <numeric>
 
+#include <tbb/parallel_sort.h>
+
 #include "isowave/core/error.h"
 
 namespace isowave {
@@ -39,40 +41,48 @@ std::string edge_name(std::uint32_t a, std::uint32_t b) {
   return "(" + std::to_string(a) + ", " + std::to_string(b) + ")";
 }
 
-// Builds face_of, opposite, outgoing and out_degree; throws on repeated
-// directed edges and on edges with more than two faces.
+// Builds face_of, opposite, outgoing and out_degree; throws on edges with more
+// than two faces and on edges traversed twice in the same direction. One
+// parallel sort of the corners by undirected edge, then a linear scan.
 HalfEdges build_half_edges(const PolygonMesh& mesh, const std::string& source) {
   HalfEdges he(mesh);
-  const std::size_t corners = mesh.face_vertices.size();
+  const auto corners = static_cast<std::uint32_t>(mesh.face_vertices.size());
   he.face_of.resize(corners);
   for (std::uint32_t f = 0; f < mesh.face_count(); ++f)
     std::fill(he.face_of.begin() + mesh.face_offsets[f], he.face_of.begin() + mesh.face_offsets[f + 1], f);
 
-  std::vector<std::pair<std::uint64_t, std::uint32_t>> directed(corners);
-  for (std::uint32_t c = 0; c < corners; ++c) directed[c] = {edge_key(he.origin(c), he.target(c)), c};
-  std::sort(directed.begin(), directed.end());
-  for (std::size_t i = 1; i < corners; ++i) {
-    if (directed[i].first != directed[i - 1].first) continue;
-    const std::uint32_t a = static_cast<std::uint32_t>(directed[i].first >> 32);
-    const std::uint32_t b = static_cast<std::uint32_t>(directed[i].first);
-    const auto count_of = [&](std::uint64_t key) {
-      const auto range = std::equal_range(directed.begin(), directed.end(), std::make_pair(key, 0u),
-                                          [](const auto& x, const auto& y) { return x.first < y.first; });
-      return static_cast<std::size_t>(range.second - range.first);
-    };
-    if (count_of(edge_key(a, b)) + count_of(edge_key(b, a)) > 2)
+  struct Entry {
+    std::uint64_t edge;  // (smaller vertex, larger vertex)
+    std::uint32_t corner;
+  };
+  std::vector<Entry> entries(corners);
+  for (std::uint32_t c = 0; c < corners; ++c) {
+    const std::uint32_t a = he.origin(c), b = he.target(c);
+    entries[c] = {edge_key(std::min(a, b), std::max(a, b)), c};
+  }
+  tbb::parallel_sort(entries.begin(), entries.end(), [](const Entry& x, const Entry& y) {
+    return x.edge < y.edge || (x.edge == y.edge && x.corner < y.corner);
+  });
+  he.opposite.assign(corners, kNone);
+  for (std::size_t i = 0; i < entries.size();) {
+    std::size_t j = i + 1;
+    while (j < entries.size() && entries[j].edge == entries[i].edge) ++j;
+    const auto a = static_cast<std::uint32_t>(entries[i].edge >> 32);
+    const auto b = static_cast<std::uint32_t>(entries[i].edge);
+    if (j - i > 2)
       throw Error(ErrorKind::Topology,
                   source + ": non-manifold edge " + edge_name(a, b) + " is shared by more than two faces");
-    throw Error(ErrorKind::Topology, source + ": inconsistent face orientation: edge " + edge_name(a, b) +
-                                         " is traversed twice in the same direction (faces " +
-                                         std::to_string(he.face_of[directed[i - 1].second]) + " and " +
-                                         std::to_string(he.face_of[directed[i].second]) + ")");
-  }
-  he.opposite.assign(corners, kNone);
-  for (std::uint32_t c = 0; c < corners; ++c) {
-    const std::uint64_t key = edge_key(he.target(c), he.origin(c));
-    const auto it = std::lower_bound(directed.begin(), directed.end(), std::make_pair(key, 0u));
-    if (it != directed.end() && it->first == key) he.opposite[c] = it->second;
+    if (j - i == 2) {
+      const std::uint32_t c0 = entries[i].corner, c1 = entries[i + 1].corner;
+      if (he.origin(c0) == he.origin(c1))
+        throw Error(ErrorKind::Topology, source + ": inconsistent face orientation: edge " +
+                                             edge_name(he.origin(c0), he.target(c0)) +
+                                             " is traversed twice in the same direction (faces " +
+                                             std::to_string(he.face_of[c0]) + " and " + std::to_string(he.face_of[c1]) + ")");
+      he.opposite[c0] = c1;
+      he.opposite[c1] = c0;
+    }
+    i = j;
   }
   he.outgoing.assign(mesh.vertex_count(), kNone);
   he.out_degree.assign(mesh.vertex_count(), 0);
@@ -103,13 +113,27 @@ struct UnionFind {
 void require_manifold(const PolygonMesh& mesh, const std::string& source) {
   validate_indices(mesh, source);
   if (mesh.face_count() == 0) throw Error(ErrorKind::Topology, source + ": the mesh has no faces");
+  std::vector<std::uint32_t> sorted;
   for (std::size_t f = 0; f < mesh.face_count(); ++f) {
-    std::vector<std::uint32_t> corners(mesh.face_begin(f), mesh.face_begin(f) + mesh.face_size(f));
-    std::sort(corners.begin(), corners.end());
-    const auto repeated = std::adjacent_find(corners.begin(), corners.end());
-    if (repeated != corners.end())
+    const std::uint32_t* face = mesh.face_begin(f);
+    const std::uint32_t n = mesh.face_size(f);
+    std::uint32_t repeated = kNone;
+    if (n <= 8) {  // typical faces: compare pairs without allocating
+      for (std::uint32_t i = 0; i < n && repeated == kNone; ++i)
+        for (std::uint32_t j = i + 1; j < n; ++j)
+          if (face[i] == face[j]) {
+            repeated = face[i];
+            break;
+          }
+    } else {
+      sorted.assign(face, face + n);
+      std::sort(sorted.begin(), sorted.end());
+      const auto it = std::adjacent_find(sorted.begin(), sorted.end());
+      if (it != sorted.end()) repeated = *it;
+    }
+    if (repeated != kNone)
       throw Error(ErrorKind::Topology,
-                  source + ": face " + std::to_string(f) + " uses vertex " + std::to_string(*repeated) + " twice");
+                  source + ": face " + std::to_string(f) + " uses vertex " + std::to_string(repeated) + " twice");
   }
   const HalfEdges he = build_half_edges(mesh, source);
   for (std::uint32_t v = 0; v < mesh.vertex_count(); ++v) {

@@ -28,7 +28,14 @@ class AtomicFileWriter {
   std::string path_;
   std::string temporary_path_;
   std::FILE* file_ = nullptr;
+  char* registered_path_ = nullptr;  // copy of temporary_path_ known to remove_uncommitted_temporary_files()
+  void release_registration();
   bool overwrite_ = true;
 };
+
+// Removes the temporary file of every writer that has not committed, so that
+// a program interrupted by a signal leaves nothing half-written behind. Only
+// async-signal-safe calls (unlink), for use in a signal handler.
+void remove_uncommitted_temporary_files() noexcept;
 
 }  // namespace isowave

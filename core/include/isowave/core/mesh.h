@@ -43,4 +43,8 @@ void validate_indices(const PolygonMesh& mesh, const std::string& source);
 // Returns how many were removed.
 std::size_t remove_unreferenced_vertices(PolygonMesh& mesh);
 
+// Splits every face into triangles (quads along their shorter diagonal,
+// larger polygons as a fan), keeping orientation, vertices and sharp flags.
+PolygonMesh triangulate(const PolygonMesh& mesh);
+
 }  // namespace isowave

@@ -1,0 +1,308 @@
+// isowave convert: volumes to .isw files, one per input and isovalue, with a
+// summary table; a failing input is reported and skipped.
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <glob.h>
+#include <mutex>
+#include <sstream>
+#include <thread>
+
+#include "cli.h"
+#include "commands.h"
+#include "console_progress.h"
+#include "isowave/codec/convert.h"
+#include "isowave/codec/isw_format.h"
+#include "isowave/core/error.h"
+#include "isowave/extract/volume_io.h"
+#include "volume_options.h"
+
+namespace isowave::commands {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct Job {
+  std::string input;
+  double iso = 0;
+  std::string output;
+};
+
+struct JobOutcome {
+  bool ok = false;
+  std::string error;
+  double load_seconds = 0;
+  ConvertResult result;
+};
+
+bool is_volume_file(const fs::path& path) {
+  std::string ext = path.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  return ext == ".raw" || ext == ".nrrd" || ext == ".nhdr" || ext == ".vtk" || ext == ".vti" || ext == ".vdb";
+}
+
+// Files, directories (their volume files, sorted) and glob patterns.
+std::vector<std::string> expand_inputs(const std::vector<std::string>& arguments) {
+  std::vector<std::string> inputs;
+  for (const std::string& argument : arguments) {
+    if (argument.rfind("builtin:", 0) == 0) {
+      inputs.push_back(argument);
+    } else if (fs::is_directory(argument)) {
+      std::vector<std::string> found;
+      for (const auto& entry : fs::directory_iterator(argument))
+        if (entry.is_regular_file() && is_volume_file(entry.path())) found.push_back(entry.path().string());
+      std::sort(found.begin(), found.end());
+      if (found.empty()) throw Error(ErrorKind::InvalidArgument, argument + ": no volume files in this directory");
+      inputs.insert(inputs.end(), found.begin(), found.end());
+    } else if (argument.find_first_of("*?[") != std::string::npos) {
+      glob_t matches{};
+      if (glob(argument.c_str(), 0, nullptr, &matches) == 0)
+        for (std::size_t i = 0; i < matches.gl_pathc; ++i) inputs.push_back(matches.gl_pathv[i]);
+      globfree(&matches);
+      if (inputs.empty()) throw Error(ErrorKind::InvalidArgument, argument + ": no file matches this pattern");
+    } else {
+      inputs.push_back(argument);  // a missing file is reported when its job runs
+    }
+  }
+  return inputs;
+}
+
+std::vector<double> parse_isovalues(const std::string& text) {
+  std::vector<double> values;
+  std::stringstream stream(text);
+  std::string item;
+  while (std::getline(stream, item, ',')) {
+    char* end = nullptr;
+    const double v = std::strtod(item.c_str(), &end);
+    if (item.empty() || *end != '\0' || !std::isfinite(v))
+      throw Error(ErrorKind::InvalidArgument, "--iso expects numbers separated by commas, got '" + text + "'");
+    values.push_back(v);
+  }
+  if (values.empty()) throw Error(ErrorKind::InvalidArgument, "--iso is empty");
+  return values;
+}
+
+std::string stem_of(const std::string& input) {
+  if (input.rfind("builtin:", 0) == 0) {
+    std::string name = input.substr(8);
+    std::replace(name.begin(), name.end(), ':', '_');
+    return name;
+  }
+  return fs::path(input).stem().string();
+}
+
+std::string iso_text(double iso) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%g", iso);
+  return text;
+}
+
+std::string json_escape(const std::string& s) {
+  std::string out;
+  for (char c : s) {
+    if (c == '"' || c == '\\') out += '\\';
+    if (static_cast<unsigned char>(c) < 0x20) {
+      out += ' ';
+      continue;
+    }
+    out += c;
+  }
+  return out;
+}
+
+}  // namespace
+
+int convert(const Args& raw) {
+  std::vector<cli::OptionSpec> options = {
+      {"iso", true, "isovalue(s), comma separated (default 0 for builtin: inputs)", "V[,V2,...]"},
+      {"levels", true, "subdivision levels 1..6, or 'auto' (default): the fine mesh as large as the isosurface", "L|auto"},
+      {"base-vertices", true, "base mesh vertex target", "N"},
+      {"base-ratio", true, "base mesh vertex target as a fraction of the isosurface's vertices (default 0.02)", "R"},
+      {"min-component-vertices", true, "drop isosurface components with fewer vertices", "N"},
+      {"smooth", true, "Gaussian pre-filter of the field, in voxels", "SIGMA"},
+      {"flip", false, "orient normals toward higher values", ""},
+      {"step", true, "quantization step in cells (default 0.01: adds about 0.5% of a cell RMSE)", "CELLS"},
+      {"output", true, "output file (one input and one isovalue)", "OUT.isw"},
+      {"out-dir", true, "output directory: NAME.isw, or NAME_isoV.isw with several isovalues", "DIR"},
+      {"jobs", true, "convert this many inputs at once (default 1)", "N"},
+      {"force", false, "overwrite existing outputs", ""},
+      {"quiet", false, "print nothing but errors", ""},
+      {"json", false, "print machine-readable results as one JSON object", ""},
+  };
+  cli::add_volume_options(options);
+  const cli::CommandSpec spec{
+      "convert",
+      "INPUT... --iso V[,V2,...] [--levels L|auto] [--base-vertices N | --base-ratio R] [extract options]\n"
+      "                (-o OUT.isw | --out-dir DIR) [--jobs N] [--force] [--quiet] [--json]",
+      "Converts isosurfaces of volumes into wavelet files: extraction -> base mesh -> signed distance ->\n"
+      "shrink-wrap -> wavelet analysis -> quantization and coding. INPUT may be files, directories (all their\n"
+      "volume files) or glob patterns. A failing input is reported and skipped; the exit code is non-zero if\n"
+      "any failed. Outputs are written atomically and never overwritten without --force.",
+      options,
+      1,
+      -1};
+  const cli::Arguments args(spec, raw);
+  if (args.help_requested()) {
+    std::fputs(cli::usage(spec).c_str(), stdout);
+    return 0;
+  }
+  if (args.has("output") == args.has("out-dir"))
+    throw Error(ErrorKind::InvalidArgument, "give exactly one of -o OUT.isw and --out-dir DIR");
+  if (args.has("base-vertices") && args.has("base-ratio"))
+    throw Error(ErrorKind::InvalidArgument, "give at most one of --base-vertices and --base-ratio");
+
+  const VolumeReadOptions read_options = cli::volume_read_options(args);
+  ConvertOptions convert_options;
+  const std::string levels_text = args.get("levels", "auto");
+  convert_options.levels = levels_text == "auto" ? 0 : args.get_int("levels", 0, 1, 6);
+  convert_options.base_vertices = static_cast<std::size_t>(args.get_int("base-vertices", 0, 4, 1 << 30));
+  convert_options.base_ratio = args.get_double("base-ratio", 0.02);
+  if (!(convert_options.base_ratio > 0 && convert_options.base_ratio <= 1))
+    throw Error(ErrorKind::InvalidArgument, "--base-ratio must be in (0, 1]");
+  convert_options.min_component_vertices = static_cast<std::size_t>(args.get_int("min-component-vertices", 0, 0, 1 << 30));
+  convert_options.smooth_sigma = args.get_double("smooth", 0);
+  if (convert_options.smooth_sigma < 0) throw Error(ErrorKind::InvalidArgument, "--smooth must be >= 0");
+  convert_options.flip = args.has("flip");
+  convert_options.step_cells = args.get_double("step", 0.01);
+  if (!(convert_options.step_cells > 0)) throw Error(ErrorKind::InvalidArgument, "--step must be positive");
+  const int jobs_count = args.get_int("jobs", 1, 1, 64);
+  const bool force = args.has("force");
+  const bool json = args.has("json");
+  const bool quiet = args.has("quiet") || json;
+
+  const std::vector<std::string> inputs = expand_inputs(args.positional());
+  std::vector<Job> jobs;
+  for (const std::string& input : inputs) {
+    std::vector<double> isovalues;
+    if (args.has("iso")) isovalues = parse_isovalues(args.get("iso"));
+    else if (cli::is_builtin_volume(input)) isovalues = {0.0};
+    else throw Error(ErrorKind::InvalidArgument, "missing --iso (needed for " + input + ")");
+    for (double iso : isovalues) {
+      Job job{input, iso, {}};
+      if (args.has("output")) {
+        job.output = args.get("output");
+      } else {
+        const std::string name = stem_of(input) + (isovalues.size() > 1 ? "_iso" + iso_text(iso) : "") + ".isw";
+        job.output = (fs::path(args.get("out-dir")) / name).string();
+      }
+      jobs.push_back(job);
+    }
+  }
+  if (args.has("output") && jobs.size() != 1)
+    throw Error(ErrorKind::InvalidArgument, "-o takes one input and one isovalue; use --out-dir for batches");
+  if (args.has("out-dir")) {
+    std::error_code ignored;
+    fs::create_directories(args.get("out-dir"), ignored);
+    if (!fs::is_directory(args.get("out-dir")))
+      throw Error(ErrorKind::Io, args.get("out-dir") + ": cannot create the output directory");
+  }
+
+  const cli::ProgressMode mode =
+      quiet ? cli::ProgressMode::Quiet
+            : (jobs_count > 1 ? cli::ProgressMode::Lines : cli::default_progress_mode(false));
+  std::vector<JobOutcome> outcomes(jobs.size());
+  std::atomic<std::size_t> next{0};
+  std::mutex print_mutex;
+  const auto worker = [&] {
+    for (std::size_t j = next++; j < jobs.size(); j = next++) {
+      const Job& job = jobs[j];
+      JobOutcome& outcome = outcomes[j];
+      const std::string label = stem_of(job.input) + (args.has("iso") ? " @" + iso_text(job.iso) : "");
+      try {
+        if (!force && fs::exists(job.output))
+          throw Error(ErrorKind::Io, job.output + ": already exists (use --force to overwrite)");
+        cli::ConsoleProgress progress(label, mode);
+        const auto start = std::chrono::steady_clock::now();
+        progress.begin_stage("load");
+        const Volume volume = read_volume(job.input, read_options);
+        progress.end_stage();
+        outcome.load_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        ConvertOptions job_options = convert_options;
+        job_options.iso = job.iso;
+        outcome.result = convert_volume(volume, job.input, job_options, progress);
+        write_isw(job.output, outcome.result.bytes, force);
+        outcome.ok = true;
+        if (!quiet) {
+          std::lock_guard<std::mutex> lock(print_mutex);
+          for (const std::string& warning : outcome.result.warnings)
+            std::fprintf(stderr, "isowave convert: warning: %s: %s\n", job.input.c_str(), warning.c_str());
+        }
+      } catch (const std::exception& error) {
+        outcome.error = error.what();
+        std::lock_guard<std::mutex> lock(print_mutex);
+        std::fprintf(stderr, "isowave convert: %s: %s (skipped)\n", job.input.c_str(), error.what());
+      }
+    }
+  };
+  std::vector<std::thread> threads;
+  for (int t = 1; t < std::min<int>(jobs_count, static_cast<int>(jobs.size())); ++t) threads.emplace_back(worker);
+  worker();
+  for (std::thread& t : threads) t.join();
+
+  std::size_t failed = 0;
+  for (const JobOutcome& o : outcomes) failed += o.ok ? 0 : 1;
+
+  const auto rmse_percent = [](const ConvertResult& r, double value) { return 100.0 * value / r.cell_size; };
+  if (json) {
+    std::printf("{\"converted\": %zu, \"failed\": %zu, \"results\": [", jobs.size() - failed, failed);
+    for (std::size_t j = 0; j < jobs.size(); ++j) {
+      const JobOutcome& o = outcomes[j];
+      std::printf("%s{\"input\": \"%s\", \"iso\": %.10g, \"output\": \"%s\", \"ok\": %s", j ? ", " : "",
+                  json_escape(jobs[j].input).c_str(), jobs[j].iso, json_escape(jobs[j].output).c_str(),
+                  o.ok ? "true" : "false");
+      if (!o.ok) {
+        std::printf(", \"error\": \"%s\"}", json_escape(o.error).c_str());
+        continue;
+      }
+      const ConvertResult& r = o.result;
+      std::printf(", \"bytes\": %zu, \"cell_size\": %.9g, \"extracted_vertices\": %zu, \"base_vertices\": %zu, "
+                  "\"fine_vertices\": %zu, \"levels\": %d, \"seconds\": {\"load\": %.3f, \"extract\": %.3f, "
+                  "\"simplify\": %.3f, \"distance\": %.3f, \"fit\": %.3f, \"analysis\": %.3f, \"encode\": %.3f, "
+                  "\"evaluate\": %.3f}, \"rows\": [",
+                  r.bytes.size(), r.cell_size, r.extracted_vertices, r.base_vertices, r.fine_vertices, r.levels,
+                  o.load_seconds, r.seconds.extract, r.seconds.simplify, r.seconds.distance, r.seconds.fit,
+                  r.seconds.analysis, r.seconds.encode, r.seconds.evaluate);
+      for (std::size_t k = 0; k < r.summary.size(); ++k) {
+        const ConvertSummaryRow& row = r.summary[k];
+        std::printf("%s{\"percent\": %.4f, \"coefficients\": %zu, \"rmse_percent_cell\": %.6g, \"max_percent_cell\": "
+                    "%.6g, \"bytes\": %llu, \"base\": %s}",
+                    k ? ", " : "", row.percent, row.kept, rmse_percent(r, row.rms), rmse_percent(r, row.max),
+                    static_cast<unsigned long long>(row.bytes), row.is_base ? "true" : "false");
+      }
+      std::printf("]}");
+    }
+    std::printf("]}\n");
+  } else if (!quiet) {
+    std::printf("\n%-28s %10s %9s %9s %10s %3s %8s  %s\n", "output", "bytes", "isosurf.", "base", "fine", "L",
+                "seconds", "RMSE [% cell] at percent of coefficients (base last)");
+    for (std::size_t j = 0; j < jobs.size(); ++j) {
+      const JobOutcome& o = outcomes[j];
+      if (!o.ok) {
+        std::printf("%-28s FAILED: %s\n", jobs[j].output.c_str(), o.error.c_str());
+        continue;
+      }
+      const ConvertResult& r = o.result;
+      std::string errors;
+      char cell[64];
+      for (const ConvertSummaryRow& row : r.summary) {
+        std::snprintf(cell, sizeof cell, "%s%.4g%%: %.3g", errors.empty() ? "" : "  ", row.percent, rmse_percent(r, row.rms));
+        errors += cell;
+      }
+      std::printf("%-28s %10zu %9zu %9zu %10zu %3d %8.1f  %s\n", jobs[j].output.c_str(), r.bytes.size(),
+                  r.extracted_vertices, r.base_vertices, r.fine_vertices, r.levels, o.load_seconds + r.seconds.total(),
+                  errors.c_str());
+      std::printf("%-28s stages: load %.2f, extract %.2f, simplify %.2f, distance %.2f, fit %.2f, analysis %.2f, "
+                  "encode %.2f, evaluate %.2f s; %.2f bits per fine vertex\n",
+                  "", o.load_seconds, r.seconds.extract, r.seconds.simplify, r.seconds.distance, r.seconds.fit,
+                  r.seconds.analysis, r.seconds.encode, r.seconds.evaluate,
+                  8.0 * static_cast<double>(r.bytes.size()) / static_cast<double>(r.fine_vertices));
+    }
+    if (failed) std::printf("\n%zu of %zu conversions failed\n", failed, jobs.size());
+  }
+  return failed ? 1 : 0;
+}
+
+}  // namespace isowave::commands

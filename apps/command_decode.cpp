@@ -1,0 +1,80 @@
+// isowave decode: synthesis with the kept coefficients of an .isw file, written
+// as a mesh at the chosen level (optionally its limit surface).
+#include <chrono>
+#include <cstdio>
+
+#include "cli.h"
+#include "commands.h"
+#include "isowave/codec/isw_format.h"
+#include "isowave/codec/statistics.h"
+#include "isowave/core/error.h"
+#include "isowave/core/mesh_io.h"
+#include "isowave/transform/limit_surface.h"
+
+namespace isowave::commands {
+
+int decode(const Args& raw) {
+  const cli::CommandSpec spec{
+      "decode",
+      "IN.isw (--percent P | --coefficients N) [--level L] [--limit] [--triangulate] [--ascii] -o OUT.ply|OUT.obj",
+      "Rebuilds the surface from the base mesh and the most important wavelet coefficients of IN.isw.\n"
+      "--percent counts as the paper does: the total is the number of fine control points (base vertices plus\n"
+      "all coefficients), and the base mesh alone is the smallest choice. Reads only the part of the file it needs.",
+      {{"percent", true, "keep this percentage of full resolution (0..100)", "P"},
+       {"coefficients", true, "keep this many wavelet coefficients (besides the base mesh)", "N"},
+       {"level", true, "write the control mesh of this level (default: the finest)", "L"},
+       {"limit", false, "move the vertices to the limit surface (OpenSubdiv)", ""},
+       {"triangulate", false, "split quads into triangles", ""},
+       {"ascii", false, "write ASCII PLY instead of binary", ""},
+       {"quiet", false, "print nothing on success", ""},
+       {"output", true, "output mesh (.ply, .obj or .off)", "OUT"}},
+      1,
+      1};
+  const cli::Arguments args(spec, raw);
+  if (args.help_requested()) {
+    std::fputs(cli::usage(spec).c_str(), stdout);
+    return 0;
+  }
+  if (args.has("percent") == args.has("coefficients"))
+    throw Error(ErrorKind::InvalidArgument, "give exactly one of --percent and --coefficients");
+  const std::string output = args.require("output");
+  mesh_format_from_path(output);
+  const auto start = std::chrono::steady_clock::now();
+
+  IswDecodeOptions options;
+  if (args.has("percent")) {
+    options.max_percent = args.get_double("percent", 100);
+    if (!(options.max_percent >= 0 && options.max_percent <= 100))
+      throw Error(ErrorKind::InvalidArgument, "--percent must be in 0..100");
+  } else {
+    const double n = args.get_double("coefficients", 0);
+    if (!(n >= 0) || n != static_cast<double>(static_cast<std::uint64_t>(n)))
+      throw Error(ErrorKind::InvalidArgument, "--coefficients must be a non-negative integer");
+    options.max_coefficients = static_cast<std::uint64_t>(n);
+  }
+  const std::string& input = args.positional()[0];
+  const IswDecoded decoded = read_isw(input, options);
+  if (decoded.truncated) std::fprintf(stderr, "isowave decode: warning: %s: %s\n", input.c_str(), decoded.truncation_note.c_str());
+  const int level = args.get_int("level", decoded.levels, 0, decoded.levels);
+
+  const std::vector<Vec3> points = reconstruct(decoded, decoded.ranked.size(), level);
+  PolygonMesh mesh = decoded.hierarchy->control_mesh(level, points);
+  if (args.has("limit")) mesh.positions = limit_surface(mesh).positions;
+  if (args.has("triangulate")) mesh = triangulate(mesh);
+  MeshWriteOptions write_options;
+  write_options.ascii = args.has("ascii");
+  write_mesh(output, mesh, write_options);
+
+  if (!args.has("quiet")) {
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const double kept = static_cast<double>(decoded.hierarchy->vertex_count(0) + decoded.ranked.size());
+    std::printf("%s: %zu of %llu coefficients kept (%.2f%% of %zu fine control points), level %d%s\n", input.c_str(),
+                decoded.ranked.size(), static_cast<unsigned long long>(decoded.coefficients_total),
+                100.0 * kept / static_cast<double>(decoded.hierarchy->fine_vertex_count()),
+                decoded.hierarchy->fine_vertex_count(), level, args.has("limit") ? ", limit surface" : "");
+    std::printf("%s: %zu vertices, %zu faces (%.2f s)\n", output.c_str(), mesh.vertex_count(), mesh.face_count(), seconds);
+  }
+  return 0;
+}
+
+}  // namespace isowave::commands

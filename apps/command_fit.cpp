@@ -1,0 +1,168 @@
+// isowave fit: extract the isosurface, build its signed-distance field and
+// shrink-wrap a base mesh's subdivision hierarchy onto it (paper Sec. 4.2);
+// writes the fine control mesh and prints the quality report per level.
+#include <chrono>
+#include <climits>
+#include <cstdio>
+#include <string>
+
+#include "cli.h"
+#include "commands.h"
+#include "isowave/core/error.h"
+#include "isowave/core/mesh_io.h"
+#include "isowave/extract/isosurface.h"
+#include "isowave/extract/volume_io.h"
+#include "isowave/fit/fit_quality.h"
+#include "isowave/fit/shrink_wrap.h"
+#include "isowave/fit/signed_distance.h"
+#include "isowave/fit/surface_distance.h"
+#include "isowave/transform/hierarchy.h"
+#include "volume_options.h"
+
+namespace isowave::commands {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
+
+void print_quality(const FitQuality& q) {
+  std::printf("  level %d: %zu vertices, %zu faces%s\n", q.level, q.vertices, q.faces,
+              q.nonfinite_vertices ? " (NON-FINITE VERTICES)" : "");
+  std::printf("    on the isosurface (|f - iso| / |grad f|): rms %.4f, max %.4f cell%s\n", q.isosurface_rms,
+              q.isosurface_max,
+              q.isosurface_undefined ? (" (" + std::to_string(q.isosurface_undefined) + " without gradient)").c_str() : "");
+  std::printf("    to the extracted mesh: rms %.4f, max %.4f cell\n", q.surface_rms, q.surface_max);
+  std::printf("    coverage (extracted vertices to the fit): rms %.4f, 99th percentile %.4f, max %.4f cell\n",
+              q.coverage_rms, q.coverage_p99, q.coverage_max);
+  std::printf("    tangled faces: %zu (%.4f%%)\n", q.tangled_faces, 100.0 * q.tangled_fraction);
+  std::printf("    face area / patch mean: min %.3f, 1%% %.3f, median %.3f, 99%% %.3f, max %.3f, deviation %.3f\n",
+              q.area_ratio_min, q.area_ratio_p1, q.area_ratio_median, q.area_ratio_p99, q.area_ratio_max,
+              q.area_ratio_deviation);
+}
+
+}  // namespace
+
+int fit(const Args& raw) {
+  cli::CommandSpec spec{
+      "fit",
+      "INPUT --iso V --base BASE.ply --levels L [reader and extraction options] -o FINE.ply",
+      "Fits the subdivision hierarchy of BASE (L levels) to the isosurface of INPUT by shrink-wrapping\n"
+      "(Bertram et al. 2000, Sec. 4.2): per level a few rounds of relaxation and attraction toward the\n"
+      "zero set of a signed-distance field, then refinement with the wavelet subdivision operator S; finally\n"
+      "every fine vertex moves onto the isosurface along the field gradient. The extraction options must\n"
+      "match those BASE came from. Writes the level-L control mesh (quads, PLY vertex property 'sharp') and\n"
+      "prints a quality report per level (distances in cells).",
+      {{"iso", true, "isovalue (samples >= V are inside)", "V"}},
+      1,
+      1};
+  cli::add_volume_options(spec.options);
+  spec.options.push_back({"min-component-vertices", true, "drop connected components with fewer vertices", "N"});
+  spec.options.push_back({"smooth", true, "Gaussian pre-filter of the field, standard deviation in voxels", "SIGMA"});
+  spec.options.push_back({"flip", false, "normals toward higher values", ""});
+  spec.options.push_back({"base", true, "base mesh (.ply, .obj, .off), e.g. from the base-mesh stage", "BASE"});
+  spec.options.push_back({"levels", true, "subdivision levels, 0..8", "L"});
+  spec.options.push_back({"iterations", true, "relaxation + attraction rounds per coarse level (default 4)", "N"});
+  spec.options.push_back({"final-iterations", true, "rounds on the finest level (default 2)", "N"});
+  spec.options.push_back({"reach", true, "attraction reach in edge lengths (default 2)", "R"});
+  spec.options.push_back({"band", true, "signed-distance narrow band in cells, 0 = whole grid (default 4)", "K"});
+  spec.options.push_back({"no-correction", false, "skip the final move onto the exact isosurface", ""});
+  spec.options.push_back({"no-report", false, "skip the quality report (it needs distance trees)", ""});
+  spec.options.push_back({"ascii", false, "write ASCII PLY instead of binary", ""});
+  spec.options.push_back({"quiet", false, "print nothing on success", ""});
+  spec.options.push_back({"output", true, "output mesh (.ply, .obj or .off)", "FINE"});
+  const cli::Arguments args(spec, raw);
+  if (args.help_requested()) {
+    std::fputs(cli::usage(spec).c_str(), stdout);
+    return 0;
+  }
+  const std::string& input = args.positional()[0];
+  const std::string output = args.require("output");
+  mesh_format_from_path(output);  // reject a bad extension before any work
+  const std::string base_path = args.require("base");
+  const int levels = args.get_int("levels", -1, 0, 8);
+  if (levels < 0) throw Error(ErrorKind::InvalidArgument, "missing required option --levels");
+  if (!args.has("iso") && !cli::is_builtin_volume(input))
+    throw Error(ErrorKind::InvalidArgument, "missing required option --iso (only builtin: inputs default to 0)");
+  IsosurfaceOptions extract_options;
+  extract_options.iso = args.get_double("iso", 0.0);
+  extract_options.flip = args.has("flip");
+  extract_options.min_component_vertices =
+      static_cast<std::size_t>(args.get_int("min-component-vertices", 0, 0, INT_MAX));
+  const double smooth = args.get_double("smooth", 0.0);
+  if (!(smooth >= 0 && smooth <= 100))
+    throw Error(ErrorKind::InvalidArgument, "--smooth must be in 0..100 voxels, got " + args.get("smooth"));
+  ShrinkWrapOptions wrap_options;
+  wrap_options.iterations = args.get_int("iterations", wrap_options.iterations, 0, 100);
+  wrap_options.final_level_iterations = args.get_int("final-iterations", wrap_options.final_level_iterations, 0, 100);
+  wrap_options.attraction.reach_edges = args.get_double("reach", wrap_options.attraction.reach_edges);
+  wrap_options.final_correction = !args.has("no-correction");
+  const bool report = !args.has("no-report") && !args.has("quiet");
+  wrap_options.keep_levels = report;
+  const double band = args.get_double("band", 4.0);
+  if (!(band >= 0 && band <= 1e6)) throw Error(ErrorKind::InvalidArgument, "--band must be >= 0 cells");
+  const VolumeReadOptions read_options = cli::volume_read_options(args);
+
+  // The base mesh first: cheap to read, and its errors are the likeliest.
+  PolygonMesh base = read_mesh(base_path);
+  const std::size_t unreferenced = remove_unreferenced_vertices(base);
+  const SubdivisionHierarchy hierarchy(base, levels);
+
+  auto start = Clock::now();
+  Volume field = read_volume(input, read_options);
+  if (field.dims[0] < 2 || field.dims[1] < 2 || field.dims[2] < 2)
+    throw Error(ErrorKind::InvalidArgument, input + ": fitting needs at least 2 samples along each axis");
+  // The fit sees the same (pre-filtered) field the surface is extracted from.
+  if (smooth > 0) field = gaussian_smoothed(field, smooth);
+  const Isosurface surface = extract_isosurface(field, extract_options);
+  if (surface.mesh.face_count() == 0)
+    throw Error(ErrorKind::InvalidArgument, input + ": the isosurface at " + args.get("iso", "0") + " is empty");
+  const double extract_seconds = seconds_since(start);
+
+  start = Clock::now();
+  SignedDistanceOptions distance_options;
+  distance_options.iso = extract_options.iso;
+  distance_options.flip = extract_options.flip;
+  distance_options.band_cells = band;
+  distance_options.surface = &surface.mesh;
+  const SignedDistanceField distance = compute_signed_distance(field, distance_options);
+  const double distance_seconds = seconds_since(start);
+
+  start = Clock::now();
+  const ShrinkWrapResult result = shrink_wrap(hierarchy, base.positions, distance, field, wrap_options);
+  const double wrap_seconds = seconds_since(start);
+
+  const PolygonMesh fine = hierarchy.control_mesh(levels, result.positions);
+  MeshWriteOptions write_options;
+  write_options.ascii = args.has("ascii");
+  write_mesh(output, fine, write_options);
+  if (args.has("quiet")) return 0;
+
+  std::printf("%s: %zu vertices, %zu faces, %zu sharp%s\n", base_path.c_str(), base.vertex_count(), base.face_count(),
+              base.sharp_count(),
+              unreferenced ? (" (" + std::to_string(unreferenced) + " unreferenced vertices dropped)").c_str() : "");
+  std::printf("%s: isosurface %zu vertices, %zu triangles (%.2f s)\n", input.c_str(), surface.mesh.vertex_count(),
+              surface.mesh.face_count(), extract_seconds);
+  std::printf("signed distance: %zu nodes, %zu seeds, band %s (%.2f s)\n", distance.statistics.nodes,
+              distance.statistics.seed_nodes, band > 0 ? (std::to_string(band) + " cells").c_str() : "none",
+              distance_seconds);
+  std::printf("shrink-wrap: %zu fine vertices (%.2f s)\n", hierarchy.fine_vertex_count(), wrap_seconds);
+  for (const WrapLevelStatistics& s : result.levels)
+    std::printf("  level %d: %zu vertices, last attraction %zu attracted, %zu out of reach\n", s.level, s.vertices,
+                s.last_attraction.attracted, s.last_attraction.out_of_reach);
+  if (wrap_options.final_correction)
+    std::printf("  correction: %zu vertices onto the isosurface (mean %.4f, max %.4f cell), %zu left in place\n",
+                result.correction.corrected, result.correction.mean_move_cells, result.correction.max_move_cells,
+                result.correction.failed);
+  if (report) {
+    std::printf("quality:\n");
+    const SurfaceDistance reference(surface.mesh);
+    for (int level = 0; level <= levels; ++level)
+      print_quality(measure_fit_quality(
+          hierarchy, level, level < levels ? result.level_positions[static_cast<std::size_t>(level)] : result.positions,
+          surface.mesh, reference, field, extract_options.iso, extract_options.flip));
+  }
+  std::printf("%s: level %d, %zu vertices, %zu quads\n", output.c_str(), levels, fine.vertex_count(), fine.face_count());
+  return 0;
+}
+
+}  // namespace isowave::commands

@@ -1,0 +1,76 @@
+// isowave simplify: base-mesh construction of paper Sec. 4.1 (bucket-priority
+// edge collapse, then edge removal into quads and pentagons).
+#include <cmath>
+#include <cstdio>
+#include <limits>
+
+#include "cli.h"
+#include "commands.h"
+#include "isowave/core/error.h"
+#include "isowave/core/mesh_io.h"
+#include "isowave/simplify/simplify.h"
+
+namespace isowave::commands {
+
+int simplify(const Args& raw) {
+  const cli::CommandSpec spec{
+      "simplify",
+      "MESH (--target-vertices N | --ratio R) [--no-edge-removal] [--normal-threshold D] -o BASE.ply|BASE.obj",
+      "Builds a base mesh from a 2-manifold triangle mesh (Bertram et al. 2000, Sec. 4.1): edge collapses in\n"
+      "bucket-priority order keep genus, components and boundary loops and valences 3..8 (2..8 on the\n"
+      "boundary); then edges are removed to form quads and pentagons. Unreferenced vertices are dropped\n"
+      "first. --target-vertices 0 simplifies as far as the rules allow. The PLY vertex property 'sharp'\n"
+      "(uchar 1) marks sharp vertices on input and output; sharp vertices never move.",
+      {{"target-vertices", true, "stop at this many vertices (0: as far as possible)", "N"},
+       {"ratio", true, "target as a fraction of the input vertex count, in (0, 1]", "R"},
+       {"no-edge-removal", false, "keep the triangles of the collapse phase", ""},
+       {"normal-threshold", true, "edge removal needs unit face normals with dot >= D, in [-1, 1] (default 0.5)",
+        "D"},
+       {"no-distance", false, "skip the distance from the input vertices to the base mesh", ""},
+       {"ascii", false, "write ASCII PLY instead of binary", ""},
+       {"quiet", false, "print nothing on success", ""},
+       {"output", true, "base mesh (.ply or .obj)", "BASE"}},
+      1,
+      1};
+  const cli::Arguments args(spec, raw);
+  if (args.help_requested()) {
+    std::fputs(cli::usage(spec).c_str(), stdout);
+    return 0;
+  }
+  if (args.has("target-vertices") == args.has("ratio"))
+    throw Error(ErrorKind::InvalidArgument, "give exactly one of --target-vertices and --ratio");
+  const std::string output = args.require("output");
+  if (mesh_format_from_path(output) == MeshFormat::Off)
+    throw Error(ErrorKind::InvalidArgument, "the base mesh must be written as .ply or .obj: " + output);
+  simplify::SimplifyOptions options;
+  const double ratio = args.get_double("ratio", 1.0);
+  if (args.has("ratio") && !(ratio > 0 && ratio <= 1))
+    throw Error(ErrorKind::InvalidArgument, "--ratio must be in (0, 1], got " + args.get("ratio"));
+  const int target = args.get_int("target-vertices", 0, 0, std::numeric_limits<int>::max());
+  options.edge_removal = !args.has("no-edge-removal");
+  options.edge_removal_min_normal_dot = args.get_double("normal-threshold", 0.5);
+  if (!(options.edge_removal_min_normal_dot >= -1 && options.edge_removal_min_normal_dot <= 1))
+    throw Error(ErrorKind::InvalidArgument, "--normal-threshold must be in [-1, 1], got " + args.get("normal-threshold"));
+  options.compute_distance = !args.has("no-distance");
+
+  const std::string& input = args.positional()[0];
+  PolygonMesh mesh = read_mesh(input);
+  const std::size_t unreferenced = remove_unreferenced_vertices(mesh);
+  options.target_vertices = args.has("ratio")
+                                ? static_cast<std::size_t>(std::llround(ratio * double(mesh.vertex_count())))
+                                : static_cast<std::size_t>(target);
+  const simplify::SimplifyResult result = simplify::simplify(mesh, options);
+  MeshWriteOptions write_options;
+  write_options.ascii = args.has("ascii");
+  write_mesh(output, result.base, write_options);
+
+  if (!args.has("quiet")) {
+    std::printf("%s", input.c_str());
+    if (unreferenced) std::printf(" (%zu unreferenced vertices dropped)", unreferenced);
+    std::printf("\n%s", simplify::format_report(result.report).c_str());
+    std::printf("written: %s\n", output.c_str());
+  }
+  return 0;
+}
+
+}  // namespace isowave::commands

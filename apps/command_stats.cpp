@@ -1,0 +1,175 @@
+// isowave stats: the paper's Table 1 for an .isw file, as text, CSV or JSON,
+// optionally plotted as SVG.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+
+#include "cli.h"
+#include "commands.h"
+#include "isowave/codec/isw_format.h"
+#include "isowave/codec/statistics.h"
+#include "isowave/core/atomic_file.h"
+#include "isowave/core/error.h"
+
+namespace isowave::commands {
+namespace {
+
+std::vector<double> parse_percents(const std::string& text) {
+  std::vector<double> result;
+  std::stringstream stream(text);
+  std::string item;
+  while (std::getline(stream, item, ',')) {
+    char* end = nullptr;
+    const double value = std::strtod(item.c_str(), &end);
+    if (item.empty() || *end != '\0' || !(value >= 0 && value <= 100))
+      throw Error(ErrorKind::InvalidArgument, "--percents expects numbers in 0..100 separated by commas, got '" + text + "'");
+    result.push_back(value);
+  }
+  if (result.empty()) throw Error(ErrorKind::InvalidArgument, "--percents is empty");
+  return result;
+}
+
+std::string svg_plot(const std::vector<RateDistortionRow>& rows, double cell, const std::string& title) {
+  std::vector<RateDistortionRow> sorted = rows;
+  std::sort(sorted.begin(), sorted.end(), [](const auto& a, const auto& b) { return a.percent < b.percent; });
+  const double width = 640, height = 420, left = 70, right = 20, top = 40, bottom = 60;
+  double max_x = 0, max_y = 0;
+  for (const auto& r : sorted) {
+    max_x = std::max(max_x, r.percent);
+    max_y = std::max(max_y, 100 * r.rms / cell);
+  }
+  max_x = max_x > 0 ? max_x : 1;
+  max_y = max_y > 0 ? max_y * 1.1 : 1;
+  const auto x = [&](double v) { return left + (width - left - right) * v / max_x; };
+  const auto y = [&](double v) { return height - bottom - (height - top - bottom) * v / max_y; };
+  char buffer[512];
+  std::string svg = "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n";
+  std::snprintf(buffer, sizeof buffer,
+                "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"%.0f\" height=\"%.0f\" font-family=\"sans-serif\" font-size=\"12\">\n"
+                "<rect width=\"100%%\" height=\"100%%\" fill=\"white\"/>\n",
+                width, height);
+  svg += buffer;
+  std::snprintf(buffer, sizeof buffer, "<text x=\"%.0f\" y=\"22\" text-anchor=\"middle\" font-size=\"14\">%s</text>\n",
+                width / 2, title.c_str());
+  svg += buffer;
+  // Axes, ticks and labels.
+  std::snprintf(buffer, sizeof buffer,
+                "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"black\"/>\n"
+                "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"black\"/>\n",
+                left, y(0), width - right, y(0), left, y(0), left, top);
+  svg += buffer;
+  for (int t = 0; t <= 5; ++t) {
+    const double vx = max_x * t / 5, vy = max_y * t / 5;
+    std::snprintf(buffer, sizeof buffer,
+                  "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"black\"/>"
+                  "<text x=\"%.1f\" y=\"%.1f\" text-anchor=\"middle\">%.3g</text>\n"
+                  "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"#ddd\"/>"
+                  "<text x=\"%.1f\" y=\"%.1f\" text-anchor=\"end\">%.3g</text>\n",
+                  x(vx), y(0), x(vx), y(0) + 5, x(vx), y(0) + 20, vx, left, y(vy), width - right, y(vy), left - 6,
+                  y(vy) + 4, vy);
+    svg += buffer;
+  }
+  std::snprintf(buffer, sizeof buffer,
+                "<text x=\"%.1f\" y=\"%.1f\" text-anchor=\"middle\">coefficients kept [%% of full resolution]</text>\n"
+                "<text x=\"18\" y=\"%.1f\" text-anchor=\"middle\" transform=\"rotate(-90 18 %.1f)\">RMSE [%% of cell edge]</text>\n",
+                (left + width - right) / 2, height - 18, (top + height - bottom) / 2, (top + height - bottom) / 2);
+  svg += buffer;
+  svg += "<polyline fill=\"none\" stroke=\"#1f5fbf\" stroke-width=\"2\" points=\"";
+  for (const auto& r : sorted) {
+    std::snprintf(buffer, sizeof buffer, "%.1f,%.1f ", x(r.percent), y(100 * r.rms / cell));
+    svg += buffer;
+  }
+  svg += "\"/>\n";
+  for (const auto& r : sorted) {
+    std::snprintf(buffer, sizeof buffer, "<circle cx=\"%.1f\" cy=\"%.1f\" r=\"3.5\" fill=\"#1f5fbf\"/>\n", x(r.percent),
+                  y(100 * r.rms / cell));
+    svg += buffer;
+  }
+  svg += "</svg>\n";
+  return svg;
+}
+
+}  // namespace
+
+int stats(const Args& raw) {
+  const cli::CommandSpec spec{
+      "stats",
+      "IN.isw [--percents 100,20,10,5] [--csv | --json] [--plot FILE.svg]",
+      "Prints the paper's Table 1 for IN.isw: coefficients kept (base vertices included), percent of full\n"
+      "resolution, RMSE and maximum error in percent of the volume cell edge (over the fine control points,\n"
+      "against the full-resolution decode), bytes a progressive reader needs, bits per fine vertex and per\n"
+      "vertex of the extracted isosurface; the base-mesh row last. The cell edge is the grid spacing (the\n"
+      "geometric mean on anisotropic grids).",
+      {{"percents", true, "percentages of full resolution to tabulate", "LIST"},
+       {"csv", false, "print CSV", ""},
+       {"json", false, "print one JSON object", ""},
+       {"plot", true, "draw RMSE against percent as SVG", "FILE.svg"}},
+      1,
+      1};
+  const cli::Arguments args(spec, raw);
+  if (args.help_requested()) {
+    std::fputs(cli::usage(spec).c_str(), stdout);
+    return 0;
+  }
+  if (args.has("csv") && args.has("json")) throw Error(ErrorKind::InvalidArgument, "give at most one of --csv and --json");
+  const std::vector<double> percents = parse_percents(args.get("percents", "100,20,10,5"));
+  const std::string& input = args.positional()[0];
+  const IswDecoded decoded = read_isw(input);
+  if (decoded.truncated) throw Error(ErrorKind::Format, input + ": " + decoded.truncation_note + "; stats need the whole file");
+  const std::vector<RateDistortionRow> rows = rate_distortion(decoded, percents);
+
+  const double cell = decoded.metadata.number("cell_size", 1.0);
+  const bool cell_known = decoded.metadata.values.count("cell_size") != 0;
+  const double fine = static_cast<double>(decoded.hierarchy->fine_vertex_count());
+  const double extracted = decoded.metadata.number("extracted_vertices", 0);
+  const auto pct = [&](double world) { return 100.0 * world / cell; };
+
+  if (args.has("json")) {
+    std::printf("{\"file\": \"%s\", \"cell_size\": %.9g, \"cell_size_known\": %s, \"fine_vertices\": %.0f, "
+                "\"base_vertices\": %zu, \"levels\": %d, \"extracted_vertices\": %.0f, \"rows\": [",
+                input.c_str(), cell, cell_known ? "true" : "false", fine, decoded.hierarchy->vertex_count(0),
+                decoded.levels, extracted);
+    for (std::size_t i = 0; i < rows.size(); ++i) {
+      const auto& r = rows[i];
+      std::printf("%s{\"coefficients\": %zu, \"percent\": %.4f, \"rmse_percent_cell\": %.6g, \"max_percent_cell\": %.6g, "
+                  "\"bytes\": %llu, \"bits_per_fine_vertex\": %.5g, \"bits_per_isosurface_vertex\": %.5g, \"base\": %s}",
+                  i ? ", " : "", r.kept, r.percent, pct(r.rms), pct(r.max), static_cast<unsigned long long>(r.bytes),
+                  8.0 * static_cast<double>(r.bytes) / fine,
+                  extracted > 0 ? 8.0 * static_cast<double>(r.bytes) / extracted : 0.0, r.is_base ? "true" : "false");
+    }
+    std::printf("]}\n");
+  } else if (args.has("csv")) {
+    std::printf("coefficients,percent,rmse_percent_cell,max_percent_cell,bytes,bits_per_fine_vertex,bits_per_isosurface_vertex,base\n");
+    for (const auto& r : rows)
+      std::printf("%zu,%.4f,%.6g,%.6g,%llu,%.5g,%.5g,%d\n", r.kept, r.percent, pct(r.rms), pct(r.max),
+                  static_cast<unsigned long long>(r.bytes), 8.0 * static_cast<double>(r.bytes) / fine,
+                  extracted > 0 ? 8.0 * static_cast<double>(r.bytes) / extracted : 0.0, r.is_base ? 1 : 0);
+  } else {
+    std::printf("%s: %s, isovalue %s, %d levels, %zu base vertices, %.0f fine control points\n", input.c_str(),
+                decoded.metadata.text("source", "unknown source").c_str(), decoded.metadata.text("isovalue", "?").c_str(),
+                decoded.levels, decoded.hierarchy->vertex_count(0), fine);
+    std::printf("cell edge %.6g%s\n\n", cell,
+                cell_known ? (decoded.metadata.text("cell_size_note").empty() ? "" : (" (" + decoded.metadata.text("cell_size_note") + ")").c_str())
+                           : " (not recorded in the file: errors are in world units x 100)");
+    std::printf("%12s %8s %14s %13s %12s %10s %12s\n", "coefficients", "percent", "RMSE [% cell]", "max [% cell]", "bytes",
+                "bits/fine", "bits/isovtx");
+    for (const auto& r : rows) {
+      std::printf("%12zu %8.2f %14.3f %13.3f %12llu %10.3f", r.kept, r.percent, pct(r.rms), pct(r.max),
+                  static_cast<unsigned long long>(r.bytes), 8.0 * static_cast<double>(r.bytes) / fine);
+      if (extracted > 0) std::printf(" %12.3f", 8.0 * static_cast<double>(r.bytes) / extracted);
+      else std::printf(" %12s", "-");
+      std::printf("%s\n", r.is_base ? "  (base mesh)" : "");
+    }
+  }
+  if (args.has("plot")) {
+    std::vector<double> plot_percents = {2, 3, 5, 7.5, 10, 15, 20, 30, 50, 75, 100};
+    const std::vector<RateDistortionRow> curve = rate_distortion(decoded, plot_percents);
+    AtomicFileWriter file(args.get("plot"));
+    file.write(svg_plot(curve, cell, "RMSE against coefficients kept: " + decoded.metadata.text("source", input)));
+    file.commit();
+  }
+  return 0;
+}
+
+}  // namespace isowave::commands

@@ -1,0 +1,54 @@
+#include "console_progress.h"
+
+#include <cstdio>
+#include <unistd.h>
+
+namespace isowave::cli {
+
+ProgressMode default_progress_mode(bool quiet) {
+  if (quiet) return ProgressMode::Quiet;
+  return isatty(fileno(stderr)) ? ProgressMode::LiveBar : ProgressMode::Lines;
+}
+
+void ConsoleProgress::begin_stage(std::string_view name) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  stage_ = std::string(name);
+  stage_start_ = Clock::now();
+  last_draw_ = {};
+  if (mode_ == ProgressMode::LiveBar) draw(0.0, false);
+}
+
+void ConsoleProgress::update(double fraction) {
+  if (mode_ != ProgressMode::LiveBar) return;
+  std::unique_lock<std::mutex> lock(mutex_, std::try_to_lock);
+  if (!lock.owns_lock()) return;  // another thread is drawing
+  if (Clock::now() - last_draw_ < std::chrono::milliseconds(100)) return;
+  draw(fraction, false);
+}
+
+void ConsoleProgress::end_stage() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (mode_ == ProgressMode::Quiet) return;
+  draw(1.0, true);
+}
+
+void ConsoleProgress::draw(double fraction, bool final_line) {
+  last_draw_ = Clock::now();
+  const double elapsed = std::chrono::duration<double>(last_draw_ - stage_start_).count();
+  if (mode_ == ProgressMode::Lines) {
+    std::fprintf(stderr, "%s: %s done in %.2f s\n", label_.c_str(), stage_.c_str(), elapsed);
+    return;
+  }
+  const int width = 24;
+  const int filled = static_cast<int>(fraction * width + 0.5);
+  std::string bar(static_cast<std::size_t>(filled), '#');
+  bar.resize(width, '.');
+  char eta[32] = "";
+  if (!final_line && fraction > 0.02)
+    std::snprintf(eta, sizeof eta, "  ETA %.0f s", elapsed * (1.0 - fraction) / fraction);
+  std::fprintf(stderr, "\r\033[K%s  %-24s [%s] %3.0f%%  %.1f s%s%s", label_.c_str(), stage_.c_str(), bar.c_str(),
+               100.0 * fraction, elapsed, eta, final_line ? "\n" : "");
+  std::fflush(stderr);
+}
+
+}  // namespace isowave::cli

@@ -1,0 +1,87 @@
+#include "volume_options.h"
+
+#include <charconv>
+#include <cmath>
+
+#include "isowave/core/error.h"
+
+namespace isowave::cli {
+namespace {
+
+[[noreturn]] void bad_value(const std::string& option, const std::string& text, const std::string& expected) {
+  throw Error(ErrorKind::InvalidArgument, "--" + option + " expects " + expected + ", got '" + text + "'");
+}
+
+// Splits "a,b,c" into exactly three fields.
+std::vector<std::string> three_fields(const std::string& option, const std::string& text, const std::string& expected) {
+  std::vector<std::string> fields;
+  std::size_t start = 0;
+  while (true) {
+    const std::size_t comma = text.find(',', start);
+    fields.push_back(text.substr(start, comma == std::string::npos ? std::string::npos : comma - start));
+    if (comma == std::string::npos) break;
+    start = comma + 1;
+  }
+  if (fields.size() != 3) bad_value(option, text, expected);
+  return fields;
+}
+
+Vec3 parse_vec3(const std::string& option, const std::string& text, bool positive) {
+  const std::string expected = positive ? "three positive numbers X,Y,Z" : "three numbers X,Y,Z";
+  const std::vector<std::string> fields = three_fields(option, text, expected);
+  double value[3];
+  for (int i = 0; i < 3; ++i) {
+    const std::string& field = fields[static_cast<std::size_t>(i)];
+    const auto result = std::from_chars(field.data(), field.data() + field.size(), value[i]);
+    if (field.empty() || result.ec != std::errc() || result.ptr != field.data() + field.size() ||
+        !std::isfinite(value[i]) || (positive && !(value[i] > 0)))
+      bad_value(option, text, expected);
+  }
+  return {value[0], value[1], value[2]};
+}
+
+}  // namespace
+
+void add_volume_options(std::vector<OptionSpec>& options) {
+  options.push_back({"dims", true, "raw input: samples along x, y, z", "X,Y,Z"});
+  options.push_back({"type", true, "raw input: uint8|int8|uint16|int16|uint32|int32|float32|float64", "T"});
+  options.push_back({"endian", true, "raw input: little (default) or big", "E"});
+  options.push_back({"spacing", true, "world units between samples (overrides the file)", "SX,SY,SZ"});
+  options.push_back({"origin", true, "world position of the first sample (overrides the file)", "OX,OY,OZ"});
+  options.push_back({"field", true, ".vtk/.vti input: the point-data array to read", "NAME"});
+  options.push_back({"grid", true, ".vdb input: the grid to read", "NAME"});
+}
+
+VolumeReadOptions volume_read_options(const Arguments& args) {
+  VolumeReadOptions options;
+  if (args.has("dims")) {
+    const std::string text = args.get("dims");
+    const std::string expected = "three positive integers X,Y,Z";
+    const std::vector<std::string> fields = three_fields("dims", text, expected);
+    std::array<std::size_t, 3> dims{};
+    for (int i = 0; i < 3; ++i) {
+      const std::string& field = fields[static_cast<std::size_t>(i)];
+      unsigned long long value = 0;
+      const auto result = std::from_chars(field.data(), field.data() + field.size(), value);
+      if (field.empty() || result.ec != std::errc() || result.ptr != field.data() + field.size() || value == 0)
+        bad_value("dims", text, expected);
+      dims[static_cast<std::size_t>(i)] = static_cast<std::size_t>(value);
+    }
+    options.dims = dims;
+  }
+  if (args.has("type")) options.type = parse_scalar_type(args.get("type"));
+  if (args.has("endian")) {
+    const std::string endian = args.get("endian");
+    if (endian != "little" && endian != "big") bad_value("endian", endian, "little or big");
+    options.big_endian = endian == "big";
+  }
+  if (args.has("spacing")) options.spacing = parse_vec3("spacing", args.get("spacing"), true);
+  if (args.has("origin")) options.origin = parse_vec3("origin", args.get("origin"), false);
+  options.field = args.get("field");
+  options.grid = args.get("grid");
+  return options;
+}
+
+bool is_builtin_volume(const std::string& input) { return input.rfind("builtin:", 0) == 0; }
+
+}  // namespace isowave::cli

@@ -1,0 +1,293 @@
+// Signed-distance field and shrink-wrap speed and quality (issue 5), with
+// OpenVDB's tools::meshToLevelSet (half width 3) on the extracted mesh timed in
+// the same run as the peer for the distance field.
+//
+// Default: the miranda isosurface (iso 1.5, min_component_vertices 50), its
+// base mesh simplified as far as topology allows, L = 3, 2 threads. Targets:
+// distance field <= 1.5 s and <= 1.0x OpenVDB; shrink-wrap <= 5 s.
+//
+// usage: bench_fit [INPUT ISO] [--min-component N] [--base-vertices N]
+//                  [--levels L] [--threads T] [--band K] [--no-quality]
+//   INPUT is a volume file or builtin:NAME[:N]; --base-vertices 0 simplifies
+//   as far as the rules allow (default).
+#include <sys/resource.h>
+
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+#include <vector>
+
+#include <openvdb/openvdb.h>
+#include <openvdb/tools/MeshToVolume.h>
+#include <tbb/global_control.h>
+
+#include "isowave/core/error.h"
+#include "isowave/extract/isosurface.h"
+#include "isowave/extract/volume_io.h"
+#include "isowave/fit/fit_quality.h"
+#include "isowave/fit/shrink_wrap.h"
+#include "isowave/fit/signed_distance.h"
+#include "isowave/fit/surface_distance.h"
+#include "isowave/fit/trilinear.h"
+#include "isowave/simplify/simplify.h"
+#include "isowave/transform/hierarchy.h"
+
+using namespace isowave;
+
+namespace {
+
+double seconds_since(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+double peak_megabytes() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return double(usage.ru_maxrss) / 1024.0;  // Linux: kilobytes
+}
+
+void print_quality(const FitQuality& q) {
+  std::printf(
+      "  level %d: %zu vertices, %zu faces | isosurface rms %.4f max %.3f cell | to extracted rms %.4f max %.3f cell |"
+      " coverage rms %.3f p99 %.3f max %.3f cell | tangled %zu (%.4f%%) | area/patch mean p1 %.2f median %.2f p99 "
+      "%.2f (sd %.2f)%s\n",
+      q.level, q.vertices, q.faces, q.isosurface_rms, q.isosurface_max, q.surface_rms, q.surface_max, q.coverage_rms,
+      q.coverage_p99, q.coverage_max, q.tangled_faces, 100 * q.tangled_fraction, q.area_ratio_p1,
+      q.area_ratio_median, q.area_ratio_p99, q.area_ratio_deviation, q.nonfinite_vertices ? " NON-FINITE" : "");
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::string input = std::string(ISOWAVE_SHARED_DATA_DIR) + "/volumes/miranda_256x256x256.nrrd";
+  double iso = 1.5;
+  std::size_t min_component = 50, base_vertices = 0;
+  int levels = 3, threads = 2;
+  double band = 0;
+  bool quality = true, sdf_only = false, correction = true;
+  int untangle_rounds = ShrinkWrapOptions().untangle_rounds;
+  double weight = 0.5, correction_cells = ShrinkWrapOptions().correction_max_cells;
+  double reach = ShrinkWrapOptions().attraction.reach_edges, min_reach = ShrinkWrapOptions().attraction.min_reach_cells;
+  int iterations = ShrinkWrapOptions().iterations, final_iterations = ShrinkWrapOptions().final_level_iterations;
+  std::vector<std::string> positional;
+  for (int a = 1; a < argc; ++a) {
+    const std::string arg = argv[a];
+    const auto next = [&]() -> std::string {
+      if (a + 1 >= argc) {
+        std::fprintf(stderr, "missing value for %s\n", arg.c_str());
+        std::exit(2);
+      }
+      return argv[++a];
+    };
+    if (arg == "--min-component") min_component = std::stoul(next());
+    else if (arg == "--base-vertices") base_vertices = std::stoul(next());
+    else if (arg == "--levels") levels = std::stoi(next());
+    else if (arg == "--threads") threads = std::stoi(next());
+    else if (arg == "--band") band = std::stod(next());
+    else if (arg == "--no-quality") quality = false;
+    else if (arg == "--distance-only") sdf_only = true;
+    else if (arg == "--no-correction") correction = false;
+    else if (arg == "--weight") weight = std::stod(next());
+    else if (arg == "--correction-cells") correction_cells = std::stod(next());
+    else if (arg == "--untangle") untangle_rounds = std::stoi(next());
+    else if (arg == "--reach") reach = std::stod(next());
+    else if (arg == "--min-reach") min_reach = std::stod(next());
+    else if (arg == "--iterations") iterations = std::stoi(next());
+    else if (arg == "--final-iterations") final_iterations = std::stoi(next());
+    else positional.push_back(arg);
+  }
+  if (positional.size() == 2) {
+    input = positional[0];
+    iso = std::stod(positional[1]);
+  } else if (!positional.empty()) {
+    std::fprintf(stderr, "usage: bench_fit [INPUT ISO] [options]\n");
+    return 2;
+  }
+  tbb::global_control thread_limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
+
+  try {
+    auto start = std::chrono::steady_clock::now();
+    const Volume volume = read_volume(input);
+    std::printf("%s: %zux%zux%zu, read in %.2f s, %d threads\n", input.c_str(), volume.dims[0], volume.dims[1],
+                volume.dims[2], seconds_since(start), threads);
+
+    start = std::chrono::steady_clock::now();
+    IsosurfaceOptions extract_options;
+    extract_options.iso = iso;
+    extract_options.min_component_vertices = min_component;
+    const Isosurface surface = extract_isosurface(volume, extract_options);
+    const PolygonMesh& extracted = surface.mesh;
+    std::printf("extracted: %zu vertices, %zu triangles, genus %lld, %zu components in %.2f s\n",
+                extracted.vertex_count(), extracted.face_count(), surface.report.after.genus,
+                surface.report.after.components, seconds_since(start));
+
+    // Our distance field, whole grid and narrow band.
+    SignedDistanceOptions distance_options;
+    distance_options.iso = iso;
+    distance_options.band_cells = band;
+    distance_options.surface = &extracted;
+    start = std::chrono::steady_clock::now();
+    const SignedDistanceField distance = compute_signed_distance(volume, distance_options);
+    const double distance_seconds = seconds_since(start);
+    const SignedDistanceStatistics& ds = distance.statistics;
+    std::printf("signed distance (band %s): %.3f s | %zu nodes, %zu seeds (%zu first-order), %zu pops, %zu updates, "
+                "peak queue %zu, working set %.1f MB; %zu nodes on dropped components, %zu flipped\n",
+                band > 0 ? std::to_string(band).c_str() : "none", distance_seconds, ds.nodes, ds.seed_nodes,
+                ds.first_order_seeds, ds.queue_pops, ds.updates, ds.peak_queue, double(ds.peak_bytes) / 1e6,
+                ds.unseeded_crossing_nodes, ds.flipped_nodes);
+    if (std::getenv("FIT_DEBUG")) {
+      const SurfaceDistance reference(extracted);
+      std::vector<Vec3> nodes;
+      std::vector<double> values;
+      const double cell = volume.cell_size();
+      for (std::size_t k = 0; k < volume.dims[2]; ++k)
+        for (std::size_t j = 0; j < volume.dims[1]; ++j)
+          for (std::size_t i = 0; i < volume.dims[0]; ++i) {
+            const double d = distance.distance.at(i, j, k);
+            if (std::abs(d) <= 3 * cell && (i * 7 + j * 13 + k * 5) % 3 == 0) {
+              nodes.push_back(volume.world(double(i), double(j), double(k)));
+              values.push_back(d);
+            }
+          }
+      const std::vector<double> exact = reference.distances(nodes);
+      double sum = 0, max = 0; std::size_t worst = 0;
+      for (std::size_t n = 0; n < nodes.size(); ++n) {
+        const double e = std::abs(std::abs(values[n]) - exact[n]) / cell;
+        sum += e; if (e > max) { max = e; worst = n; }
+      }
+      std::size_t big = 0, big_box = 0;
+      for (std::size_t n = 0; n < nodes.size(); ++n) {
+        const double e = std::abs(std::abs(values[n]) - exact[n]) / cell;
+        if (e > 0.5) {
+          ++big;
+          const Vec3 g = (nodes[n] - volume.origin);
+          if (g.x < 3 || g.y < 3 || g.z < 3 || g.x > volume.dims[0] - 4 || g.y > volume.dims[1] - 4 || g.z > volume.dims[2] - 4) ++big_box;
+          if (big < 10) std::printf("  big error at (%g %g %g): %g vs %g\n", nodes[n].x, nodes[n].y, nodes[n].z, values[n], exact[n]);
+        }
+      }
+      std::printf("  %zu errors > 0.5 cell, %zu within 3 cells of the box\n", big, big_box);
+      std::printf("SDF check: %zu nodes, mean |error| %.4f cell, max %.3f cell at (%g %g %g) value %g exact %g\n", nodes.size(), sum / nodes.size(), max,
+                  nodes[worst].x, nodes[worst].y, nodes[worst].z, values[worst], exact[worst]);
+    }
+    double banded_seconds = 0;
+    if (band == 0) {
+      SignedDistanceOptions banded_options = distance_options;
+      banded_options.band_cells = 3;
+      start = std::chrono::steady_clock::now();
+      const SignedDistanceField banded = compute_signed_distance(volume, banded_options);
+      banded_seconds = seconds_since(start);
+      std::printf("signed distance (band 3 cells): %.3f s | %zu pops, %zu updates, reached %zu nodes\n",
+                  banded_seconds, banded.statistics.queue_pops, banded.statistics.updates,
+                  banded.statistics.reached_nodes);
+    }
+
+    // Peer: OpenVDB's mesh-to-level-set on the extracted triangles.
+    {
+      openvdb::initialize();
+      std::vector<openvdb::Vec3s> points;
+      std::vector<openvdb::Vec3I> triangles;
+      points.reserve(extracted.vertex_count());
+      for (const Vec3& p : extracted.positions) points.emplace_back(float(p.x), float(p.y), float(p.z));
+      triangles.reserve(extracted.face_count());
+      for (std::size_t f = 0; f < extracted.face_count(); ++f) {
+        const std::uint32_t* t = extracted.face_begin(f);
+        triangles.emplace_back(t[0], t[1], t[2]);
+      }
+      const openvdb::math::Transform::Ptr transform = openvdb::math::Transform::createLinearTransform(volume.cell_size());
+      start = std::chrono::steady_clock::now();
+      const openvdb::FloatGrid::Ptr grid = openvdb::tools::meshToLevelSet<openvdb::FloatGrid>(*transform, points, triangles, 3.0f);
+      const double vdb_seconds = seconds_since(start);
+      std::printf("OpenVDB meshToLevelSet (half width 3): %.3f s, %zu active voxels\n", vdb_seconds,
+                  std::size_t(grid->activeVoxelCount()));
+      std::printf("ratio signed distance / OpenVDB: whole grid %.2fx%s (target <= 1.0x)\n",
+                  distance_seconds / vdb_seconds,
+                  banded_seconds > 0 ? (", band 3: " + std::to_string(banded_seconds / vdb_seconds) + "x").c_str() : "");
+    }
+
+    if (sdf_only) return 0;
+    start = std::chrono::steady_clock::now();
+    simplify::SimplifyOptions simplify_options;
+    simplify_options.target_vertices = base_vertices;
+    simplify_options.compute_distance = false;
+    const simplify::SimplifyResult simplified = simplify::simplify(extracted, simplify_options);
+    if (std::getenv("FIT_DEBUG")) {
+      const SurfaceDistance reference(extracted);
+      const SubdivisionHierarchy h0(extracted, 0);
+      print_quality(measure_fit_quality(h0, 0, extracted.positions, extracted, reference, volume, iso, false));
+      const SubdivisionHierarchy h1(simplified.base, 0);
+      print_quality(measure_fit_quality(h1, 0, simplified.base.positions, extracted, reference, volume, iso, false));
+    }
+    std::printf("base mesh: %zu vertices, %zu faces in %.2f s\n", simplified.base.vertex_count(),
+                simplified.base.face_count(), seconds_since(start));
+
+    start = std::chrono::steady_clock::now();
+    const SubdivisionHierarchy hierarchy(simplified.base, levels);
+    const double hierarchy_seconds = seconds_since(start);
+    ShrinkWrapOptions wrap_options;
+    wrap_options.keep_levels = quality;
+    wrap_options.attraction.reach_edges = reach;
+    wrap_options.attraction.min_reach_cells = min_reach;
+    wrap_options.iterations = iterations;
+    wrap_options.final_level_iterations = final_iterations;
+    wrap_options.final_correction = correction;
+    wrap_options.relaxation_weight = weight;
+    wrap_options.correction_max_cells = correction_cells;
+    wrap_options.untangle_rounds = untangle_rounds;
+    start = std::chrono::steady_clock::now();
+    const ShrinkWrapResult wrapped = shrink_wrap(hierarchy, simplified.base.positions, distance, volume, wrap_options);
+    const double wrap_seconds = seconds_since(start);
+    std::printf("hierarchy %.3f s; shrink-wrap to %zu fine vertices: %.3f s (target <= 5 s)\n", hierarchy_seconds,
+                hierarchy.fine_vertex_count(), wrap_seconds);
+    for (const WrapLevelStatistics& s : wrapped.levels)
+      std::printf("  level %d: %zu vertices (%zu on the box, %zu fixed) %.3f s; last attraction: %zu attracted "
+                  "(mean %.3f, max %.2f cell), %zu out of reach, %zu without direction\n",
+                  s.level, s.vertices, s.boundary_vertices, s.fixed_vertices, s.seconds, s.last_attraction.attracted,
+                  s.last_attraction.mean_move_cells, s.last_attraction.max_move_cells, s.last_attraction.out_of_reach,
+                  s.last_attraction.no_direction);
+    std::printf("  correction: %zu corrected (mean %.4f, max %.3f cell), %zu failed\n", wrapped.correction.corrected,
+                wrapped.correction.mean_move_cells, wrapped.correction.max_move_cells, wrapped.correction.failed);
+    std::printf("  untangle: %zu tangled faces before, %zu after %d rounds\n", wrapped.untangle.tangled_before,
+                wrapped.untangle.tangled_after, wrapped.untangle.rounds);
+    std::printf("peak memory so far: %.0f MB\n", peak_megabytes());
+
+    if (quality) {
+      start = std::chrono::steady_clock::now();
+      const SurfaceDistance reference(extracted);
+      for (int level = 0; level <= levels; ++level)
+        print_quality(measure_fit_quality(hierarchy, level,
+                                          level < levels ? wrapped.level_positions[std::size_t(level)] : wrapped.positions,
+                                          extracted, reference, volume, iso, false));
+      std::printf("quality measured in %.1f s\n", seconds_since(start));
+      if (std::getenv("FIT_DEBUG")) {
+        const PolygonMesh fine = hierarchy.control_mesh(levels, wrapped.positions);
+        const Vec3 lo = volume_box_min(volume), hi = volume_box_max(volume);
+        std::size_t tangled = 0, near_box = 0, near_sharp_or_boundary = 0;
+        const WrapLevelMesh wm = make_wrap_level_mesh(hierarchy, levels, wrapped.positions, volume);
+        std::vector<int> valence_hist(20, 0);
+        for (std::size_t f = 0; f < fine.face_count(); ++f) {
+          const std::uint32_t* q = fine.face_begin(f);
+          Vec3 n, c;
+          for (int k = 0; k < 4; ++k) { n += cross(fine.positions[q[k]], fine.positions[q[(k + 1) % 4]]); c += fine.positions[q[k]]; }
+          c *= 0.25;
+          const Vec3 g = trilinear_sample(volume, c).gradient;
+          if (dot(n, g) < 0) continue;
+          ++tangled;
+          double d = 1e9;
+          for (int a = 0; a < 3; ++a) d = std::min({d, c[a] - lo[a], hi[a] - c[a]});
+          if (d < 3 * volume.cell_size()) ++near_box;
+          bool b = false;
+          for (int k = 0; k < 4; ++k) b |= wm.role[q[k]] != WrapRole::Free;
+          near_sharp_or_boundary += b;
+          // distance from the base vertex: which level-0 vertex is the face's corner? skip
+        }
+        std::printf("debug: %zu tangled faces, %zu within 3 cells of the box, %zu touching boundary vertices\n", tangled, near_box, near_sharp_or_boundary);
+      }
+    }
+    std::printf("peak memory: %.0f MB\n", peak_megabytes());
+  } catch (const Error& error) {
+    std::fprintf(stderr, "bench_fit: %s\n", error.what());
+    return 1;
+  }
+  return 0;
+}

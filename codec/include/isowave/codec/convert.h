@@ -1,0 +1,74 @@
+#pragma once
+// The whole conversion of paper Sec. 4-5 for one volume and isovalue:
+// extraction -> base mesh -> signed distance -> shrink-wrap -> analysis ->
+// quantization and coding into an .isw file, with the figures users need
+// (sizes, stage timings, RMSE at several coefficient percentages).
+#include <string>
+#include <vector>
+
+#include "isowave/codec/isw_format.h"
+#include "isowave/core/progress.h"
+#include "isowave/core/volume.h"
+#include "isowave/extract/isosurface.h"
+#include "isowave/fit/shrink_wrap.h"
+#include "isowave/simplify/simplify.h"
+
+namespace isowave {
+
+struct ConvertOptions {
+  double iso = 0.0;
+  bool flip = false;
+  std::size_t min_component_vertices = 0;  // extraction clean-up (0: off)
+  double smooth_sigma = 0.0;               // extraction pre-filter in voxels (0: off)
+  // Subdivision levels; 0 picks the level whose fine mesh has about as many
+  // vertices as the extracted isosurface (the paper: 1.19 M fine control
+  // points for a 0.98 M-vertex isosurface).
+  int levels = 0;
+  // Base mesh size: base_vertices if non-zero, else base_ratio times the
+  // extracted vertex count.
+  std::size_t base_vertices = 0;
+  double base_ratio = 0.02;
+  // Quantization step in cells (see IswEncodeOptions::step); the expected
+  // RMSE it adds is about half of it.
+  double step_cells = 0.01;
+  ShrinkWrapOptions shrink_wrap;
+  // Percentages for the error summary (the base-mesh row is added).
+  std::vector<double> summary_percents{100, 20, 10, 5};
+};
+
+struct ConvertTimings {
+  double extract = 0, simplify = 0, distance = 0, fit = 0, analysis = 0, encode = 0, evaluate = 0;
+  double total() const { return extract + simplify + distance + fit + analysis + encode + evaluate; }
+};
+
+struct ConvertSummaryRow {
+  double percent = 0;  // of the fine control points (base row: the base's share)
+  std::size_t kept = 0;  // base vertices + wavelet coefficients
+  double rms = 0, max = 0;  // world units, against the fitted (unquantized) fine control points
+  std::uint64_t bytes = 0;  // file prefix a progressive reader needs
+  bool is_base = false;
+};
+
+struct ConvertResult {
+  std::string bytes;  // the .isw file
+  IsosurfaceReport extraction;
+  simplify::SimplifyReport simplification;
+  ShrinkWrapResult fit;  // positions: the fitted fine control points
+  int levels = 0;
+  std::size_t extracted_vertices = 0, base_vertices = 0, fine_vertices = 0;
+  double cell_size = 1;
+  ConvertTimings seconds;
+  std::vector<ConvertSummaryRow> summary;
+  std::vector<std::string> warnings;  // e.g. a base mesh kept large by the topology
+};
+
+// Converts one isosurface of `volume`. `source` names the input in the file's
+// metadata. Throws Error for invalid options, an empty isosurface, and what
+// the stages throw.
+ConvertResult convert_volume(const Volume& volume, const std::string& source, const ConvertOptions& options,
+                             ProgressSink& progress = no_progress());
+
+// Fine control point count of `levels` subdivisions of `base` (no refinement).
+std::size_t fine_vertex_count(const PolygonMesh& base, int levels);
+
+}  // namespace isowave

@@ -1,0 +1,55 @@
+#pragma once
+// Coefficient importance and truncation (paper Sec. 5; Staadt et al.'s
+// coefficient oracles). The bicubic wavelet basis is not orthogonal, so a
+// coefficient's effect on the reconstruction is its magnitude times the size
+// of its synthesized wavelet at the finest level. That size is estimated per
+// class (level and vertex type) as the root-mean-square L2 norm, over the
+// fine control points, of the class's wavelets: with random signs s_i on every
+// coefficient i of a class, E ||synthesis(s)||^2 = sum_i ||psi_i||^2, so one
+// synthesis per class gives the class mean exactly in expectation.
+#include <cstdint>
+#include <utility>
+#include <vector>
+
+#include "isowave/core/vec3.h"
+#include "isowave/transform/hierarchy.h"
+
+namespace isowave {
+
+// Class of the entry at `index` of the coarse-to-fine array: 0 for base
+// control points, then 1 + 2 (level - 1) for f details and 2 + 2 (level - 1)
+// for e details of `level`. Classes: 1 + 2 L.
+int coefficient_class(const SubdivisionHierarchy& hierarchy, std::size_t index);
+int coefficient_class_count(const SubdivisionHierarchy& hierarchy);
+// The entries of a class form one contiguous index range [first, second).
+std::pair<std::size_t, std::size_t> coefficient_class_range(const SubdivisionHierarchy& hierarchy, int class_index);
+
+// Per class: root-mean-square fine-level L2 norm of one unit basis function
+// (scaling function for class 0, wavelets otherwise). Deterministic (fixed
+// random seed). Cost: 1 + 2 L syntheses.
+std::vector<double> wavelet_norms(const SubdivisionHierarchy& hierarchy);
+
+// Importance of every entry: weight of its class times its magnitude.
+// Base control points get +infinity (always kept).
+std::vector<double> importance(const SubdivisionHierarchy& hierarchy, const std::vector<Vec3>& coefficients,
+                               const std::vector<double>& class_weights);
+
+// Zeroes every wavelet coefficient except the `keep` most important (ties by
+// index); base control points are never dropped. With unit weights this is
+// selection by raw magnitude.
+void keep_most_important(const SubdivisionHierarchy& hierarchy, std::vector<Vec3>& coefficients,
+                         const std::vector<double>& class_weights, std::size_t keep);
+
+// Number of wavelet coefficients kept at `percent` of full resolution, counted
+// as the paper does: the total is the fine control point count (base vertices
+// plus all coefficients) and the base mesh alone is the smallest choice.
+std::size_t coefficients_for_percent(const SubdivisionHierarchy& hierarchy, double percent);
+
+// RMS and maximum of the distances between corresponding points.
+struct PointErrors {
+  double rms = 0;
+  double max = 0;
+};
+PointErrors point_errors(const std::vector<Vec3>& a, const std::vector<Vec3>& b, std::size_t count);
+
+}  // namespace isowave

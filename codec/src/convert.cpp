@@ -1,0 +1,186 @@
+#include "isowave/codec/convert.h"
+
+#include <chrono>
+#include <cmath>
+#include <sstream>
+
+#include "isowave/codec/importance.h"
+#include "isowave/codec/statistics.h"
+#include "isowave/core/error.h"
+#include "isowave/core/mesh_topology.h"
+#include "isowave/fit/signed_distance.h"
+#include "isowave/transform/wavelet_transform.h"
+
+namespace isowave {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
+
+std::string number(double v) {
+  std::ostringstream s;
+  s.precision(10);
+  s << v;
+  return s.str();
+}
+
+}  // namespace
+
+std::size_t fine_vertex_count(const PolygonMesh& base, int levels) {
+  // V' = V + F + E, F' = corners, E' = 2E + corners, corners' = 4F'.
+  double v = static_cast<double>(base.vertex_count()), f = static_cast<double>(base.face_count());
+  double corners = static_cast<double>(base.face_vertices.size());
+  double e = static_cast<double>(summarize_topology(base).edges);
+  for (int l = 0; l < levels; ++l) {
+    v += f + e;
+    e = 2 * e + corners;
+    f = corners;
+    corners = 4 * f;
+  }
+  return static_cast<std::size_t>(v);
+}
+
+ConvertResult convert_volume(const Volume& volume, const std::string& source, const ConvertOptions& options,
+                             ProgressSink& progress) {
+  if (options.levels < 0 || options.levels > 6)
+    throw Error(ErrorKind::InvalidArgument, "levels must be in 1..6, or 0 for automatic");
+  if (!(options.base_ratio > 0 && options.base_ratio <= 1))
+    throw Error(ErrorKind::InvalidArgument, "the base ratio must be in (0, 1]");
+  if (!(options.step_cells > 0) || !std::isfinite(options.step_cells))
+    throw Error(ErrorKind::InvalidArgument, "the quantization step must be positive");
+  ConvertResult result;
+  result.cell_size = volume.cell_size();
+
+  // Extraction; with smoothing, the distance field and the final correction
+  // must use the smoothed field the surface came from.
+  auto start = Clock::now();
+  const Volume smoothed = options.smooth_sigma > 0 ? gaussian_smoothed(volume, options.smooth_sigma) : Volume{};
+  const Volume& field = options.smooth_sigma > 0 ? smoothed : volume;
+  IsosurfaceOptions extract_options;
+  extract_options.iso = options.iso;
+  extract_options.flip = options.flip;
+  extract_options.min_component_vertices = options.min_component_vertices;
+  Isosurface surface = extract_isosurface(field, extract_options, progress);
+  surface.report.smooth_sigma = options.smooth_sigma;
+  result.extraction = surface.report;
+  result.extracted_vertices = surface.mesh.vertex_count();
+  result.seconds.extract = seconds_since(start);
+  if (surface.mesh.face_count() == 0)
+    throw Error(ErrorKind::InvalidArgument, source + ": the isosurface at " + number(options.iso) + " is empty");
+
+  // Base mesh.
+  start = Clock::now();
+  simplify::SimplifyOptions simplify_options;
+  simplify_options.target_vertices = options.base_vertices > 0
+                                         ? options.base_vertices
+                                         : std::max<std::size_t>(4, static_cast<std::size_t>(std::llround(
+                                                                        options.base_ratio * result.extracted_vertices)));
+  simplify_options.compute_distance = false;
+  simplify::SimplifyResult simplified = simplify::simplify(surface.mesh, simplify_options, progress);
+  result.simplification = simplified.report;
+  PolygonMesh base = std::move(simplified.base);
+  result.base_vertices = base.vertex_count();
+  result.seconds.simplify = seconds_since(start);
+  if (base.vertex_count() > 3 * simplify_options.target_vertices / 2) {
+    std::ostringstream warning;
+    warning << "the base mesh keeps " << base.vertex_count() << " vertices (target " << simplify_options.target_vertices
+            << "): the isosurface has " << surface.report.after.components << " components and genus "
+            << surface.report.after.genus
+            << ", which the base mesh must keep; --min-component-vertices N and --smooth SIGMA remove small bubbles "
+               "and handles";
+    result.warnings.push_back(warning.str());
+  }
+
+  // Levels: the fine mesh about as large as the extracted isosurface.
+  int levels = options.levels;
+  if (levels == 0) {
+    double best = 1e300;
+    for (int l = 1; l <= 6; ++l) {
+      const double fine = static_cast<double>(fine_vertex_count(base, l));
+      const double misfit = std::abs(std::log(fine / static_cast<double>(result.extracted_vertices)));
+      if (misfit < best) {
+        best = misfit;
+        levels = l;
+      }
+      if (fine > 4.0 * static_cast<double>(result.extracted_vertices)) break;
+    }
+  }
+  result.levels = levels;
+
+  // Signed distance and shrink-wrap.
+  start = Clock::now();
+  SignedDistanceOptions distance_options;
+  distance_options.iso = options.iso;
+  distance_options.flip = options.flip;
+  distance_options.surface = &surface.mesh;
+  const SignedDistanceField distance = compute_signed_distance(field, distance_options, progress);
+  result.seconds.distance = seconds_since(start);
+
+  start = Clock::now();
+  const SubdivisionHierarchy hierarchy(base, levels);
+  result.fine_vertices = hierarchy.fine_vertex_count();
+  result.fit = shrink_wrap(hierarchy, base.positions, distance, field, options.shrink_wrap, progress);
+  result.seconds.fit = seconds_since(start);
+
+  // Analysis and coding.
+  start = Clock::now();
+  progress.begin_stage("analysis");
+  std::vector<Vec3> coefficients = result.fit.positions;
+  analyze(hierarchy, coefficients);
+  progress.end_stage();
+  result.seconds.analysis = seconds_since(start);
+
+  start = Clock::now();
+  progress.begin_stage("encode");
+  IswMetadata metadata;
+  metadata.values["source"] = source;
+  metadata.values["isovalue"] = number(options.iso);
+  metadata.values["spacing"] = number(volume.spacing.x) + "," + number(volume.spacing.y) + "," + number(volume.spacing.z);
+  metadata.values["origin"] = number(volume.origin.x) + "," + number(volume.origin.y) + "," + number(volume.origin.z);
+  metadata.values["dims"] = std::to_string(volume.dims[0]) + "," + std::to_string(volume.dims[1]) + "," +
+                            std::to_string(volume.dims[2]);
+  metadata.values["cell_size"] = number(result.cell_size);
+  if (volume.spacing.x != volume.spacing.y || volume.spacing.y != volume.spacing.z)
+    metadata.values["cell_size_note"] = "geometric mean of the anisotropic spacing";
+  metadata.values["levels"] = std::to_string(levels);
+  metadata.values["extracted_vertices"] = std::to_string(result.extracted_vertices);
+  metadata.values["base_vertices"] = std::to_string(result.base_vertices);
+  metadata.values["fine_vertices"] = std::to_string(result.fine_vertices);
+  metadata.values["options"] = "flip=" + std::to_string(options.flip) +
+                               " min_component_vertices=" + std::to_string(options.min_component_vertices) +
+                               " smooth_sigma=" + number(options.smooth_sigma) + " step_cells=" + number(options.step_cells);
+  IswEncodeOptions encode_options;
+  encode_options.step = options.step_cells * result.cell_size;
+  // The quantization error is measured after a first encode and recorded.
+  std::string bytes = encode_isw(base, levels, coefficients, metadata, encode_options);
+  const IswDecoded decoded = decode_isw(bytes, source);
+  const std::vector<Vec3> full = reconstruct(decoded, decoded.ranked.size());
+  const PointErrors quantization = point_errors(full, result.fit.positions, full.size());
+  metadata.values["quantization_rmse"] = number(quantization.rms);
+  result.bytes = encode_isw(base, levels, coefficients, metadata, encode_options);
+  progress.end_stage();
+  result.seconds.encode = seconds_since(start);
+
+  // Error summary against the fitted control points, from the file's content.
+  start = Clock::now();
+  progress.begin_stage("evaluate");
+  const IswDecoded final_decode = decode_isw(result.bytes, source);
+  const std::vector<RateDistortionRow> rows = rate_distortion(final_decode, options.summary_percents);
+  for (const RateDistortionRow& row : rows) {
+    ConvertSummaryRow summary;
+    summary.percent = row.percent;
+    summary.kept = row.kept;
+    summary.bytes = row.bytes;
+    summary.is_base = row.is_base;
+    const PointErrors e = point_errors(reconstruct(final_decode, row.wavelet_coefficients), result.fit.positions,
+                                       result.fine_vertices);
+    summary.rms = e.rms;
+    summary.max = e.max;
+    result.summary.push_back(summary);
+  }
+  progress.end_stage();
+  result.seconds.evaluate = seconds_since(start);
+  return result;
+}
+
+}  // namespace isowave

@@ -1,0 +1,97 @@
+#include "isowave/codec/importance.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+#include <random>
+
+#include "isowave/core/error.h"
+#include "isowave/transform/wavelet_transform.h"
+
+namespace isowave {
+
+int coefficient_class(const SubdivisionHierarchy& hierarchy, std::size_t index) {
+  const int level = hierarchy.level_of_index(index);
+  if (level == 0) return 0;
+  const bool is_edge = index >= hierarchy.vertex_count(level - 1) + hierarchy.step(level).parent_face_count;
+  return 1 + 2 * (level - 1) + (is_edge ? 1 : 0);
+}
+
+int coefficient_class_count(const SubdivisionHierarchy& hierarchy) { return 1 + 2 * hierarchy.levels(); }
+
+std::pair<std::size_t, std::size_t> coefficient_class_range(const SubdivisionHierarchy& hierarchy, int class_index) {
+  if (class_index == 0) return {0, hierarchy.vertex_count(0)};
+  const int level = 1 + (class_index - 1) / 2;
+  const std::size_t first_face = hierarchy.vertex_count(level - 1);
+  const std::size_t first_edge = first_face + hierarchy.step(level).parent_face_count;
+  return (class_index - 1) % 2 == 0 ? std::make_pair(first_face, first_edge)
+                                     : std::make_pair(first_edge, hierarchy.vertex_count(level));
+}
+
+std::vector<double> wavelet_norms(const SubdivisionHierarchy& hierarchy) {
+  const int classes = coefficient_class_count(hierarchy);
+  std::vector<double> norms(static_cast<std::size_t>(classes), 1.0);
+  std::vector<Vec3> data(hierarchy.fine_vertex_count());
+  std::mt19937 rng(12345);
+  for (int c = 0; c < classes; ++c) {
+    std::fill(data.begin(), data.end(), Vec3{});
+    const auto [first, last] = coefficient_class_range(hierarchy, c);
+    for (std::size_t i = first; i < last; ++i) data[i].x = (rng() & 1) ? 1.0 : -1.0;
+    const std::size_t count = last - first;
+    if (count == 0) continue;
+    synthesize(hierarchy, data);
+    double sum = 0;
+    for (const Vec3& p : data) sum += p.x * p.x;
+    norms[static_cast<std::size_t>(c)] = std::sqrt(sum / static_cast<double>(count));
+  }
+  return norms;
+}
+
+std::vector<double> importance(const SubdivisionHierarchy& hierarchy, const std::vector<Vec3>& coefficients,
+                               const std::vector<double>& class_weights) {
+  std::vector<double> result(hierarchy.fine_vertex_count());
+  for (int c = 0; c < coefficient_class_count(hierarchy); ++c) {
+    const auto [first, last] = coefficient_class_range(hierarchy, c);
+    for (std::size_t i = first; i < last; ++i)
+      result[i] = c == 0 ? std::numeric_limits<double>::infinity()
+                         : class_weights[static_cast<std::size_t>(c)] * norm(coefficients[i]);
+  }
+  return result;
+}
+
+void keep_most_important(const SubdivisionHierarchy& hierarchy, std::vector<Vec3>& coefficients,
+                         const std::vector<double>& class_weights, std::size_t keep) {
+  const std::size_t base = hierarchy.vertex_count(0);
+  const std::size_t total = hierarchy.fine_vertex_count() - base;
+  if (keep >= total) return;
+  const std::vector<double> weight = importance(hierarchy, coefficients, class_weights);
+  std::vector<std::uint32_t> order(total);
+  std::iota(order.begin(), order.end(), static_cast<std::uint32_t>(base));
+  std::nth_element(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(keep), order.end(),
+                   [&](std::uint32_t a, std::uint32_t b) { return weight[a] > weight[b] || (weight[a] == weight[b] && a < b); });
+  for (std::size_t k = keep; k < total; ++k) coefficients[order[k]] = Vec3{};
+}
+
+std::size_t coefficients_for_percent(const SubdivisionHierarchy& hierarchy, double percent) {
+  if (!(percent >= 0 && percent <= 100))
+    throw Error(ErrorKind::InvalidArgument, "percent must be in 0..100, got " + std::to_string(percent));
+  const double total = static_cast<double>(hierarchy.fine_vertex_count());
+  const double wanted = std::round(total * percent / 100.0) - static_cast<double>(hierarchy.vertex_count(0));
+  return wanted <= 0 ? 0 : std::min(static_cast<std::size_t>(wanted), hierarchy.fine_vertex_count() - hierarchy.vertex_count(0));
+}
+
+PointErrors point_errors(const std::vector<Vec3>& a, const std::vector<Vec3>& b, std::size_t count) {
+  PointErrors e;
+  if (count == 0) return e;
+  double sum = 0;
+  for (std::size_t i = 0; i < count; ++i) {
+    const double d = norm(a[i] - b[i]);
+    sum += d * d;
+    e.max = std::max(e.max, d);
+  }
+  e.rms = std::sqrt(sum / static_cast<double>(count));
+  return e;
+}
+
+}  // namespace isowave

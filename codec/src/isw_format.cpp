@@ -1,0 +1,672 @@
+#include "isowave/codec/isw_format.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <limits>
+#include <memory>
+#include <numeric>
+
+#include <zlib.h>
+
+#include "isowave/codec/importance.h"
+#include "isowave/core/atomic_file.h"
+#include "isowave/core/error.h"
+#include "isowave/core/mesh_topology.h"
+#include "isowave/transform/hierarchy.h"
+#include "range_coder.h"
+
+namespace isowave {
+
+using detail::IntegerModel;
+using detail::Probability;
+using detail::RangeDecoder;
+using detail::RangeEncoder;
+
+namespace {
+
+constexpr char kMagic[8] = {'\x89', 'I', 'S', 'W', '\r', '\n', '\x1a', '\n'};
+constexpr std::size_t kHeaderBytes = 16;
+constexpr std::size_t kSectionHeader = 4 + 8 + 4;  // tag, payload size, CRC-32 of tag and size
+constexpr std::size_t kSectionOverhead = kSectionHeader + 4;
+// Generous bounds that a hostile file cannot push the decoder past.
+constexpr int kMaxLevels = 8;
+constexpr std::uint64_t kMaxFineVertices = 1ull << 28;
+constexpr std::uint64_t kFineVerticesPerFileByte = 4096;
+// An adaptive binary decision costs at least ~0.02 bits and an integer at
+// least six of them, so a coded byte holds at most ~64 integers.
+constexpr std::uint64_t kMaxIntegersPerCodedByte = 64;
+
+// ------------------------------------------------------------ byte helpers
+
+void put_u16(std::string& out, std::uint16_t v) { out.append(reinterpret_cast<const char*>(&v), 2); }
+void put_u32(std::string& out, std::uint32_t v) { out.append(reinterpret_cast<const char*>(&v), 4); }
+void put_u64(std::string& out, std::uint64_t v) { out.append(reinterpret_cast<const char*>(&v), 8); }
+void put_f64(std::string& out, double v) { out.append(reinterpret_cast<const char*>(&v), 8); }
+
+std::uint32_t crc_of(const char* tag, const std::string& payload) {
+  uLong crc = crc32(0L, Z_NULL, 0);
+  crc = crc32(crc, reinterpret_cast<const Bytef*>(tag), 4);
+  // zlib's crc32 takes a uInt length: feed large payloads in pieces.
+  for (std::size_t offset = 0; offset < payload.size(); offset += 1u << 30) {
+    const std::size_t n = std::min<std::size_t>(payload.size() - offset, 1u << 30);
+    crc = crc32(crc, reinterpret_cast<const Bytef*>(payload.data() + offset), static_cast<uInt>(n));
+  }
+  return static_cast<std::uint32_t>(crc);
+}
+
+// The header has its own CRC so that a damaged size field reads as corruption,
+// while a file cut inside a payload reads as truncation.
+std::uint32_t header_crc(const char* tag, std::uint64_t size) {
+  std::string size_bytes;
+  put_u64(size_bytes, size);
+  return crc_of(tag, size_bytes);
+}
+
+void put_section(std::string& out, const char* tag, const std::string& payload) {
+  out.append(tag, 4);
+  put_u64(out, payload.size());
+  put_u32(out, header_crc(tag, payload.size()));
+  out += payload;
+  put_u32(out, crc_of(tag, payload));
+}
+
+// Bounds-checked little-endian reader over one section's payload.
+class PayloadReader {
+ public:
+  PayloadReader(const std::string& data, std::string context) : data_(data), context_(std::move(context)) {}
+  template <class T>
+  T read() {
+    if (data_.size() - position_ < sizeof(T)) fail("is truncated");
+    T v;
+    std::memcpy(&v, data_.data() + position_, sizeof(T));
+    position_ += sizeof(T);
+    return v;
+  }
+  std::string bytes(std::uint64_t n) {
+    if (data_.size() - position_ < n) fail("is truncated");
+    std::string s = data_.substr(position_, static_cast<std::size_t>(n));
+    position_ += static_cast<std::size_t>(n);
+    return s;
+  }
+  std::size_t remaining() const { return data_.size() - position_; }
+  [[noreturn]] void fail(const std::string& what) const { throw Error(ErrorKind::Format, context_ + " " + what); }
+
+ private:
+  const std::string& data_;
+  std::size_t position_ = 0;
+  std::string context_;
+};
+
+// ------------------------------------------------------------ models
+
+int magnitude_bucket(std::int64_t value) {
+  const std::uint64_t m = static_cast<std::uint64_t>(value < 0 ? -value : value);
+  return m == 0 ? 0 : (m < 4 ? 1 : (m < 64 ? 2 : 3));
+}
+
+// Coefficient chunk contexts: significance flags by class and previous flag;
+// components by class, component and the previous coefficient's magnitude.
+struct ChunkModels {
+  std::vector<std::array<Probability, 2>> flags;
+  std::vector<IntegerModel> components;
+  explicit ChunkModels(int classes)
+      : flags(static_cast<std::size_t>(classes), {detail::kProbabilityHalf, detail::kProbabilityHalf}),
+        components(static_cast<std::size_t>(classes) * 3 * 4) {}
+  IntegerModel& component(int cls, int axis, int bucket) {
+    return components[(static_cast<std::size_t>(cls) * 3 + static_cast<std::size_t>(axis)) * 4 + static_cast<std::size_t>(bucket)];
+  }
+};
+
+struct BaseModels {
+  IntegerModel face_size, first_index, other_index, sharp_gap;
+};
+
+// Neighbours of each base vertex with a smaller index: the decoded ones when
+// base control points are decoded in index order.
+std::vector<std::vector<std::uint32_t>> earlier_neighbours(const PolygonMesh& base) {
+  std::vector<std::vector<std::uint32_t>> result(base.vertex_count());
+  for (std::size_t f = 0; f < base.face_count(); ++f) {
+    const std::uint32_t n = base.face_size(f);
+    for (std::uint32_t k = 0; k < n; ++k) {
+      const std::uint32_t a = base.face_begin(f)[k], b = base.face_begin(f)[(k + 1) % n];
+      if (a < b) result[b].push_back(a);
+      else result[a].push_back(b);
+    }
+  }
+  for (auto& list : result) {
+    std::sort(list.begin(), list.end());
+    list.erase(std::unique(list.begin(), list.end()), list.end());
+  }
+  return result;
+}
+
+using QuantizedVector = std::array<std::int64_t, 3>;
+
+QuantizedVector predict_base(const std::vector<QuantizedVector>& q, const std::vector<std::uint32_t>& neighbours,
+                             std::size_t index) {
+  if (neighbours.empty()) return index == 0 ? QuantizedVector{0, 0, 0} : q[index - 1];
+  QuantizedVector p{};
+  for (int axis = 0; axis < 3; ++axis) {
+    std::int64_t sum = 0;
+    for (std::uint32_t n : neighbours) sum += q[n][axis];
+    const auto count = static_cast<std::int64_t>(neighbours.size());
+    p[axis] = sum >= 0 ? (sum + count / 2) / count : -((-sum + count / 2) / count);
+  }
+  return p;
+}
+
+double class_step(double step, const std::vector<double>& weights, int cls) {
+  return step / weights[static_cast<std::size_t>(cls)];
+}
+
+// Importance order of the non-zero quantized coefficients: weight times the
+// dequantized magnitude, ties by index. Encoder and decoder compute it from
+// the same integers and weights, so they agree exactly.
+void rank_by_importance(std::vector<std::uint32_t>& indices, const std::vector<double>& importance) {
+  std::sort(indices.begin(), indices.end(), [&](std::uint32_t a, std::uint32_t b) {
+    return importance[a] > importance[b] || (importance[a] == importance[b] && a < b);
+  });
+}
+
+std::string sanitize(const std::string& text) {
+  std::string s = text;
+  for (char& c : s)
+    if (c == '\n' || c == '\r' || c == '=') c = ' ';
+  return s;
+}
+
+}  // namespace
+
+double IswMetadata::number(const std::string& key, double fallback) const {
+  const auto it = values.find(key);
+  if (it == values.end()) return fallback;
+  char* end = nullptr;
+  const double v = std::strtod(it->second.c_str(), &end);
+  return end && *end == '\0' && std::isfinite(v) ? v : fallback;
+}
+
+std::string IswMetadata::text(const std::string& key, const std::string& fallback) const {
+  const auto it = values.find(key);
+  return it == values.end() ? fallback : it->second;
+}
+
+// ================================================================ encoder
+
+std::string encode_isw(const PolygonMesh& base, int levels, const std::vector<Vec3>& coefficients,
+                       const IswMetadata& metadata, const IswEncodeOptions& options) {
+  if (levels < 0 || levels > kMaxLevels)
+    throw Error(ErrorKind::InvalidArgument, "levels must be in 0.." + std::to_string(kMaxLevels));
+  if (!(options.step > 0) || !std::isfinite(options.step))
+    throw Error(ErrorKind::InvalidArgument, "the quantization step must be positive");
+  const SubdivisionHierarchy hierarchy(base, levels);
+  if (coefficients.size() != hierarchy.fine_vertex_count())
+    throw Error(ErrorKind::InvalidArgument, "expected " + std::to_string(hierarchy.fine_vertex_count()) +
+                                                " coefficients, got " + std::to_string(coefficients.size()));
+  const std::vector<double> weights = wavelet_norms(hierarchy);
+  const int classes = coefficient_class_count(hierarchy);
+  const std::size_t fine = hierarchy.fine_vertex_count();
+  const std::size_t base_count = hierarchy.vertex_count(0);
+
+  // Quantize every entry with its class's step.
+  std::vector<QuantizedVector> q(fine);
+  std::vector<double> importance(fine, 0.0);
+  for (int c = 0; c < classes; ++c) {
+    const double s = class_step(options.step, weights, c);
+    const auto [first, last] = coefficient_class_range(hierarchy, c);
+    for (std::size_t i = first; i < last; ++i) {
+      double magnitude2 = 0;
+      for (int axis = 0; axis < 3; ++axis) {
+        const double scaled = coefficients[i][axis] / s;
+        if (!std::isfinite(scaled) || std::abs(scaled) > 1e9)
+          throw Error(ErrorKind::InvalidArgument, "coefficient " + std::to_string(i) +
+                                                      " is not finite or too large for the quantization step");
+        q[i][axis] = std::llround(scaled);
+        const double dequantized = static_cast<double>(q[i][axis]) * s;
+        magnitude2 += dequantized * dequantized;
+      }
+      importance[i] = weights[static_cast<std::size_t>(c)] * std::sqrt(magnitude2);
+    }
+  }
+  std::vector<std::uint32_t> ranked;
+  for (std::size_t i = base_count; i < fine; ++i)
+    if (q[i][0] != 0 || q[i][1] != 0 || q[i][2] != 0) ranked.push_back(static_cast<std::uint32_t>(i));
+  rank_by_importance(ranked, importance);
+
+  // Chunk boundaries (cumulative ranks).
+  std::vector<std::uint64_t> chunk_ends;
+  for (double percent : options.chunk_percents) {
+    const std::uint64_t end = std::min<std::uint64_t>(coefficients_for_percent(hierarchy, percent), ranked.size());
+    if (end > 0 && (chunk_ends.empty() || end > chunk_ends.back())) chunk_ends.push_back(end);
+  }
+  if (chunk_ends.empty() || chunk_ends.back() < ranked.size()) chunk_ends.push_back(ranked.size());
+  if (ranked.empty()) chunk_ends.clear();
+
+  std::string out(kMagic, kMagic + 8);
+  put_u16(out, kIswMajorVersion);
+  put_u16(out, kIswMinorVersion);
+  put_u32(out, 0);
+
+  {  // META
+    std::string text;
+    for (const auto& [key, value] : metadata.values) text += sanitize(key) + "=" + sanitize(value) + "\n";
+    put_section(out, "META", text);
+  }
+  {  // BASE
+    std::string payload;
+    put_u32(payload, static_cast<std::uint32_t>(base.vertex_count()));
+    put_u32(payload, static_cast<std::uint32_t>(base.face_count()));
+    put_u32(payload, static_cast<std::uint32_t>(base.face_vertices.size()));
+    std::vector<std::uint32_t> sharp;
+    for (std::size_t v = 0; v < base.vertex_count(); ++v)
+      if (base.is_sharp(v)) sharp.push_back(static_cast<std::uint32_t>(v));
+    put_u32(payload, static_cast<std::uint32_t>(sharp.size()));
+    std::string coded;
+    RangeEncoder rc(coded);
+    BaseModels m;
+    std::int64_t previous_first = 0;
+    for (std::size_t f = 0; f < base.face_count(); ++f) {
+      const std::uint32_t* face = base.face_begin(f);
+      detail::encode_integer(rc, m.face_size, static_cast<std::int64_t>(base.face_size(f)) - 3);
+      detail::encode_integer(rc, m.first_index, static_cast<std::int64_t>(face[0]) - previous_first);
+      for (std::uint32_t k = 1; k < base.face_size(f); ++k)
+        detail::encode_integer(rc, m.other_index, static_cast<std::int64_t>(face[k]) - static_cast<std::int64_t>(face[0]));
+      previous_first = face[0];
+    }
+    std::int64_t previous_sharp = -1;
+    for (std::uint32_t v : sharp) {
+      detail::encode_integer(rc, m.sharp_gap, static_cast<std::int64_t>(v) - previous_sharp);
+      previous_sharp = v;
+    }
+    rc.finish();
+    put_u64(payload, coded.size());
+    payload += coded;
+    put_section(out, "BASE", payload);
+  }
+  {  // QUAN
+    std::string payload;
+    put_f64(payload, options.step);
+    put_u32(payload, static_cast<std::uint32_t>(levels));
+    put_u32(payload, static_cast<std::uint32_t>(classes));
+    for (double w : weights) put_f64(payload, w);
+    put_u64(payload, ranked.size());
+    put_u32(payload, static_cast<std::uint32_t>(chunk_ends.size()));
+    for (std::uint64_t end : chunk_ends) put_u64(payload, end);
+    put_section(out, "QUAN", payload);
+  }
+  {  // BPTS
+    std::string coded;
+    RangeEncoder rc(coded);
+    std::array<IntegerModel, 3> models;
+    const auto neighbours = earlier_neighbours(base);
+    for (std::size_t v = 0; v < base_count; ++v) {
+      const QuantizedVector prediction = predict_base(q, neighbours[v], v);
+      for (int axis = 0; axis < 3; ++axis) detail::encode_integer(rc, models[static_cast<std::size_t>(axis)], q[v][axis] - prediction[axis]);
+    }
+    rc.finish();
+    std::string payload;
+    put_u64(payload, coded.size());
+    payload += coded;
+    put_section(out, "BPTS", payload);
+  }
+  // CHNK: flags over the not-yet-significant coefficients in index order.
+  std::vector<std::uint64_t> rank_of(fine, UINT64_MAX);
+  for (std::size_t r = 0; r < ranked.size(); ++r) rank_of[ranked[r]] = r;
+  std::vector<std::uint8_t> significant(fine, 0);
+  std::uint64_t begin = 0;
+  for (std::size_t chunk = 0; chunk < chunk_ends.size(); ++chunk) {
+    const std::uint64_t end = chunk_ends[chunk];
+    std::string coded;
+    RangeEncoder rc(coded);
+    ChunkModels models(classes);
+    for (int c = 1; c < classes; ++c) {
+      const auto [first, last] = coefficient_class_range(hierarchy, c);
+      int previous_flag = 0;
+      std::array<int, 3> previous_bucket{0, 0, 0};
+      for (std::size_t i = first; i < last; ++i) {
+        if (significant[i]) continue;
+        const int flag = rank_of[i] >= begin && rank_of[i] < end ? 1 : 0;
+        rc.encode_bit(models.flags[static_cast<std::size_t>(c)][static_cast<std::size_t>(previous_flag)], flag);
+        previous_flag = flag;
+        if (!flag) continue;
+        significant[i] = 1;
+        for (int axis = 0; axis < 3; ++axis) {
+          detail::encode_integer(rc, models.component(c, axis, previous_bucket[static_cast<std::size_t>(axis)]), q[i][axis]);
+          previous_bucket[static_cast<std::size_t>(axis)] = magnitude_bucket(q[i][axis]);
+        }
+      }
+    }
+    rc.finish();
+    std::string payload;
+    put_u32(payload, static_cast<std::uint32_t>(chunk));
+    put_u64(payload, begin);
+    put_u64(payload, end);
+    put_u64(payload, coded.size());
+    payload += coded;
+    put_section(out, "CHNK", payload);
+    begin = end;
+  }
+  put_section(out, "END ", std::string());
+  return out;
+}
+
+// ================================================================ decoder
+
+IswDecoded decode_isw(const std::string& bytes, const std::string& name, const IswDecodeOptions& options) {
+  IswDecoded result;
+  if (bytes.size() < kHeaderBytes || std::memcmp(bytes.data(), kMagic, 8) != 0)
+    throw Error(ErrorKind::Format, name + ": not an isowave .isw file (bad magic)");
+  std::uint16_t major = 0, minor = 0;
+  std::uint32_t reserved = 0;
+  std::memcpy(&major, bytes.data() + 8, 2);
+  std::memcpy(&minor, bytes.data() + 10, 2);
+  std::memcpy(&reserved, bytes.data() + 12, 4);
+  if (major != kIswMajorVersion)
+    throw Error(ErrorKind::Unsupported, name + ": .isw format version " + std::to_string(major) + "." +
+                                            std::to_string(minor) + " is not supported (this build reads " +
+                                            std::to_string(kIswMajorVersion) + ".x)");
+  if (reserved != 0) throw Error(ErrorKind::Format, name + ": corrupt file header (reserved field is not zero)");
+
+  std::size_t position = kHeaderBytes;
+  std::shared_ptr<SubdivisionHierarchy> hierarchy;
+  std::uint64_t limit = options.max_coefficients;
+  std::vector<QuantizedVector> q;
+  std::vector<std::uint8_t> significant;
+  std::vector<std::uint64_t> chunk_ends;
+  std::uint64_t nonzero_total = 0;
+  const char* expected_order[] = {"META", "BASE", "QUAN", "BPTS"};
+  std::size_t section_index = 0;
+  bool saw_end = false;
+
+  while (position < bytes.size()) {
+    if (bytes.size() - position < kSectionHeader) {
+      if (section_index >= 4) {
+        result.truncated = true;
+        break;
+      }
+      throw Error(ErrorKind::Format, name + ": truncated section header at byte " + std::to_string(position));
+    }
+    const std::string tag = bytes.substr(position, 4);
+    std::uint64_t size = 0;
+    std::uint32_t stored_header_crc = 0;
+    std::memcpy(&size, bytes.data() + position + 4, 8);
+    std::memcpy(&stored_header_crc, bytes.data() + position + 12, 4);
+    const std::string where = name + ": section " + tag + " (at byte " + std::to_string(position) + ")";
+    if (header_crc(tag.c_str(), size) != stored_header_crc)
+      throw Error(ErrorKind::Format, where + ": corrupt section header (CRC mismatch)");
+    if (section_index < 4 && tag != expected_order[section_index])
+      throw Error(ErrorKind::Format, where + ": expected section " + expected_order[section_index]);
+    if (section_index >= 4 && tag != "CHNK" && tag != "END ")
+      throw Error(ErrorKind::Format, where + ": unknown section");
+    if (size > bytes.size() - position - kSectionHeader || bytes.size() - position - kSectionHeader - size < 4) {
+      if (tag == "CHNK") {
+        result.truncated = true;
+        break;
+      }
+      throw Error(ErrorKind::Format, where + " is truncated");
+    }
+    const std::string payload = bytes.substr(position + kSectionHeader, static_cast<std::size_t>(size));
+    std::uint32_t stored_crc = 0;
+    std::memcpy(&stored_crc, bytes.data() + position + kSectionHeader + size, 4);
+    if (crc_of(tag.c_str(), payload) != stored_crc) throw Error(ErrorKind::Format, where + " is corrupt (CRC mismatch)");
+    IswSectionInfo info{tag, position, size + kSectionOverhead, 0};
+    position += static_cast<std::size_t>(size) + kSectionOverhead;
+    PayloadReader reader(payload, where);
+    ++section_index;
+
+    if (tag == "META") {
+      std::size_t start = 0;
+      while (start < payload.size()) {
+        std::size_t end = payload.find('\n', start);
+        if (end == std::string::npos) end = payload.size();
+        const std::string line = payload.substr(start, end - start);
+        const std::size_t eq = line.find('=');
+        if (eq != std::string::npos) result.metadata.values[line.substr(0, eq)] = line.substr(eq + 1);
+        start = end + 1;
+      }
+    } else if (tag == "BASE") {
+      const auto vertices = reader.read<std::uint32_t>();
+      const auto faces = reader.read<std::uint32_t>();
+      const auto corners = reader.read<std::uint32_t>();
+      const auto sharp_count = reader.read<std::uint32_t>();
+      const auto coded_size = reader.read<std::uint64_t>();
+      if (coded_size != reader.remaining()) reader.fail("has an inconsistent size");
+      const std::uint64_t integer_budget = kMaxIntegersPerCodedByte * (coded_size + 16);
+      if (faces == 0 || corners < 3ull * faces || vertices > corners || sharp_count > vertices ||
+          std::uint64_t{corners} + faces + sharp_count > integer_budget)
+        reader.fail("has impossible counts");
+      const std::string coded = reader.bytes(coded_size);
+      RangeDecoder rc(reinterpret_cast<const std::uint8_t*>(coded.data()), coded.size());
+      BaseModels m;
+      PolygonMesh& base = result.base;
+      base.positions.assign(vertices, Vec3{});
+      base.face_offsets.reserve(std::size_t{faces} + 1);
+      base.face_vertices.reserve(corners);
+      std::int64_t previous_first = 0;
+      std::vector<std::uint32_t> face;
+      for (std::uint32_t f = 0; f < faces; ++f) {
+        const std::int64_t size_code = detail::decode_integer(rc, m.face_size);
+        if (size_code < 0 || base.face_vertices.size() + 3 + static_cast<std::uint64_t>(size_code) > corners)
+          reader.fail("has an invalid face size");
+        face.assign(static_cast<std::size_t>(size_code + 3), 0);
+        const std::int64_t first = previous_first + detail::decode_integer(rc, m.first_index);
+        for (std::size_t k = 0; k < face.size(); ++k) {
+          const std::int64_t index = k == 0 ? first : first + detail::decode_integer(rc, m.other_index);
+          if (index < 0 || index >= vertices) reader.fail("has a vertex index out of range");
+          face[k] = static_cast<std::uint32_t>(index);
+        }
+        previous_first = first;
+        base.add_face(face.data(), face.size());
+      }
+      if (base.face_vertices.size() != corners) reader.fail("has an inconsistent corner count");
+      if (sharp_count > 0) base.sharp.assign(vertices, 0);
+      std::int64_t previous_sharp = -1;
+      for (std::uint32_t s = 0; s < sharp_count; ++s) {
+        const std::int64_t v = previous_sharp + detail::decode_integer(rc, m.sharp_gap);
+        if (v <= previous_sharp || v >= vertices) reader.fail("has an invalid sharp vertex");
+        base.sharp[static_cast<std::size_t>(v)] = 1;
+        previous_sharp = v;
+      }
+      if (rc.overran()) reader.fail("is corrupt (coded data ends early)");
+      try {
+        require_manifold(base, "base mesh");
+      } catch (const Error& error) {
+        reader.fail(std::string("holds an invalid base mesh: ") + error.what());
+      }
+    } else if (tag == "QUAN") {
+      result.step = reader.read<double>();
+      const auto levels = reader.read<std::uint32_t>();
+      const auto classes = reader.read<std::uint32_t>();
+      if (!(result.step > 0) || !std::isfinite(result.step)) reader.fail("has an invalid quantization step");
+      if (levels > kMaxLevels || classes != 1 + 2 * levels) reader.fail("has an invalid level count");
+      result.levels = static_cast<int>(levels);
+      for (std::uint32_t c = 0; c < classes; ++c) {
+        const double w = reader.read<double>();
+        if (!(w > 0) || !std::isfinite(w)) reader.fail("has an invalid class weight");
+        result.class_weights.push_back(w);
+      }
+      nonzero_total = reader.read<std::uint64_t>();
+      const auto chunks = reader.read<std::uint32_t>();
+      if (chunks > reader.remaining() / 8) reader.fail("has an impossible chunk count");
+      std::uint64_t previous = 0;
+      for (std::uint32_t c = 0; c < chunks; ++c) {
+        const auto end = reader.read<std::uint64_t>();
+        if (end <= previous || end > nonzero_total) reader.fail("has invalid chunk boundaries");
+        chunk_ends.push_back(end);
+        previous = end;
+      }
+      if (!chunk_ends.empty() && chunk_ends.back() != nonzero_total) reader.fail("has invalid chunk boundaries");
+      result.chunks_total = chunks;
+      result.coefficients_total = nonzero_total;
+      // The hierarchy (and so the fine vertex count) follows from the base
+      // mesh and the levels; bound it by the file size before building it.
+      double estimate = static_cast<double>(result.base.vertex_count());
+      {
+        double f = static_cast<double>(result.base.face_count());
+        double corners = static_cast<double>(result.base.face_vertices.size());
+        double e = static_cast<double>(summarize_topology(result.base).edges);
+        for (std::uint32_t l = 0; l < levels; ++l) {
+          estimate += f + e;
+          e = 2 * e + corners;
+          f = corners;
+          corners = 4 * f;
+        }
+      }
+      if (estimate > static_cast<double>(kMaxFineVertices) ||
+          estimate > static_cast<double>(kFineVerticesPerFileByte * bytes.size() + (1u << 20)))
+        reader.fail("describes a hierarchy larger than the file can justify");
+      hierarchy = std::make_shared<SubdivisionHierarchy>(result.base, result.levels);
+      result.hierarchy = hierarchy;
+      limit = std::min<std::uint64_t>(limit, coefficients_for_percent(*hierarchy, options.max_percent));
+      if (nonzero_total > hierarchy->fine_vertex_count() - hierarchy->vertex_count(0))
+        reader.fail("claims more coefficients than the hierarchy has");
+    } else if (tag == "BPTS") {
+      const auto coded_size = reader.read<std::uint64_t>();
+      if (coded_size != reader.remaining()) reader.fail("has an inconsistent size");
+      if (3ull * result.base.vertex_count() > kMaxIntegersPerCodedByte * (coded_size + 16)) reader.fail("is too short");
+      const std::string coded = reader.bytes(coded_size);
+      RangeDecoder rc(reinterpret_cast<const std::uint8_t*>(coded.data()), coded.size());
+      q.assign(hierarchy->fine_vertex_count(), QuantizedVector{0, 0, 0});
+      std::array<IntegerModel, 3> models;
+      const auto neighbours = earlier_neighbours(result.base);
+      const double s = class_step(result.step, result.class_weights, 0);
+      for (std::size_t v = 0; v < result.base.vertex_count(); ++v) {
+        const QuantizedVector prediction = predict_base(q, neighbours[v], v);
+        for (int axis = 0; axis < 3; ++axis) {
+          q[v][axis] = prediction[axis] + detail::decode_integer(rc, models[static_cast<std::size_t>(axis)]);
+          if (std::abs(q[v][axis]) > (1ll << 40)) reader.fail("holds an impossible value");
+        }
+        result.base.positions[v] = {q[v][0] * s, q[v][1] * s, q[v][2] * s};
+      }
+      if (rc.overran()) reader.fail("is corrupt (coded data ends early)");
+      significant.assign(hierarchy->fine_vertex_count(), 0);
+      if (options.headers_only) {
+        result.sections.push_back(info);
+        // List the remaining sections without decoding them.
+        while (position + kSectionHeader <= bytes.size()) {
+          std::uint64_t next_size = 0;
+          std::memcpy(&next_size, bytes.data() + position + 4, 8);
+          IswSectionInfo next{bytes.substr(position, 4), position, 0, 0};
+          if (next_size > bytes.size() - position - kSectionHeader ||
+              bytes.size() - position - kSectionHeader - next_size < 4) {
+            result.truncated = true;
+            break;
+          }
+          next.bytes = next_size + kSectionOverhead;
+          if (next.tag == "CHNK" && next_size >= 20) {
+            std::uint64_t b = 0, e = 0;
+            std::memcpy(&b, bytes.data() + position + kSectionHeader + 4, 8);
+            std::memcpy(&e, bytes.data() + position + kSectionHeader + 12, 8);
+            next.coefficients = e >= b ? e - b : 0;
+          }
+          result.sections.push_back(next);
+          position += static_cast<std::size_t>(next.bytes);
+        }
+        return result;
+      }
+    } else if (tag == "CHNK") {
+      const auto chunk = reader.read<std::uint32_t>();
+      const auto begin = reader.read<std::uint64_t>();
+      const auto end = reader.read<std::uint64_t>();
+      const auto coded_size = reader.read<std::uint64_t>();
+      if (chunk != result.chunks_decoded || chunk >= chunk_ends.size() || end != chunk_ends[chunk] ||
+          begin != (chunk == 0 ? 0 : chunk_ends[chunk - 1]))
+        reader.fail("is out of order or inconsistent with QUAN");
+      if (coded_size != reader.remaining()) reader.fail("has an inconsistent size");
+      const std::string coded = reader.bytes(coded_size);
+      RangeDecoder rc(reinterpret_cast<const std::uint8_t*>(coded.data()), coded.size());
+      const int classes = coefficient_class_count(*hierarchy);
+      ChunkModels models(classes);
+      std::uint64_t found = 0;
+      const std::size_t first_new = result.ranked.size();
+      for (int c = 1; c < classes; ++c) {
+        const auto [first, last] = coefficient_class_range(*hierarchy, c);
+        int previous_flag = 0;
+        std::array<int, 3> previous_bucket{0, 0, 0};
+        for (std::size_t i = first; i < last; ++i) {
+          if (significant[i]) continue;
+          const int flag = rc.decode_bit(models.flags[static_cast<std::size_t>(c)][static_cast<std::size_t>(previous_flag)]);
+          previous_flag = flag;
+          if (!flag) continue;
+          if (++found > end - begin) reader.fail("holds more coefficients than it declares");
+          significant[i] = 1;
+          for (int axis = 0; axis < 3; ++axis) {
+            q[i][axis] = detail::decode_integer(rc, models.component(c, axis, previous_bucket[static_cast<std::size_t>(axis)]));
+            previous_bucket[static_cast<std::size_t>(axis)] = magnitude_bucket(q[i][axis]);
+          }
+          if (q[i][0] == 0 && q[i][1] == 0 && q[i][2] == 0) reader.fail("holds a zero coefficient");
+          result.ranked.push_back(static_cast<std::uint32_t>(i));
+        }
+      }
+      if (found != end - begin) reader.fail("holds fewer coefficients than it declares");
+      if (rc.overran()) reader.fail("is corrupt (coded data ends early)");
+      // Rank the new coefficients as the encoder did.
+      std::vector<double> importance(hierarchy->fine_vertex_count(), 0.0);
+      for (std::size_t r = first_new; r < result.ranked.size(); ++r) {
+        const std::uint32_t i = result.ranked[r];
+        const int c = coefficient_class(*hierarchy, i);
+        const double s = class_step(result.step, result.class_weights, c);
+        double magnitude2 = 0;
+        for (int axis = 0; axis < 3; ++axis) magnitude2 += (q[i][axis] * s) * (q[i][axis] * s);
+        importance[i] = result.class_weights[static_cast<std::size_t>(c)] * std::sqrt(magnitude2);
+      }
+      std::vector<std::uint32_t> fresh(result.ranked.begin() + static_cast<std::ptrdiff_t>(first_new), result.ranked.end());
+      rank_by_importance(fresh, importance);
+      std::copy(fresh.begin(), fresh.end(), result.ranked.begin() + static_cast<std::ptrdiff_t>(first_new));
+      info.coefficients = end - begin;
+      ++result.chunks_decoded;
+      result.sections.push_back(info);
+      if (result.ranked.size() >= limit) break;
+      continue;
+    } else if (tag == "END ") {
+      if (result.chunks_decoded != result.chunks_total) throw Error(ErrorKind::Format, where + ": chunks are missing");
+      saw_end = true;
+      result.sections.push_back(info);
+      break;
+    }
+    result.sections.push_back(info);
+  }
+  if (section_index < 4) throw Error(ErrorKind::Format, name + ": the file ends before the coefficient sections");
+  const bool stopped_early = result.ranked.size() >= limit && result.chunks_decoded < result.chunks_total;
+  if (!saw_end && !stopped_early) result.truncated = true;
+  if (result.truncated)
+    result.truncation_note = result.chunks_decoded < result.chunks_total
+                                 ? "file is truncated inside the coefficient stream: decoded " +
+                                       std::to_string(result.chunks_decoded) + " of " +
+                                       std::to_string(result.chunks_total) + " chunks (" +
+                                       std::to_string(result.ranked.size()) + " of " +
+                                       std::to_string(result.coefficients_total) + " coefficients)"
+                                 : "file ends before its END section (all coefficient chunks were decoded)";
+
+  // Dequantize.
+  result.coefficients.assign(hierarchy->fine_vertex_count(), Vec3{});
+  for (int c = 0; c < coefficient_class_count(*hierarchy); ++c) {
+    const double s = class_step(result.step, result.class_weights, c);
+    const auto [first, last] = coefficient_class_range(*hierarchy, c);
+    for (std::size_t i = first; i < last; ++i)
+      result.coefficients[i] = {q[i][0] * s, q[i][1] * s, q[i][2] * s};
+  }
+  if (result.ranked.size() > limit) {
+    for (std::size_t r = static_cast<std::size_t>(limit); r < result.ranked.size(); ++r)
+      result.coefficients[result.ranked[r]] = Vec3{};
+    result.ranked.resize(static_cast<std::size_t>(limit));
+  }
+  return result;
+}
+
+IswDecoded read_isw(const std::string& path, const IswDecodeOptions& options) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw Error(ErrorKind::Io, path + ": cannot open");
+  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  if (in.bad()) throw Error(ErrorKind::Io, path + ": read failed");
+  return decode_isw(bytes, path, options);
+}
+
+void write_isw(const std::string& path, const std::string& bytes, bool overwrite) {
+  AtomicFileWriter file(path, overwrite);
+  file.write(bytes);
+  file.commit();
+}
+
+}  // namespace isowave

@@ -1,0 +1,65 @@
+#include "isowave/codec/statistics.h"
+
+#include <algorithm>
+
+#include "isowave/codec/importance.h"
+#include "isowave/core/error.h"
+#include "isowave/transform/wavelet_transform.h"
+
+namespace isowave {
+
+std::vector<Vec3> reconstruct(const IswDecoded& decoded, std::size_t keep, int level) {
+  if (!decoded.hierarchy) throw Error(ErrorKind::InvalidArgument, "reconstruct needs a decoded file");
+  std::vector<Vec3> data = decoded.coefficients;
+  for (std::size_t r = std::min(keep, decoded.ranked.size()); r < decoded.ranked.size(); ++r) data[decoded.ranked[r]] = Vec3{};
+  synthesize(*decoded.hierarchy, data, level);
+  data.resize(decoded.hierarchy->vertex_count(level < 0 ? decoded.levels : level));
+  return data;
+}
+
+std::vector<RateDistortionRow> rate_distortion(const IswDecoded& decoded, const std::vector<double>& percents) {
+  if (!decoded.hierarchy || decoded.truncated || decoded.chunks_decoded != decoded.chunks_total)
+    throw Error(ErrorKind::InvalidArgument, "statistics need a complete decode of the file");
+  const SubdivisionHierarchy& h = *decoded.hierarchy;
+  const std::vector<Vec3> full = reconstruct(decoded, decoded.ranked.size());
+  const std::size_t fine = h.fine_vertex_count();
+
+  // Bytes before the first chunk, and after each chunk.
+  std::uint64_t header_bytes = 16;
+  std::vector<std::uint64_t> chunk_end_rank, chunk_end_bytes;
+  std::uint64_t rank = 0;
+  for (const IswSectionInfo& s : decoded.sections) {
+    if (s.tag == "CHNK") {
+      rank += s.coefficients;
+      chunk_end_rank.push_back(rank);
+      chunk_end_bytes.push_back(s.offset + s.bytes);
+    } else if (s.tag != "END ") {
+      header_bytes = s.offset + s.bytes;
+    }
+  }
+  const auto bytes_for = [&](std::size_t kept_wavelets) -> std::uint64_t {
+    if (kept_wavelets == 0) return header_bytes;
+    for (std::size_t c = 0; c < chunk_end_rank.size(); ++c)
+      if (chunk_end_rank[c] >= kept_wavelets) return chunk_end_bytes[c];
+    return chunk_end_bytes.empty() ? header_bytes : chunk_end_bytes.back();
+  };
+
+  std::vector<RateDistortionRow> rows;
+  const auto add_row = [&](std::size_t wavelets, bool is_base) {
+    RateDistortionRow row;
+    row.wavelet_coefficients = std::min(wavelets, decoded.ranked.size());
+    row.kept = h.vertex_count(0) + wavelets;
+    row.percent = 100.0 * static_cast<double>(row.kept) / static_cast<double>(fine);
+    const PointErrors e = point_errors(reconstruct(decoded, wavelets), full, fine);
+    row.rms = e.rms;
+    row.max = e.max;
+    row.bytes = bytes_for(row.wavelet_coefficients);
+    row.is_base = is_base;
+    rows.push_back(row);
+  };
+  for (double percent : percents) add_row(coefficients_for_percent(h, percent), false);
+  add_row(0, true);
+  return rows;
+}
+
+}  // namespace isowave

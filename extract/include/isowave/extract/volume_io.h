@@ -1,0 +1,67 @@
+#pragma once
+// Volume input: raw, NRRD (.nrrd/.nhdr), legacy VTK (.vtk), VTK XML ImageData
+// (.vti), OpenVDB (.vdb), and generated fields named builtin:NAME[:N].
+//
+// Every reader treats the file as hostile: sizes are checked against the file
+// (or, for compressed data, against the most the compressed bytes can inflate
+// to) before allocating, and any problem with the file is an Error(Format) or
+// Error(Io) whose message starts with the file's path and names the problem
+// (truncated data, size mismatch, unknown type, corrupt gzip/zlib, missing
+// field, bad header). Usage problems (missing .raw dimensions, an unknown
+// extension, a bad builtin: name) are Error(InvalidArgument).
+//
+// Formats, chosen by extension (case-insensitive):
+//   .raw         headerless samples; dims and type from the options, the file
+//                size must equal dims x sample size exactly.
+//   .nrrd/.nhdr  NRRD0001-0005, attached or detached header (the data file is
+//                relative to the header), raw / gzip / ascii encoding, line
+//                and byte skip; 3-D scalar data only. Geometry from
+//                'space directions' (axis-aligned) + 'space origin', or
+//                'spacings'.
+//   .vtk         legacy STRUCTURED_POINTS, ASCII or BINARY (big-endian); other
+//                arrays (VECTORS, NORMALS, FIELD, cell data, ...) are skipped.
+//   .vti         ImageData with ascii, inline base64 or appended (raw/base64)
+//                arrays, optionally vtkZLibDataCompressor, UInt32/UInt64
+//                headers, either byte order; one Piece; axis-aligned Direction.
+//   .vdb         a float or double grid, densified over its active bounding
+//                box (inactive voxels read as the background); the transform
+//                must be linear and axis-aligned.
+// Axes with a negative step (NRRD space directions, VTI Direction, VDB
+// transforms) are reversed so that the spacing is positive and every sample
+// keeps its world position.
+#include <array>
+#include <optional>
+#include <string>
+
+#include "isowave/core/volume.h"
+
+namespace isowave {
+
+struct VolumeReadOptions {
+  // .raw only (required there): samples along x, y, z and the sample type.
+  std::optional<std::array<std::size_t, 3>> dims;
+  std::optional<ScalarType> type;
+  bool big_endian = false;  // .raw only
+  // Override (for .raw: set) the grid geometry; any format.
+  std::optional<Vec3> spacing;
+  std::optional<Vec3> origin;
+  // .vtk / .vti: the point-data array to read by name. Default: .vtk the first
+  // SCALARS array of the point data; .vti the PointData's Scalars array, else
+  // its first DataArray. A .vtk FIELD array with one component also qualifies
+  // when named. The array must have one component.
+  std::string field;
+  // .vdb: the grid to read by name (default: the first float or double grid).
+  std::string grid;
+};
+
+// Reads a volume, choosing the reader by extension (case-insensitive) or the
+// builtin: prefix (builtin:NAME[:N] calls make_builtin_field(NAME, N), N
+// defaulting to 128). NaN/Inf samples (including float64 samples beyond the
+// float range) are kept and counted in nonfinite_count.
+Volume read_volume(const std::string& path, const VolumeReadOptions& options = {});
+
+// Parses "uint8", "int16", "float32", ... (also "float" and "double");
+// throws Error(InvalidArgument).
+ScalarType parse_scalar_type(const std::string& name);
+
+}  // namespace isowave

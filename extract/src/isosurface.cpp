@@ -1,0 +1,240 @@
+// Extraction driver and clean-ups: Gaussian pre-filter, small-component
+// removal, statistics (contouring itself is in contour.cpp).
+#include "isowave/extract/isosurface.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+
+#include "isowave/core/error.h"
+#include "isowave/core/mesh_topology.h"
+
+namespace isowave {
+namespace {
+
+// Convolves `rows` rows of nx contiguous samples, row m starting at
+// data + base + m * stride, along the row index (the y or z axis) in place.
+// `scratch` holds rows * nx floats.
+void convolve_rows(float* data, std::size_t base, std::size_t stride, std::size_t rows, std::size_t nx,
+                   const std::vector<float>& weights, std::vector<float>& scratch) {
+  scratch.resize(rows * nx);
+  for (std::size_t m = 0; m < rows; ++m) std::copy_n(data + base + m * stride, nx, scratch.data() + m * nx);
+  const long radius = static_cast<long>(weights.size()) - 1;
+  const long last = static_cast<long>(rows) - 1;
+  std::vector<float> sum(nx), weight(nx);
+  for (long m = 0; m <= last; ++m) {
+    std::fill(sum.begin(), sum.end(), 0.0f);
+    std::fill(weight.begin(), weight.end(), 0.0f);
+    for (long d = -radius; d <= radius; ++d) {
+      const float w = weights[static_cast<std::size_t>(std::abs(d))];
+      const float* row = scratch.data() + static_cast<std::size_t>(std::clamp(m + d, 0L, last)) * nx;
+      for (std::size_t i = 0; i < nx; ++i) {
+        const bool finite = std::isfinite(row[i]);
+        sum[i] += finite ? w * row[i] : 0.0f;
+        weight[i] += finite ? w : 0.0f;
+      }
+    }
+    float* out = data + base + static_cast<std::size_t>(m) * stride;
+    for (std::size_t i = 0; i < nx; ++i)
+      out[i] = weight[i] > 0 ? sum[i] / weight[i] : std::numeric_limits<float>::quiet_NaN();
+  }
+}
+
+// Convolves one contiguous row (the x axis) in place.
+void convolve_row(float* row, std::size_t nx, const std::vector<float>& weights, std::vector<float>& scratch) {
+  scratch.assign(row, row + nx);
+  const long radius = static_cast<long>(weights.size()) - 1;
+  const long last = static_cast<long>(nx) - 1;
+  for (long i = 0; i <= last; ++i) {
+    float sum = 0, weight = 0;
+    for (long d = -radius; d <= radius; ++d) {
+      const float v = scratch[static_cast<std::size_t>(std::clamp(i + d, 0L, last))];
+      if (!std::isfinite(v)) continue;
+      const float w = weights[static_cast<std::size_t>(std::abs(d))];
+      sum += w * v;
+      weight += w;
+    }
+    row[i] = weight > 0 ? sum / weight : std::numeric_limits<float>::quiet_NaN();
+  }
+}
+
+std::vector<std::size_t> size_histogram(const std::vector<std::size_t>& sizes) {
+  std::vector<std::size_t> histogram;
+  for (std::size_t size : sizes) {
+    std::size_t bucket = 0;
+    for (std::size_t s = size; s >= 10; s /= 10) ++bucket;
+    if (histogram.size() <= bucket) histogram.resize(bucket + 1, 0);
+    ++histogram[bucket];
+  }
+  return histogram;
+}
+
+double face_area(const PolygonMesh& mesh, std::size_t f) {
+  const std::uint32_t* face = mesh.face_begin(f);
+  const Vec3& a = mesh.positions[face[0]];
+  double area = 0;
+  for (std::uint32_t i = 1; i + 1 < mesh.face_size(f); ++i)
+    area += 0.5 * norm(cross(mesh.positions[face[i]] - a, mesh.positions[face[i + 1]] - a));
+  return area;
+}
+
+}  // namespace
+
+Volume gaussian_smoothed(const Volume& volume, double sigma) {
+  if (!(sigma > 0) || !std::isfinite(sigma))
+    throw Error(ErrorKind::InvalidArgument, "the smoothing sigma must be a positive number of voxels");
+  const std::size_t radius = static_cast<std::size_t>(std::ceil(3 * sigma));
+  std::vector<float> weights(radius + 1);
+  for (std::size_t d = 0; d <= radius; ++d)
+    weights[d] = static_cast<float>(std::exp(-0.5 * static_cast<double>(d * d) / (sigma * sigma)));
+
+  Volume out = volume;
+  const std::size_t nx = volume.dims[0], ny = volume.dims[1], nz = volume.dims[2], plane = nx * ny;
+  float* data = out.values.data();
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, ny * nz), [&](const tbb::blocked_range<std::size_t>& range) {
+    std::vector<float> scratch;
+    for (std::size_t r = range.begin(); r != range.end(); ++r) convolve_row(data + r * nx, nx, weights, scratch);
+  });
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nz), [&](const tbb::blocked_range<std::size_t>& range) {
+    std::vector<float> scratch;
+    for (std::size_t k = range.begin(); k != range.end(); ++k)
+      convolve_rows(data, k * plane, nx, ny, nx, weights, scratch);
+  });
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, ny), [&](const tbb::blocked_range<std::size_t>& range) {
+    std::vector<float> scratch;
+    for (std::size_t j = range.begin(); j != range.end(); ++j)
+      convolve_rows(data, j * nx, plane, nz, nx, weights, scratch);
+  });
+  out.nonfinite_count = static_cast<std::size_t>(
+      std::count_if(out.values.begin(), out.values.end(), [](float v) { return !std::isfinite(v); }));
+  return out;
+}
+
+ComponentSizes component_sizes(const PolygonMesh& mesh) {
+  ComponentSizes result;
+  std::size_t count = 0;
+  result.face_component = face_components(mesh, &count);
+  constexpr std::uint32_t kNone = ~std::uint32_t{0};
+  std::vector<std::uint32_t> vertex_component(mesh.vertex_count(), kNone);
+  result.component_vertices.assign(count, 0);
+  for (std::size_t f = 0; f < mesh.face_count(); ++f) {
+    const std::uint32_t* face = mesh.face_begin(f);
+    for (std::uint32_t i = 0; i < mesh.face_size(f); ++i) {
+      if (vertex_component[face[i]] != kNone) continue;
+      vertex_component[face[i]] = result.face_component[f];
+      ++result.component_vertices[result.face_component[f]];
+    }
+  }
+  return result;
+}
+
+ComponentRemoval remove_small_components(PolygonMesh& mesh, std::size_t min_vertices) {
+  ComponentRemoval removal;
+  if (min_vertices <= 1 || mesh.face_count() == 0) return removal;
+  const ComponentSizes sizes = component_sizes(mesh);
+  for (std::size_t size : sizes.component_vertices)
+    if (size < min_vertices) ++removal.components;
+  if (removal.components == 0) return removal;
+
+  std::vector<std::uint32_t> kept_offsets{0};
+  std::vector<std::uint32_t> kept_vertices;
+  kept_offsets.reserve(mesh.face_count() + 1);
+  kept_vertices.reserve(mesh.face_vertices.size());
+  for (std::size_t f = 0; f < mesh.face_count(); ++f) {
+    if (sizes.component_vertices[sizes.face_component[f]] < min_vertices) {
+      ++removal.faces;
+      removal.area += face_area(mesh, f);
+      continue;
+    }
+    kept_vertices.insert(kept_vertices.end(), mesh.face_begin(f), mesh.face_begin(f) + mesh.face_size(f));
+    kept_offsets.push_back(static_cast<std::uint32_t>(kept_vertices.size()));
+  }
+  mesh.face_offsets = std::move(kept_offsets);
+  mesh.face_vertices = std::move(kept_vertices);
+  removal.vertices = remove_unreferenced_vertices(mesh);
+  if (mesh.sharp_count() == 0) mesh.sharp.clear();
+  return removal;
+}
+
+double surface_area(const PolygonMesh& mesh) {
+  double area = 0;
+  for (std::size_t f = 0; f < mesh.face_count(); ++f) area += face_area(mesh, f);
+  return area;
+}
+
+SurfaceStatistics surface_statistics(const PolygonMesh& mesh) {
+  SurfaceStatistics stats;
+  if (mesh.face_count() == 0) {
+    stats.vertices = mesh.vertex_count();
+    return stats;
+  }
+  const TopologySummary topology = summarize_topology(mesh);
+  stats.vertices = topology.vertices;
+  stats.triangles = topology.faces;
+  stats.edges = topology.edges;
+  stats.boundary_edges = topology.boundary_edges;
+  stats.boundary_loops = topology.boundary_loops;
+  stats.components = topology.components;
+  stats.euler_characteristic = topology.euler_characteristic;
+  stats.genus = topology.genus;
+  stats.area = surface_area(mesh);
+  stats.component_size_histogram = size_histogram(component_sizes(mesh).component_vertices);
+  return stats;
+}
+
+Isosurface extract_isosurface(const Volume& volume, const IsosurfaceOptions& options, ProgressSink& progress) {
+  if (!std::isfinite(options.iso)) throw Error(ErrorKind::InvalidArgument, "the isovalue must be finite");
+  if (!(options.smooth_sigma >= 0) || !std::isfinite(options.smooth_sigma))
+    throw Error(ErrorKind::InvalidArgument, "the smoothing sigma must be a non-negative number of voxels");
+  Isosurface result;
+  IsosurfaceReport& report = result.report;
+  report.iso = options.iso;
+  report.flipped = options.flip;
+  report.nonfinite_samples = volume.nonfinite_count;
+  report.smooth_sigma = options.smooth_sigma;
+  report.min_component_vertices = options.min_component_vertices;
+
+  progress.begin_stage("contour");
+  result.mesh = contour_volume(volume, options.iso, options.flip, &report.centroid_vertices);
+  progress.end_stage();
+  progress.begin_stage("topology");
+  report.before = surface_statistics(result.mesh);
+  progress.end_stage();
+
+  bool changed = false;
+  if (options.smooth_sigma > 0) {
+    progress.begin_stage("smooth");
+    result.mesh = PolygonMesh();  // free the unsmoothed contour first
+    {
+      const Volume smoothed = gaussian_smoothed(volume, options.smooth_sigma);
+      result.mesh = contour_volume(smoothed, options.iso, options.flip, &report.centroid_vertices);
+    }
+    progress.end_stage();
+    changed = true;
+  }
+  if (options.min_component_vertices > 1) {
+    progress.begin_stage("components");
+    const ComponentRemoval removal = remove_small_components(result.mesh, options.min_component_vertices);
+    report.dropped_components = removal.components;
+    report.dropped_vertices = removal.vertices;
+    report.dropped_triangles = removal.faces;
+    report.dropped_area = removal.area;
+    changed = changed || removal.components > 0;
+    progress.end_stage();
+  }
+  if (changed) {
+    progress.begin_stage("topology");
+    report.after = surface_statistics(result.mesh);
+    progress.end_stage();
+  } else {
+    report.after = report.before;
+  }
+  report.sharp_vertices = result.mesh.sharp_count();
+  return result;
+}
+
+}  // namespace isowave

@@ -1,0 +1,60 @@
+#pragma once
+// Quality of a fitted control mesh (one level of a shrink-wrapped hierarchy),
+// the figures the targets are stated in. Distances are in cells
+// (Volume::cell_size()).
+//
+// - isosurface: the first-order distance |f(x) - iso| / |grad f(x)| of each
+//   vertex, f the trilinearly interpolated field (as in the final correction);
+// - surface: exact distance of each vertex to the extracted triangle mesh;
+// - coverage: exact distance of each extracted-mesh vertex to the fitted mesh
+//   (quads split into two triangles), so gaps and missed features show;
+// - tangles: faces whose normal disagrees with the field's gradient at the
+//   face centroid (normals should point toward lower values, higher with
+//   flip); zero-area faces count as tangled;
+// - evenness: each face's area divided by the mean face area of its patch
+//   (the faces descending from one base face).
+// Sharp (fixed) vertices are included in every figure.
+#include <cstddef>
+#include <vector>
+
+#include "isowave/core/mesh.h"
+#include "isowave/core/volume.h"
+#include "isowave/fit/surface_distance.h"
+#include "isowave/transform/hierarchy.h"
+
+namespace isowave {
+
+struct FitQuality {
+  int level = 0;
+  std::size_t vertices = 0;
+  std::size_t faces = 0;
+  std::size_t nonfinite_vertices = 0;
+
+  double isosurface_rms = 0, isosurface_max = 0;
+  std::size_t isosurface_undefined = 0;  // vertices with a zero or non-finite gradient (left out)
+
+  double surface_rms = 0, surface_max = 0;
+
+  double coverage_rms = 0, coverage_p99 = 0, coverage_max = 0;
+
+  std::size_t tangled_faces = 0;
+  double tangled_fraction = 0;
+
+  // Face area relative to its patch's mean: percentiles and spread.
+  double area_ratio_min = 0, area_ratio_p1 = 0, area_ratio_median = 0, area_ratio_p99 = 0, area_ratio_max = 0;
+  double area_ratio_deviation = 0;  // standard deviation of the ratio
+};
+
+// Measures level `level` of `hierarchy` with control points `positions` (at
+// least vertex_count(level)) against the extracted mesh (`extracted`, and
+// `extracted_distance` built from it) and the scalar field. Parallel (TBB),
+// deterministic. O(n log n) for the fitted mesh's distance tree.
+FitQuality measure_fit_quality(const SubdivisionHierarchy& hierarchy, int level, const std::vector<Vec3>& positions,
+                               const PolygonMesh& extracted, const SurfaceDistance& extracted_distance,
+                               const Volume& field, double iso, bool flip);
+
+// The value below which `fraction` (in [0, 1]) of `values` lie (nearest rank);
+// reorders `values`. 0 for an empty vector.
+double percentile(std::vector<double>& values, double fraction);
+
+}  // namespace isowave

@@ -1,0 +1,184 @@
+#pragma once
+// Shrink-wrap fitting of a subdivision hierarchy to an isosurface (Bertram et
+// al. 2000, Sec. 4.2, after Kobbelt et al.'s shrink-wrapping): starting from
+// the base mesh, each level gets a few rounds of
+//   relaxation  - every vertex moves to the average of its old position and
+//                 the centroid of its neighbours; a vertex on two sharp
+//                 (boundary) edges averages only its neighbours along them;
+//                 sharp vertices never move;
+//   attraction  - every vertex moves along the unit average normal of its
+//                 faces to the nearest zero crossing of the signed-distance
+//                 field (trilinear) whose field gradient agrees with that
+//                 normal; a vertex whose crossing is farther than the reach
+//                 (tied to the level's edge length) stays for later rounds;
+// and is then refined to the next level with the wavelet subdivision
+// operator S (subdivide_level), up to level L. Finally (optional, on by
+// default) every level-L vertex moves along the scalar-field gradient onto
+// the isosurface of the trilinearly interpolated field, and folds left on
+// level L are repaired locally (untangle(), not in the paper).
+//
+// Boundaries: the extracted surface's boundary lies on the faces of the
+// volume box. A boundary vertex within one cell of a box face is kept on that
+// face (snapped, relaxed along its boundary curve, attracted and corrected
+// within the face plane), so it slides along its boundary curve. Every vertex
+// is kept inside the box.
+//
+// Every step is a Jacobi update (reads the previous positions, writes new
+// ones) split across threads (TBB), so results are identical for any thread
+// count. No step ever writes a non-finite position: a vertex whose update is
+// not finite keeps its old position.
+//
+// Cost per round: O(vertices of the level) plus the line searches (a few
+// trilinear samples each). Memory: the level's connectivity (about 60 bytes
+// per vertex) and two position buffers.
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "isowave/core/progress.h"
+#include "isowave/core/vec3.h"
+#include "isowave/core/volume.h"
+#include "isowave/fit/signed_distance.h"
+#include "isowave/transform/hierarchy.h"
+
+namespace isowave {
+
+enum class WrapRole : std::uint8_t {
+  Free = 0,      // interior vertex
+  Boundary = 1,  // on two boundary edges: follows its boundary curve
+  Fixed = 2,     // sharp: never moves
+};
+
+// Connectivity of one level's control mesh as the shrink-wrap needs it, as
+// flat arrays (compressed rows): millions of vertices at the finest level,
+// visited in parallel many times per round.
+struct WrapLevelMesh {
+  static constexpr std::uint32_t kNone = ~std::uint32_t{0};
+  int level = 0;
+  std::size_t vertex_count = 0;
+  // Neighbours of vertex v: neighbours[neighbour_offsets[v] .. neighbour_offsets[v+1]).
+  std::vector<std::uint32_t> neighbour_offsets, neighbours;
+  // Faces (the control mesh's, same order) and, per vertex, its faces.
+  std::vector<std::uint32_t> face_offsets, face_vertices;
+  std::vector<std::uint32_t> vertex_face_offsets, vertex_faces;
+  std::vector<WrapRole> role;
+  // Per vertex: its two neighbours along boundary edges (kNone if interior).
+  std::vector<std::uint32_t> boundary_neighbours;
+  // Per vertex: the box face it is held on, axis * 2 + (0 low, 1 high), or -1.
+  std::vector<std::int8_t> box_face;
+
+  std::size_t face_count() const { return face_offsets.size() - 1; }
+};
+
+// Connectivity of level `level` of the hierarchy; box faces are assigned from
+// `positions` (at least vertex_count(level) of them) and the volume's box.
+// O(vertices of the level) for level >= 1 and O(n log n) for the base.
+WrapLevelMesh make_wrap_level_mesh(const SubdivisionHierarchy& hierarchy, int level,
+                                   const std::vector<Vec3>& positions, const Volume& box);
+
+// Moves box-held vertices onto their face and every vertex into the box.
+void constrain_to_box(const WrapLevelMesh& mesh, const Volume& box, std::vector<Vec3>& positions);
+
+// One relaxation round (see above): out[v] = (1 - weight) in[v] + weight
+// centroid, weight in (0, 1], 0.5 in the paper. Sizes: vertex_count.
+void relax(const WrapLevelMesh& mesh, const Volume& box, double weight, const std::vector<Vec3>& in,
+           std::vector<Vec3>& out);
+
+struct AttractionOptions {
+  // A vertex moves only if its crossing is within reach: reach_edges times
+  // the mean length of its edges, but at least min_reach_cells cells.
+  double reach_edges = 2.0;
+  double min_reach_cells = 1.0;
+};
+
+struct AttractionStatistics {
+  std::size_t movable = 0;       // vertices not fixed
+  std::size_t attracted = 0;     // moved onto a crossing
+  std::size_t out_of_reach = 0;  // left for later (no agreeing crossing within reach)
+  std::size_t no_direction = 0;  // degenerate normal
+  double mean_move_cells = 0;    // over attracted vertices
+  double max_move_cells = 0;
+};
+
+// Unit average normal of the faces around each vertex (zero where undefined).
+std::vector<Vec3> vertex_normals(const WrapLevelMesh& mesh, const std::vector<Vec3>& positions);
+
+// One attraction round (see above) toward the zero set of `distance`.
+AttractionStatistics attract(const WrapLevelMesh& mesh, const SignedDistanceField& distance,
+                             const AttractionOptions& options, const std::vector<Vec3>& in, std::vector<Vec3>& out);
+
+struct CorrectionStatistics {
+  std::size_t movable = 0;
+  std::size_t corrected = 0;  // now on the interpolated isosurface
+  std::size_t failed = 0;     // no root within reach or no gradient: left in place
+  double mean_move_cells = 0;
+  double max_move_cells = 0;
+};
+
+// The final correction: each movable vertex moves along the gradient of the
+// trilinearly interpolated field (box-held ones along its projection into
+// their face) to where the field equals iso, searching at most
+// max_move_cells cells; in place.
+CorrectionStatistics correct_to_isosurface(const WrapLevelMesh& mesh, const Volume& field, double iso,
+                                           double max_move_cells, std::vector<Vec3>& positions);
+
+struct UntangleStatistics {
+  std::size_t tangled_before = 0;  // faces whose normal disagrees with the field gradient
+  std::size_t tangled_after = 0;
+  int rounds = 0;
+};
+
+// Not in the paper: repairs folds the fit could not avoid (features thinner
+// than the mesh, attraction onto a neighbouring sheet). Each round finds the
+// faces whose normal disagrees with the field gradient at their centroid
+// (normals should point toward lower values, higher with flip), moves the
+// corners of those faces and their neighbours to the centroid of their
+// neighbours (boundary ones along their boundary) and back onto the
+// isosurface along the gradient (at most max_move_cells; a vertex without a
+// root there stays). A round that does not reduce the number of tangled
+// faces is dropped and ends the repair. In place.
+UntangleStatistics untangle(const WrapLevelMesh& mesh, const Volume& field, double iso, bool flip, int rounds,
+                            double max_move_cells, std::vector<Vec3>& positions);
+
+struct ShrinkWrapOptions {
+  int iterations = 4;              // relaxation + attraction rounds on levels 0 .. L-1
+  int final_level_iterations = 2;  // rounds on level L
+  double relaxation_weight = 0.5;  // paper: average of old position and neighbour centroid
+  AttractionOptions attraction;
+  bool final_correction = true;
+  double correction_max_cells = 2.0;
+  // Rounds of untangle() on level L after the correction (0: none).
+  int untangle_rounds = 4;
+  // Keep a copy of every level's fitted positions (for per-level reports).
+  bool keep_levels = false;
+};
+
+struct WrapLevelStatistics {
+  int level = 0;
+  std::size_t vertices = 0;
+  std::size_t boundary_vertices = 0;  // held on a box face
+  std::size_t fixed_vertices = 0;
+  AttractionStatistics last_attraction;
+  double seconds = 0;
+};
+
+struct ShrinkWrapResult {
+  // Level-L control points in the hierarchy's order: ready for analyze().
+  std::vector<Vec3> positions;
+  // With keep_levels: level_positions[l] for l in [0, L) after fitting level l.
+  std::vector<std::vector<Vec3>> level_positions;
+  std::vector<WrapLevelStatistics> levels;
+  CorrectionStatistics correction;  // zeros when the correction is off
+  UntangleStatistics untangle;
+};
+
+// Fits the hierarchy to the zero set of `distance` (computed from `field`,
+// whose grid it must share) starting from the base control points.
+// Throws Error(InvalidArgument) if base_positions has fewer than
+// vertex_count(0) entries or a non-finite one, the grids differ, or an
+// option is out of range (iterations 0..100, weight in (0, 1], reaches > 0).
+ShrinkWrapResult shrink_wrap(const SubdivisionHierarchy& hierarchy, const std::vector<Vec3>& base_positions,
+                             const SignedDistanceField& distance, const Volume& field,
+                             const ShrinkWrapOptions& options = {}, ProgressSink& progress = no_progress());
+
+}  // namespace isowave

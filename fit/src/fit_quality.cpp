@@ -1,0 +1,152 @@
+#include "isowave/fit/fit_quality.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include "isowave/core/error.h"
+#include "isowave/fit/trilinear.h"
+
+namespace isowave {
+namespace {
+
+template <class Body>
+void for_each_index(std::size_t n, const Body& body) {
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t i = r.begin(); i < r.end(); ++i) body(i);
+  });
+}
+
+// Root mean square and maximum of finite values (in order, so deterministic).
+void rms_and_max(const std::vector<double>& values, double scale, double& rms, double& max) {
+  double sum = 0;
+  max = 0;
+  for (double v : values) {
+    sum += v * v;
+    max = std::max(max, v);
+  }
+  rms = values.empty() ? 0.0 : std::sqrt(sum / double(values.size())) * scale;
+  max *= scale;
+}
+
+}  // namespace
+
+double percentile(std::vector<double>& values, double fraction) {
+  if (values.empty()) return 0.0;
+  const double clamped = std::clamp(fraction, 0.0, 1.0);
+  const std::size_t rank = std::min(values.size() - 1, static_cast<std::size_t>(std::ceil(clamped * double(values.size()))) -
+                                                           (clamped > 0 ? 1 : 0));
+  std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(rank), values.end());
+  return values[rank];
+}
+
+FitQuality measure_fit_quality(const SubdivisionHierarchy& hierarchy, int level, const std::vector<Vec3>& positions,
+                               const PolygonMesh& extracted, const SurfaceDistance& extracted_distance,
+                               const Volume& field, double iso, bool flip) {
+  if (level < 0 || level > hierarchy.levels())
+    throw Error(ErrorKind::InvalidArgument, "level " + std::to_string(level) + " is not in the hierarchy");
+  if (positions.size() < hierarchy.vertex_count(level))
+    throw Error(ErrorKind::InvalidArgument, "too few positions for the level");
+  const PolygonMesh mesh = hierarchy.control_mesh(level, positions);
+  const double inverse_cell = 1.0 / field.cell_size();
+  FitQuality q;
+  q.level = level;
+  q.vertices = mesh.vertex_count();
+  q.faces = mesh.face_count();
+  for (const Vec3& p : mesh.positions) q.nonfinite_vertices += is_finite(p) ? 0 : 1;
+  if (q.nonfinite_vertices) return q;  // nothing else is meaningful
+
+  // Vertices against the field and the extracted surface.
+  std::vector<double> first_order(q.vertices);
+  for_each_index(q.vertices, [&](std::size_t v) {
+    const TrilinearSample s = trilinear_sample(field, mesh.positions[v]);
+    const double g = norm(s.gradient);
+    first_order[v] = g > 0 && std::isfinite(s.value) ? std::abs(s.value - iso) / g : -1.0;
+  });
+  std::vector<double> defined;
+  defined.reserve(q.vertices);
+  for (double d : first_order) {
+    if (d >= 0 && std::isfinite(d)) defined.push_back(d);
+    else ++q.isosurface_undefined;
+  }
+  rms_and_max(defined, inverse_cell, q.isosurface_rms, q.isosurface_max);
+  rms_and_max(extracted_distance.distances(mesh.positions), inverse_cell, q.surface_rms, q.surface_max);
+
+  // Coverage of the extracted surface by the fitted one.
+  {
+    PolygonMesh triangles;
+    triangles.positions = mesh.positions;
+    triangles.face_offsets.reserve(2 * q.faces + 1);
+    triangles.face_vertices.reserve(6 * q.faces);
+    for (std::size_t f = 0; f < q.faces; ++f) {
+      const std::uint32_t* face = mesh.face_begin(f);
+      for (std::uint32_t k = 1; k + 1 < mesh.face_size(f); ++k) triangles.add_face({face[0], face[k], face[k + 1]});
+    }
+    const SurfaceDistance fitted(triangles);
+    std::vector<double> coverage = fitted.distances(extracted.positions);
+    rms_and_max(coverage, inverse_cell, q.coverage_rms, q.coverage_max);
+    q.coverage_p99 = percentile(coverage, 0.99) * inverse_cell;
+  }
+
+  // Tangles and areas per face.
+  std::vector<std::uint8_t> tangled(q.faces);
+  std::vector<double> area(q.faces);
+  const double expected_sign = flip ? 1.0 : -1.0;  // normals toward lower values unless flipped
+  for_each_index(q.faces, [&](std::size_t f) {
+    const std::uint32_t* face = mesh.face_begin(f);
+    const std::uint32_t size = mesh.face_size(f);
+    Vec3 newell, centroid;
+    for (std::uint32_t k = 0; k < size; ++k) {
+      newell += cross(mesh.positions[face[k]], mesh.positions[face[k + 1 == size ? 0 : k + 1]]);
+      centroid += mesh.positions[face[k]];
+    }
+    centroid *= 1.0 / double(size);
+    area[f] = 0.5 * norm(newell);
+    const Vec3 gradient = trilinear_sample(field, centroid).gradient;
+    tangled[f] = !(expected_sign * dot(newell, gradient) > 0) ? 1 : 0;
+  });
+  for (std::uint8_t t : tangled) q.tangled_faces += t;
+  q.tangled_fraction = q.faces ? double(q.tangled_faces) / double(q.faces) : 0.0;
+
+  // Patch of every face: level-1 faces are numbered by base corner, finer
+  // levels by 4 per parent face.
+  const PolygonMesh& base = hierarchy.base();
+  std::vector<std::uint32_t> patch(q.faces);
+  for (std::size_t f = 0; f < q.faces; ++f) {
+    if (level == 0) {
+      patch[f] = static_cast<std::uint32_t>(f);
+      continue;
+    }
+    const std::size_t corner = f >> (2 * (level - 1));
+    const auto it = std::upper_bound(base.face_offsets.begin(), base.face_offsets.end(), static_cast<std::uint32_t>(corner));
+    patch[f] = static_cast<std::uint32_t>(it - base.face_offsets.begin() - 1);
+  }
+  std::vector<double> patch_area(base.face_count(), 0.0);
+  std::vector<std::uint32_t> patch_faces(base.face_count(), 0);
+  for (std::size_t f = 0; f < q.faces; ++f) {
+    patch_area[patch[f]] += area[f];
+    ++patch_faces[patch[f]];
+  }
+  std::vector<double> ratio(q.faces);
+  double sum = 0, sum_squares = 0;
+  for (std::size_t f = 0; f < q.faces; ++f) {
+    const double mean = patch_area[patch[f]] / double(patch_faces[patch[f]]);
+    ratio[f] = mean > 0 ? area[f] / mean : 1.0;
+    sum += ratio[f];
+    sum_squares += ratio[f] * ratio[f];
+  }
+  if (q.faces) {
+    const double mean = sum / double(q.faces);
+    q.area_ratio_deviation = std::sqrt(std::max(0.0, sum_squares / double(q.faces) - mean * mean));
+    q.area_ratio_min = *std::min_element(ratio.begin(), ratio.end());
+    q.area_ratio_max = *std::max_element(ratio.begin(), ratio.end());
+    q.area_ratio_p1 = percentile(ratio, 0.01);
+    q.area_ratio_median = percentile(ratio, 0.5);
+    q.area_ratio_p99 = percentile(ratio, 0.99);
+  }
+  return q;
+}
+
+}  // namespace isowave

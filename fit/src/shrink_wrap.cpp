@@ -1,0 +1,588 @@
+#include "isowave/fit/shrink_wrap.h"
+
+#include <algorithm>
+#include <cassert>
+#include <chrono>
+#include <cmath>
+#include <numeric>
+#include <string>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include "isowave/core/error.h"
+#include "isowave/fit/trilinear.h"
+#include "isowave/transform/wavelet_transform.h"
+#include "root_search.h"
+
+namespace isowave {
+namespace {
+
+constexpr std::uint32_t kNone = WrapLevelMesh::kNone;
+
+template <class Body>
+void for_vertices(std::size_t n, const Body& body) {
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t v = r.begin(); v < r.end(); ++v) body(v);
+  });
+}
+
+struct Box {
+  Vec3 low, high;
+  explicit Box(const Volume& volume) : low(volume_box_min(volume)), high(volume_box_max(volume)) {}
+  Vec3 clamp(const Vec3& p) const {
+    return {std::clamp(p.x, low.x, high.x), std::clamp(p.y, low.y, high.y), std::clamp(p.z, low.z, high.z)};
+  }
+  double plane(int face) const { return (face & 1) ? high[face >> 1] : low[face >> 1]; }
+  // The range of t for which p + t d stays in the box (p inside).
+  void clip(const Vec3& p, const Vec3& d, double& t_low, double& t_high) const {
+    t_low = -1e300;
+    t_high = 1e300;
+    for (int a = 0; a < 3; ++a) {
+      if (d[a] == 0) continue;
+      double t0 = (low[a] - p[a]) / d[a], t1 = (high[a] - p[a]) / d[a];
+      if (t0 > t1) std::swap(t0, t1);
+      t_low = std::max(t_low, std::min(t0, 0.0));
+      t_high = std::min(t_high, std::max(t1, 0.0));
+    }
+  }
+};
+
+void set_axis(Vec3& p, int axis, double value) {
+  if (axis == 0) p.x = value;
+  else if (axis == 1) p.y = value;
+  else p.z = value;
+}
+
+// Keeps the vertex on its box face and inside the box.
+inline Vec3 place(const WrapLevelMesh& mesh, const Box& box, std::size_t v, Vec3 p) {
+  const int face = mesh.box_face[v];
+  if (face >= 0) set_axis(p, face >> 1, box.plane(face));
+  return box.clamp(p);
+}
+
+// Unit normal of a polygon by Newell's method (zero if degenerate).
+inline Vec3 face_normal(const std::uint32_t* face, std::uint32_t size, const std::vector<Vec3>& p) {
+  Vec3 n;
+  for (std::uint32_t k = 0; k < size; ++k) {
+    const Vec3& a = p[face[k]];
+    const Vec3& b = p[face[k + 1 == size ? 0 : k + 1]];
+    n += cross(a, b);
+  }
+  return normalized(n);
+}
+
+// The direction a vertex may move in: box-held vertices only within their face.
+inline Vec3 allowed_direction(const WrapLevelMesh& mesh, std::size_t v, Vec3 d) {
+  const int face = mesh.box_face[v];
+  if (face >= 0) set_axis(d, face >> 1, 0.0);
+  return normalized(d);
+}
+
+}  // namespace
+
+WrapLevelMesh make_wrap_level_mesh(const SubdivisionHierarchy& hierarchy, int level,
+                                   const std::vector<Vec3>& positions, const Volume& box_volume) {
+  if (level < 0 || level > hierarchy.levels())
+    throw Error(ErrorKind::InvalidArgument, "level " + std::to_string(level) + " is not in the hierarchy");
+  WrapLevelMesh mesh;
+  mesh.level = level;
+  const std::size_t n = hierarchy.vertex_count(level);
+  mesh.vertex_count = n;
+  if (positions.size() < n) throw Error(ErrorKind::InvalidArgument, "too few positions for the level");
+
+  // Edges as (a, b, boundary) and faces, from the refinement step's arrays.
+  std::vector<std::uint32_t> edge_ends;
+  std::vector<std::uint8_t> edge_boundary;
+  if (level >= 1) {
+    const RefinementStep& s = hierarchy.step(level);
+    edge_ends.reserve(2 * (2 * std::size_t{s.parent_edge_count} + s.face_offsets.back()));
+    for (std::uint32_t e = 0; e < s.parent_edge_count; ++e) {
+      const std::uint8_t boundary = s.edge_faces[2 * e] == s.edge_faces[2 * e + 1];
+      const std::uint32_t middle = s.first_edge_vertex() + e;
+      edge_ends.insert(edge_ends.end(), {s.edge_vertices[2 * e], middle, middle, s.edge_vertices[2 * e + 1]});
+      edge_boundary.insert(edge_boundary.end(), {boundary, boundary});
+    }
+    mesh.face_offsets.reserve(std::size_t{s.face_offsets.back()} + 1);
+    mesh.face_offsets.push_back(0);
+    mesh.face_vertices.reserve(4 * std::size_t{s.face_offsets.back()});
+    for (std::uint32_t f = 0; f < s.parent_face_count; ++f) {
+      const std::uint32_t centre = s.first_face_vertex() + f;
+      const std::uint32_t begin = s.face_offsets[f], end = s.face_offsets[f + 1];
+      for (std::uint32_t k = begin; k < end; ++k) {
+        edge_ends.insert(edge_ends.end(), {centre, s.face_edges[k]});
+        edge_boundary.push_back(0);
+        const std::uint32_t previous = k == begin ? end - 1 : k - 1;
+        mesh.face_vertices.insert(mesh.face_vertices.end(),
+                                  {s.face_vertices[k], s.face_edges[k], centre, s.face_edges[previous]});
+        mesh.face_offsets.push_back(static_cast<std::uint32_t>(mesh.face_vertices.size()));
+      }
+    }
+  } else {
+    const PolygonMesh& base = hierarchy.base();
+    mesh.face_offsets = base.face_offsets;
+    mesh.face_vertices = base.face_vertices;
+    if (hierarchy.levels() >= 1) {
+      const RefinementStep& s = hierarchy.step(1);
+      edge_ends = s.edge_vertices;
+      for (std::uint32_t e = 0; e < s.parent_edge_count; ++e)
+        edge_boundary.push_back(s.edge_faces[2 * e] == s.edge_faces[2 * e + 1]);
+    } else {
+      // No refinement step to read: pair up half-edges by sorting.
+      struct HalfEdge {
+        std::uint32_t low, high, from;
+      };
+      std::vector<HalfEdge> half_edges;
+      for (std::size_t f = 0; f < base.face_count(); ++f) {
+        const std::uint32_t* face = base.face_begin(f);
+        const std::uint32_t size = base.face_size(f);
+        for (std::uint32_t k = 0; k < size; ++k) {
+          const std::uint32_t a = face[k], b = face[k + 1 == size ? 0 : k + 1];
+          half_edges.push_back({std::min(a, b), std::max(a, b), a});
+        }
+      }
+      std::sort(half_edges.begin(), half_edges.end(), [](const HalfEdge& x, const HalfEdge& y) {
+        return x.low != y.low ? x.low < y.low : x.high < y.high;
+      });
+      for (std::size_t k = 0; k < half_edges.size();) {
+        std::size_t m = k + 1;
+        while (m < half_edges.size() && half_edges[m].low == half_edges[k].low && half_edges[m].high == half_edges[k].high) ++m;
+        edge_ends.insert(edge_ends.end(), {half_edges[k].low, half_edges[k].high});
+        edge_boundary.push_back(m - k == 1);
+        k = m;
+      }
+    }
+  }
+
+  // Neighbours and boundary neighbours.
+  const std::size_t edge_count = edge_boundary.size();
+  mesh.neighbour_offsets.assign(n + 1, 0);
+  for (std::size_t e = 0; e < edge_count; ++e) {
+    ++mesh.neighbour_offsets[edge_ends[2 * e] + 1];
+    ++mesh.neighbour_offsets[edge_ends[2 * e + 1] + 1];
+  }
+  std::partial_sum(mesh.neighbour_offsets.begin(), mesh.neighbour_offsets.end(), mesh.neighbour_offsets.begin());
+  mesh.neighbours.resize(mesh.neighbour_offsets[n]);
+  mesh.boundary_neighbours.assign(2 * n, kNone);
+  std::vector<std::uint8_t> boundary_edge_count(n, 0);
+  {
+    std::vector<std::uint32_t> fill(mesh.neighbour_offsets.begin(), mesh.neighbour_offsets.end() - 1);
+    for (std::size_t e = 0; e < edge_count; ++e) {
+      const std::uint32_t a = edge_ends[2 * e], b = edge_ends[2 * e + 1];
+      mesh.neighbours[fill[a]++] = b;
+      mesh.neighbours[fill[b]++] = a;
+      if (!edge_boundary[e]) continue;
+      for (const auto& [from, to] : {std::pair{a, b}, std::pair{b, a}}) {
+        if (boundary_edge_count[from] < 2) mesh.boundary_neighbours[2 * from + boundary_edge_count[from]] = to;
+        boundary_edge_count[from] = static_cast<std::uint8_t>(std::min(255, boundary_edge_count[from] + 1));
+      }
+    }
+  }
+  std::vector<std::uint32_t>().swap(edge_ends);
+
+  // Faces per vertex.
+  mesh.vertex_face_offsets.assign(n + 1, 0);
+  for (std::uint32_t v : mesh.face_vertices) ++mesh.vertex_face_offsets[v + 1];
+  std::partial_sum(mesh.vertex_face_offsets.begin(), mesh.vertex_face_offsets.end(), mesh.vertex_face_offsets.begin());
+  mesh.vertex_faces.resize(mesh.vertex_face_offsets[n]);
+  {
+    std::vector<std::uint32_t> fill(mesh.vertex_face_offsets.begin(), mesh.vertex_face_offsets.end() - 1);
+    for (std::size_t f = 0; f + 1 < mesh.face_offsets.size(); ++f)
+      for (std::uint32_t k = mesh.face_offsets[f]; k < mesh.face_offsets[f + 1]; ++k)
+        mesh.vertex_faces[fill[mesh.face_vertices[k]]++] = static_cast<std::uint32_t>(f);
+  }
+
+  // Roles and box faces.
+  const std::vector<std::uint8_t> sharp = hierarchy.sharp_flags(level);
+  const Box box(box_volume);
+  const double cell = box_volume.cell_size();
+  mesh.role.assign(n, WrapRole::Free);
+  mesh.box_face.assign(n, -1);
+  for (std::size_t v = 0; v < n; ++v) {
+    if (sharp[v] || boundary_edge_count[v] >= 3) {
+      mesh.role[v] = WrapRole::Fixed;
+    } else if (boundary_edge_count[v] == 2) {
+      mesh.role[v] = WrapRole::Boundary;
+      int nearest = -1;
+      double nearest_distance = cell;  // held only when within one cell of a face
+      for (int face = 0; face < 6; ++face) {
+        const double d = std::abs(positions[v][face >> 1] - box.plane(face));
+        if (d <= nearest_distance) {
+          nearest = face;
+          nearest_distance = d;
+        }
+      }
+      mesh.box_face[v] = static_cast<std::int8_t>(nearest);
+    }
+  }
+  return mesh;
+}
+
+void constrain_to_box(const WrapLevelMesh& mesh, const Volume& box_volume, std::vector<Vec3>& positions) {
+  const Box box(box_volume);
+  for_vertices(mesh.vertex_count, [&](std::size_t v) {
+    if (mesh.role[v] != WrapRole::Fixed) positions[v] = place(mesh, box, v, positions[v]);
+  });
+}
+
+void relax(const WrapLevelMesh& mesh, const Volume& box_volume, double weight, const std::vector<Vec3>& in,
+           std::vector<Vec3>& out) {
+  assert(in.size() >= mesh.vertex_count && &in != &out);
+  out.resize(std::max(out.size(), mesh.vertex_count));
+  const Box box(box_volume);
+  for_vertices(mesh.vertex_count, [&](std::size_t v) {
+    const Vec3& p = in[v];
+    out[v] = p;
+    if (mesh.role[v] == WrapRole::Fixed) return;
+    Vec3 centroid;
+    const std::uint32_t b0 = mesh.boundary_neighbours[2 * v], b1 = mesh.boundary_neighbours[2 * v + 1];
+    if (mesh.role[v] == WrapRole::Boundary && b0 != kNone && b1 != kNone) {
+      centroid = 0.5 * (in[b0] + in[b1]);
+    } else {
+      const std::uint32_t begin = mesh.neighbour_offsets[v], end = mesh.neighbour_offsets[v + 1];
+      if (begin == end) return;
+      for (std::uint32_t k = begin; k < end; ++k) centroid += in[mesh.neighbours[k]];
+      centroid *= 1.0 / double(end - begin);
+    }
+    const Vec3 moved = place(mesh, box, v, (1.0 - weight) * p + weight * centroid);
+    if (is_finite(moved)) out[v] = moved;
+  });
+}
+
+std::vector<Vec3> vertex_normals(const WrapLevelMesh& mesh, const std::vector<Vec3>& positions) {
+  const std::size_t faces = mesh.face_count();
+  std::vector<Vec3> face_normals(faces);
+  for_vertices(faces, [&](std::size_t f) {
+    face_normals[f] = face_normal(mesh.face_vertices.data() + mesh.face_offsets[f],
+                                  mesh.face_offsets[f + 1] - mesh.face_offsets[f], positions);
+  });
+  std::vector<Vec3> normals(mesh.vertex_count);
+  for_vertices(mesh.vertex_count, [&](std::size_t v) {
+    Vec3 sum;
+    for (std::uint32_t k = mesh.vertex_face_offsets[v]; k < mesh.vertex_face_offsets[v + 1]; ++k)
+      sum += face_normals[mesh.vertex_faces[k]];
+    normals[v] = normalized(sum);
+  });
+  return normals;
+}
+
+namespace {
+
+// Distance s >= 0 along direction `sign` (+1 or -1 times d) to the first zero
+// crossing of the distance field G(t) = D(p + t d) that G crosses upward in t
+// (field gradient agreeing with d), searching s <= limit; negative if none.
+// Steps by the distance value (no surface is nearer than |D|), at least
+// min_step.
+template <class G>
+double first_agreeing_crossing(const G& g_of_t, double g0, double sign, double limit, double min_step,
+                               double tolerance) {
+  double s_previous = 0, g_previous = g0;
+  while (s_previous < limit) {
+    const double step = std::max(0.9 * std::abs(g_previous), min_step);
+    const double s = std::min(s_previous + step, limit);
+    const double g = g_of_t(sign * s);
+    if (detail::root_side(g) != detail::root_side(g_previous)) {
+      const bool agrees = sign > 0 ? (g_previous < 0 && g >= 0) : (g_previous >= 0 && g < 0);
+      if (agrees) {
+        const double t = detail::refine_bracket(g_of_t, sign * s_previous, g_previous, sign * s, g, tolerance);
+        return std::abs(t);
+      }
+    }
+    s_previous = s;
+    g_previous = g;
+  }
+  return -1;
+}
+
+}  // namespace
+
+AttractionStatistics attract(const WrapLevelMesh& mesh, const SignedDistanceField& distance,
+                             const AttractionOptions& options, const std::vector<Vec3>& in, std::vector<Vec3>& out) {
+  assert(in.size() >= mesh.vertex_count && &in != &out);
+  out.resize(std::max(out.size(), mesh.vertex_count));
+  const Volume& field = distance.distance;
+  const Box box(field);
+  const double cell = field.cell_size();
+  const double min_step = 0.1 * cell, tolerance = 1e-3 * cell;
+  const std::vector<Vec3> normals = vertex_normals(mesh, in);
+  enum Outcome : std::uint8_t { kFixed, kAttracted, kOutOfReach, kNoDirection };
+  std::vector<std::uint8_t> outcome(mesh.vertex_count);
+  std::vector<float> moved(mesh.vertex_count, 0.0f);
+
+  for_vertices(mesh.vertex_count, [&](std::size_t v) {
+    const Vec3& p = in[v];
+    out[v] = p;
+    if (mesh.role[v] == WrapRole::Fixed) {
+      outcome[v] = kFixed;
+      return;
+    }
+    const Vec3 d = allowed_direction(mesh, v, normals[v]);
+    if (squared_norm(d) == 0) {
+      outcome[v] = kNoDirection;
+      return;
+    }
+    double edge_sum = 0;
+    const std::uint32_t begin = mesh.neighbour_offsets[v], end = mesh.neighbour_offsets[v + 1];
+    for (std::uint32_t k = begin; k < end; ++k) edge_sum += norm(in[mesh.neighbours[k]] - p);
+    const double mean_edge = end > begin ? edge_sum / double(end - begin) : 0.0;
+    const double reach = std::max(options.reach_edges * mean_edge, options.min_reach_cells * cell);
+    double t_low, t_high;
+    box.clip(p, d, t_low, t_high);
+    const auto g_of_t = [&](double t) { return trilinear_value(field, p + t * d); };
+    const double g0 = g_of_t(0);
+    double best = -1, best_sign = 1;
+    if (g0 == 0) {
+      best = 0;
+    } else {
+      // The likelier side first (inside: forward), then the other one only
+      // as far as the crossing already found.
+      const double first_sign = g0 < 0 ? 1.0 : -1.0;
+      const double first_limit = std::min(reach, first_sign > 0 ? t_high : -t_low);
+      best = first_agreeing_crossing(g_of_t, g0, first_sign, first_limit, min_step, tolerance);
+      best_sign = first_sign;
+      const double second_limit = std::min(best >= 0 ? best : reach, first_sign > 0 ? -t_low : t_high);
+      const double other = first_agreeing_crossing(g_of_t, g0, -first_sign, second_limit, min_step, tolerance);
+      if (other >= 0 && (best < 0 || other < best)) {
+        best = other;
+        best_sign = -first_sign;
+      }
+    }
+    if (best < 0) {
+      outcome[v] = kOutOfReach;
+      return;
+    }
+    const Vec3 target = place(mesh, box, v, p + (best_sign * best) * d);
+    if (!is_finite(target)) {
+      outcome[v] = kNoDirection;
+      return;
+    }
+    out[v] = target;
+    outcome[v] = kAttracted;
+    moved[v] = static_cast<float>(best / cell);
+  });
+
+  AttractionStatistics stats;
+  double move_sum = 0;
+  for (std::size_t v = 0; v < mesh.vertex_count; ++v) {
+    switch (outcome[v]) {
+      case kFixed: continue;
+      case kAttracted:
+        ++stats.attracted;
+        move_sum += moved[v];
+        stats.max_move_cells = std::max(stats.max_move_cells, double(moved[v]));
+        break;
+      case kOutOfReach: ++stats.out_of_reach; break;
+      default: ++stats.no_direction; break;
+    }
+    ++stats.movable;
+  }
+  stats.mean_move_cells = stats.attracted ? move_sum / double(stats.attracted) : 0.0;
+  return stats;
+}
+
+namespace {
+
+// Moves p along the field gradient (within the vertex's box face, if held)
+// to where the trilinear field equals iso, at most `range` away. False if
+// there is no gradient or no root within range.
+bool project_onto_isosurface(const WrapLevelMesh& mesh, const Box& box, const Volume& field, double iso, double range,
+                             std::size_t v, const Vec3& p, Vec3& target) {
+  const TrilinearSample s = trilinear_sample(field, p);
+  const double h0 = s.value - iso;
+  if (!std::isfinite(h0)) return false;
+  if (h0 == 0) {
+    target = p;
+    return true;
+  }
+  const Vec3 u = allowed_direction(mesh, v, s.gradient);
+  const double slope = dot(s.gradient, u);
+  if (!(slope > 0)) return false;
+  double t_low, t_high;
+  box.clip(p, u, t_low, t_high);
+  const auto h = [&](double t) { return trilinear_value(field, p + std::clamp(t, t_low, t_high) * u) - iso; };
+  double t = 0;
+  const double cell = field.cell_size();
+  if (!detail::find_root_along_line(h, h0, -h0 / slope, range, 0.25 * cell, 1e-5 * cell, t)) return false;
+  target = place(mesh, box, v, p + std::clamp(t, t_low, t_high) * u);
+  return is_finite(target);
+}
+
+// Per face: 1 if its normal disagrees with the field gradient at its centroid.
+std::vector<std::uint8_t> tangled_faces(const WrapLevelMesh& mesh, const Volume& field, bool flip,
+                                        const std::vector<Vec3>& positions) {
+  const double expected_sign = flip ? 1.0 : -1.0;  // normals toward lower values unless flipped
+  std::vector<std::uint8_t> tangled(mesh.face_count());
+  for_vertices(mesh.face_count(), [&](std::size_t f) {
+    const std::uint32_t begin = mesh.face_offsets[f], size = mesh.face_offsets[f + 1] - begin;
+    Vec3 newell, centroid;
+    for (std::uint32_t k = 0; k < size; ++k) {
+      const Vec3& a = positions[mesh.face_vertices[begin + k]];
+      newell += cross(a, positions[mesh.face_vertices[begin + (k + 1 == size ? 0 : k + 1)]]);
+      centroid += a;
+    }
+    centroid *= 1.0 / double(size);
+    tangled[f] = !(expected_sign * dot(newell, trilinear_sample(field, centroid).gradient) > 0);
+  });
+  return tangled;
+}
+
+}  // namespace
+
+CorrectionStatistics correct_to_isosurface(const WrapLevelMesh& mesh, const Volume& field, double iso,
+                                           double max_move_cells, std::vector<Vec3>& positions) {
+  assert(positions.size() >= mesh.vertex_count);
+  const Box box(field);
+  const double cell = field.cell_size();
+  const double range = max_move_cells * cell;
+  std::vector<float> moved(mesh.vertex_count, -1.0f);  // -1: fixed, -2: failed
+  for_vertices(mesh.vertex_count, [&](std::size_t v) {
+    if (mesh.role[v] == WrapRole::Fixed) return;
+    const Vec3 p = positions[v];
+    moved[v] = -2.0f;
+    Vec3 target;
+    if (!project_onto_isosurface(mesh, box, field, iso, range, v, p, target)) return;
+    positions[v] = target;
+    moved[v] = static_cast<float>(norm(target - p) / cell);
+  });
+  CorrectionStatistics stats;
+  double sum = 0;
+  for (float m : moved) {
+    if (m == -1.0f) continue;
+    ++stats.movable;
+    if (m == -2.0f) {
+      ++stats.failed;
+      continue;
+    }
+    ++stats.corrected;
+    sum += m;
+    stats.max_move_cells = std::max(stats.max_move_cells, double(m));
+  }
+  stats.mean_move_cells = stats.corrected ? sum / double(stats.corrected) : 0.0;
+  return stats;
+}
+
+UntangleStatistics untangle(const WrapLevelMesh& mesh, const Volume& field, double iso, bool flip, int rounds,
+                            double max_move_cells, std::vector<Vec3>& positions) {
+  assert(positions.size() >= mesh.vertex_count);
+  const Box box(field);
+  const double range = max_move_cells * field.cell_size();
+  UntangleStatistics stats;
+  std::vector<std::uint8_t> tangled = tangled_faces(mesh, field, flip, positions);
+  for (std::uint8_t t : tangled) stats.tangled_before += t;
+  stats.tangled_after = stats.tangled_before;
+  std::vector<std::uint8_t> selected(mesh.vertex_count);
+  std::vector<Vec3> next;
+  for (int round = 0; round < rounds && stats.tangled_after > 0; ++round) {
+    // The corners of tangled faces and their neighbours.
+    std::fill(selected.begin(), selected.end(), 0);
+    for (std::size_t f = 0; f < mesh.face_count(); ++f) {
+      if (!tangled[f]) continue;
+      for (std::uint32_t k = mesh.face_offsets[f]; k < mesh.face_offsets[f + 1]; ++k) {
+        const std::uint32_t v = mesh.face_vertices[k];
+        selected[v] = 1;
+        for (std::uint32_t n = mesh.neighbour_offsets[v]; n < mesh.neighbour_offsets[v + 1]; ++n)
+          selected[mesh.neighbours[n]] = 1;
+      }
+    }
+    next.assign(positions.begin(), positions.begin() + static_cast<std::ptrdiff_t>(mesh.vertex_count));
+    for_vertices(mesh.vertex_count, [&](std::size_t v) {
+      if (!selected[v] || mesh.role[v] == WrapRole::Fixed) return;
+      Vec3 centroid;
+      const std::uint32_t b0 = mesh.boundary_neighbours[2 * v], b1 = mesh.boundary_neighbours[2 * v + 1];
+      if (mesh.role[v] == WrapRole::Boundary && b0 != kNone && b1 != kNone) {
+        centroid = 0.5 * (positions[b0] + positions[b1]);
+      } else {
+        const std::uint32_t begin = mesh.neighbour_offsets[v], end = mesh.neighbour_offsets[v + 1];
+        if (begin == end) return;
+        for (std::uint32_t k = begin; k < end; ++k) centroid += positions[mesh.neighbours[k]];
+        centroid *= 1.0 / double(end - begin);
+      }
+      const Vec3 smoothed = place(mesh, box, v, centroid);
+      Vec3 target;
+      if (project_onto_isosurface(mesh, box, field, iso, range, v, smoothed, target)) next[v] = target;
+    });
+    std::vector<std::uint8_t> next_tangled = tangled_faces(mesh, field, flip, next);
+    std::size_t count = 0;
+    for (std::uint8_t t : next_tangled) count += t;
+    if (count >= stats.tangled_after) break;  // a round that does not help is dropped
+    std::copy(next.begin(), next.end(), positions.begin());
+    tangled.swap(next_tangled);
+    stats.tangled_after = count;
+    ++stats.rounds;
+  }
+  return stats;
+}
+
+ShrinkWrapResult shrink_wrap(const SubdivisionHierarchy& hierarchy, const std::vector<Vec3>& base_positions,
+                             const SignedDistanceField& distance, const Volume& field,
+                             const ShrinkWrapOptions& options, ProgressSink& progress) {
+  const std::size_t base_count = hierarchy.vertex_count(0);
+  if (base_positions.size() < base_count)
+    throw Error(ErrorKind::InvalidArgument, "shrink-wrap needs " + std::to_string(base_count) +
+                                                " base positions, got " + std::to_string(base_positions.size()));
+  for (std::size_t v = 0; v < base_count; ++v)
+    if (!is_finite(base_positions[v]))
+      throw Error(ErrorKind::InvalidArgument, "base vertex " + std::to_string(v) + " has a non-finite position");
+  if (distance.distance.dims != field.dims || !(distance.distance.spacing == field.spacing) ||
+      !(distance.distance.origin == field.origin) || distance.distance.values.size() != field.sample_count())
+    throw Error(ErrorKind::InvalidArgument, "the signed-distance field and the scalar field have different grids");
+  if (field.dims[0] < 2 || field.dims[1] < 2 || field.dims[2] < 2)
+    throw Error(ErrorKind::InvalidArgument, "shrink-wrap needs at least 2 samples along each axis");
+  if (options.iterations < 0 || options.iterations > 100 || options.final_level_iterations < 0 ||
+      options.final_level_iterations > 100)
+    throw Error(ErrorKind::InvalidArgument, "shrink-wrap iterations must be in 0..100");
+  if (options.untangle_rounds < 0 || options.untangle_rounds > 100)
+    throw Error(ErrorKind::InvalidArgument, "untangle rounds must be in 0..100");
+  if (!(options.relaxation_weight > 0 && options.relaxation_weight <= 1))
+    throw Error(ErrorKind::InvalidArgument, "relaxation weight must be in (0, 1]");
+  if (!(options.attraction.reach_edges > 0) || !(options.attraction.min_reach_cells >= 0) ||
+      !std::isfinite(options.attraction.reach_edges) || !std::isfinite(options.attraction.min_reach_cells))
+    throw Error(ErrorKind::InvalidArgument, "attraction reach must be positive and finite");
+  if (!(options.correction_max_cells > 0) || !std::isfinite(options.correction_max_cells))
+    throw Error(ErrorKind::InvalidArgument, "correction distance must be positive and finite");
+
+  progress.begin_stage("shrink-wrap");
+  ShrinkWrapResult result;
+  std::vector<Vec3>& data = result.positions;
+  data.assign(base_positions.begin(), base_positions.begin() + static_cast<std::ptrdiff_t>(base_count));
+  std::vector<Vec3> scratch;
+  const int levels = hierarchy.levels();
+  double work_done = 0, work_total = 0;
+  for (int level = 0; level <= levels; ++level) work_total += double(hierarchy.vertex_count(level));
+
+  for (int level = 0; level <= levels; ++level) {
+    const auto start = std::chrono::steady_clock::now();
+    if (level > 0) subdivide_level(hierarchy, level, data);
+    const WrapLevelMesh mesh = make_wrap_level_mesh(hierarchy, level, data, field);
+    constrain_to_box(mesh, field, data);
+    WrapLevelStatistics stats;
+    stats.level = level;
+    stats.vertices = mesh.vertex_count;
+    for (std::size_t v = 0; v < mesh.vertex_count; ++v) {
+      stats.boundary_vertices += mesh.box_face[v] >= 0 ? 1 : 0;
+      stats.fixed_vertices += mesh.role[v] == WrapRole::Fixed ? 1 : 0;
+    }
+    const int rounds = level < levels ? options.iterations : options.final_level_iterations;
+    scratch.resize(mesh.vertex_count);
+    for (int round = 0; round < rounds; ++round) {
+      relax(mesh, field, options.relaxation_weight, data, scratch);
+      stats.last_attraction = attract(mesh, distance, options.attraction, scratch, data);
+    }
+    if (level == levels && options.final_correction)
+      result.correction = correct_to_isosurface(mesh, field, distance.iso, options.correction_max_cells, data);
+    if (level == levels && options.untangle_rounds > 0)
+      result.untangle = untangle(mesh, field, distance.iso, distance.flip, options.untangle_rounds,
+                                 options.correction_max_cells, data);
+    if (options.keep_levels && level < levels)
+      result.level_positions.emplace_back(data.begin(), data.begin() + static_cast<std::ptrdiff_t>(mesh.vertex_count));
+    stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    result.levels.push_back(stats);
+    work_done += double(mesh.vertex_count);
+    progress.update(work_done / work_total);
+  }
+  data.resize(hierarchy.vertex_count(levels));
+  progress.end_stage();
+  return result;
+}
+
+}  // namespace isowave

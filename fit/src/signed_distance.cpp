@@ -1,0 +1,523 @@
+#include "isowave/fit/signed_distance.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include "isowave/core/error.h"
+#include "isowave/fit/trilinear.h"
+#include "root_search.h"
+
+namespace isowave {
+namespace {
+
+// Closest-point index per node; its top bit marks the node as queued, so the
+// propagation loop touches one array fewer per update.
+constexpr std::uint32_t kQueuedBit = 0x80000000u;
+constexpr std::uint32_t kNoPoint = 0x7fffffffu;
+// Per-node flag bits: sample side, queue membership, "the cell whose lowest
+// corner is this node carries the surface mesh", seed, sign flip, flood visit.
+constexpr std::uint8_t kInside = 1, kKeptCell = 4, kSeed = 8, kFlip = 16, kVisited = 32, kOpen = 64,
+                         kCrossCell = 128;  // the cell whose lowest corner is this node has both sides
+
+struct Point3f {
+  float x, y, z;
+};
+
+// First-in-first-out queue of node indices in a ring buffer that doubles when
+// full: the queued flag bounds it by the node count, but the frontier is
+// usually far smaller, so it starts small.
+class NodeQueue {
+ public:
+  explicit NodeQueue(std::size_t initial) : ring_(std::max<std::size_t>(initial, 1024)) {}
+  bool empty() const { return size_ == 0; }
+  std::size_t size() const { return size_; }
+  std::size_t capacity_bytes() const { return ring_.capacity() * sizeof(std::uint32_t); }
+  void push(std::uint32_t node) {
+    if (size_ == ring_.size()) grow();
+    std::size_t tail = head_ + size_;
+    if (tail >= ring_.size()) tail -= ring_.size();
+    ring_[tail] = node;
+    ++size_;
+  }
+  std::uint32_t pop() {
+    const std::uint32_t node = ring_[head_];
+    if (++head_ == ring_.size()) head_ = 0;
+    --size_;
+    return node;
+  }
+
+ private:
+  void grow() {
+    std::vector<std::uint32_t> bigger(ring_.size() * 2);
+    for (std::size_t k = 0; k < size_; ++k) bigger[k] = ring_[(head_ + k) % ring_.size()];
+    ring_.swap(bigger);
+    head_ = 0;
+  }
+  std::vector<std::uint32_t> ring_;
+  std::size_t head_ = 0, size_ = 0;
+};
+
+bool is_inside(float value, float iso) { return std::isfinite(value) && value >= iso; }
+
+// Central-difference gradient at a node (one-sided at the box faces and next
+// to non-finite samples; 0 along an axis with no usable neighbour).
+Vec3 node_gradient(const Volume& v, std::size_t i, std::size_t j, std::size_t k) {
+  const std::size_t n = v.index(i, j, k);
+  const std::size_t stride[3] = {1, v.dims[0], v.dims[0] * v.dims[1]};
+  const std::size_t coord[3] = {i, j, k};
+  const double spacing[3] = {v.spacing.x, v.spacing.y, v.spacing.z};
+  double g[3];
+  for (int a = 0; a < 3; ++a) {
+    const bool has_low = coord[a] > 0 && std::isfinite(v.values[n - stride[a]]);
+    const bool has_high = coord[a] + 1 < v.dims[a] && std::isfinite(v.values[n + stride[a]]);
+    const double low = has_low ? v.values[n - stride[a]] : v.values[n];
+    const double high = has_high ? v.values[n + stride[a]] : v.values[n];
+    const int span = int(has_low) + int(has_high);
+    g[a] = span == 0 ? 0.0 : (high - low) / (span * spacing[a]);
+  }
+  return {g[0], g[1], g[2]};
+}
+
+// Gives the regions enclosed by dropped components the sign of their
+// surroundings. Start points: nodes of cells with both sides that the surface
+// mesh does not pass through (so they sit on a dropped component). From each, a flood over
+// same-side 6-neighbours; the region is enclosed if the flood ends without
+// reaching a seed, the box faces, an earlier unenclosed region or the size
+// limit. Enclosed regions are flipped. Sequential and in index order, so
+// deterministic; cost proportional to the regions explored.
+void flip_enclosed_regions(const Volume& field, const std::vector<std::uint32_t>& starts,
+                           std::vector<std::uint8_t>& flags, SignedDistanceStatistics& stats) {
+  const std::size_t nx = field.dims[0], ny = field.dims[1], nz = field.dims[2], slice = nx * ny;
+  constexpr std::size_t kLimit = std::size_t{1} << 22;
+  std::vector<std::uint32_t> region;
+  const auto on_box = [&](std::size_t n) {
+    const std::size_t k = n / slice, j = (n - k * slice) / nx, i = n - k * slice - j * nx;
+    return i == 0 || j == 0 || k == 0 || i + 1 == nx || j + 1 == ny || k + 1 == nz;
+  };
+  const auto neighbours = [&](std::size_t n, auto&& visit) {
+    const std::size_t k = n / slice, j = (n - k * slice) / nx, i = n - k * slice - j * nx;
+    if (i > 0) visit(n - 1);
+    if (i + 1 < nx) visit(n + 1);
+    if (j > 0) visit(n - nx);
+    if (j + 1 < ny) visit(n + nx);
+    if (k > 0) visit(n - slice);
+    if (k + 1 < nz) visit(n + slice);
+  };
+  stats.unseeded_crossing_nodes = starts.size();
+  for (const std::uint32_t start : starts) {
+    if (flags[start] & (kSeed | kVisited)) continue;
+    const std::uint8_t side = flags[start] & kInside;
+    region.clear();
+    region.push_back(static_cast<std::uint32_t>(start));
+    flags[start] |= kVisited;
+    bool enclosed = !on_box(start);
+    for (std::size_t head = 0; head < region.size() && enclosed; ++head) {
+      neighbours(region[head], [&](std::size_t m) {
+        if (!enclosed || (flags[m] & kInside) != side) return;
+        if (flags[m] & kVisited && !(flags[m] & kOpen)) return;  // already in this region
+        if (flags[m] & (kSeed | kOpen) || on_box(m) || region.size() >= kLimit) {
+          enclosed = false;
+          return;
+        }
+        flags[m] |= kVisited;
+        region.push_back(static_cast<std::uint32_t>(m));
+      });
+    }
+    if (!enclosed) {  // later floods reaching these nodes stop at once
+      for (std::uint32_t n : region) flags[n] |= kOpen;
+      continue;
+    }
+    for (std::uint32_t n : region) flags[n] |= kFlip;
+    stats.flipped_nodes += region.size();
+  }
+}
+
+}  // namespace
+
+SignedDistanceField compute_signed_distance(const Volume& field, const SignedDistanceOptions& options,
+                                            ProgressSink& progress) {
+  const std::size_t nx = field.dims[0], ny = field.dims[1], nz = field.dims[2];
+  if (nx < 2 || ny < 2 || nz < 2)
+    throw Error(ErrorKind::InvalidArgument, "signed distance needs at least 2 samples along each axis");
+  if (field.values.size() != field.sample_count())
+    throw Error(ErrorKind::InvalidArgument, "volume sample count does not match its dimensions");
+  for (int a = 0; a < 3; ++a)
+    if (!(field.spacing[a] > 0) || !std::isfinite(field.spacing[a]))
+      throw Error(ErrorKind::InvalidArgument, "volume spacing must be positive and finite");
+  if (!std::isfinite(options.iso)) throw Error(ErrorKind::InvalidArgument, "isovalue must be finite");
+  if (!std::isfinite(options.band_cells) || options.band_cells < 0)
+    throw Error(ErrorKind::InvalidArgument, "narrow band width must be a finite number of cells >= 0");
+  const std::size_t node_count = field.sample_count();
+  if (node_count >= kNoPoint)
+    throw Error(ErrorKind::Unsupported, "volumes with 2^31 or more samples are not supported");
+
+  progress.begin_stage("signed distance");
+  using Clock = std::chrono::steady_clock;
+  const auto seconds_since = [](Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); };
+  auto phase_start = Clock::now();
+  const float iso = static_cast<float>(options.iso);
+  const std::size_t slice = nx * ny;
+  const double cell = field.cell_size();
+  const double max_spacing = std::max({field.spacing.x, field.spacing.y, field.spacing.z});
+  const Vec3 box_extent = volume_box_max(field) - volume_box_min(field);
+  const bool banded = options.band_cells > 0;
+  const double far_value = banded ? options.band_cells * cell : norm(box_extent) + cell;
+  const float band_squared =
+      banded ? static_cast<float>(far_value * far_value) : std::numeric_limits<float>::infinity();
+
+  // Inside/outside per node; later also the queued bit.
+  std::vector<std::uint8_t> flags(node_count);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nz), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t n = r.begin() * slice; n < r.end() * slice; ++n)
+      flags[n] = is_inside(field.values[n], iso) ? kInside : 0;
+  });
+
+  // Cells the surface mesh passes through: every vertex lies on a grid edge
+  // (or, for a loop-centre vertex, inside a cell); mark each cell around it.
+  const bool masked = options.surface != nullptr;
+  if (masked) {
+    const std::size_t cells[3] = {nx - 1, ny - 1, nz - 1};
+    for (const Vec3& p : options.surface->positions) {
+      if (!is_finite(p)) throw Error(ErrorKind::InvalidArgument, "surface mesh has a non-finite vertex");
+      std::size_t low[3], high[3];
+      for (int a = 0; a < 3; ++a) {
+        const double g = (p[a] - field.origin[a]) / field.spacing[a];
+        const double nearest = std::round(g);
+        if (std::abs(g - nearest) < 1e-6) {
+          const double m = std::clamp(nearest, 0.0, double(cells[a]));
+          low[a] = m >= 1 ? std::size_t(m) - 1 : 0;
+          high[a] = std::min(std::size_t(m), cells[a] - 1);
+        } else {
+          low[a] = high[a] = std::size_t(std::clamp(std::floor(g), 0.0, double(cells[a] - 1)));
+        }
+      }
+      for (std::size_t k = low[2]; k <= high[2]; ++k)
+        for (std::size_t j = low[1]; j <= high[1]; ++j)
+          for (std::size_t i = low[0]; i <= high[0]; ++i) flags[i + nx * j + slice * k] |= kKeptCell;
+    }
+  }
+
+  // Cells with corners on both sides (each cell writes only its lowest
+  // corner's flag and reads sample values, so slices run in parallel).
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nz - 1), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t k = r.begin(); k < r.end(); ++k)
+      for (std::size_t j = 0; j + 1 < ny; ++j) {
+        const std::size_t row = nx * j + slice * k;
+        bool low_face[4];
+        const auto face_sides = [&](std::size_t i, bool* out) {
+          out[0] = is_inside(field.values[row + i], iso);
+          out[1] = is_inside(field.values[row + i + nx], iso);
+          out[2] = is_inside(field.values[row + i + slice], iso);
+          out[3] = is_inside(field.values[row + i + nx + slice], iso);
+        };
+        face_sides(0, low_face);
+        for (std::size_t i = 0; i + 1 < nx; ++i) {
+          bool high_face[4];
+          face_sides(i + 1, high_face);
+          const bool first = low_face[0];
+          bool mixed = false;
+          for (int c = 0; c < 4; ++c) mixed |= (low_face[c] != first) | (high_face[c] != first);
+          if (mixed) flags[row + i] |= kCrossCell;
+          std::copy(high_face, high_face + 4, low_face);
+        }
+      }
+  });
+
+  // Seeds, per z-slice in parallel, concatenated in slice order so that the
+  // queue order (and hence the result) does not depend on the thread count.
+  // A node lies in a cell containing the surface exactly when one of its up
+  // to 26 neighbours is on the other side; with a surface mesh, when one of
+  // its up to 8 cells is marked.
+  struct SliceSeeds {
+    std::vector<std::uint32_t> nodes;
+    std::vector<Point3f> points;
+    std::vector<std::uint32_t> orphans;  // on cells of dropped components only
+    std::size_t projected = 0;
+  };
+  std::vector<SliceSeeds> slices(nz);
+  const double search_range = std::sqrt(3.0) * max_spacing;
+  const Vec3 box_low = volume_box_min(field), box_high = volume_box_max(field);
+  // With a surface mesh, candidate points must lie in cells it passes through.
+  const auto cell_kept = [&](std::size_t i, std::size_t j, std::size_t k) {
+    return (flags[i + nx * j + slice * k] & kKeptCell) != 0;
+  };
+  const auto point_in_kept_cell = [&](const Vec3& p) {
+    std::size_t c[3];
+    for (int a = 0; a < 3; ++a) {
+      const double g = std::floor((p[a] - field.origin[a]) / field.spacing[a]);
+      c[a] = static_cast<std::size_t>(std::clamp(g, 0.0, double(field.dims[a] - 2)));
+    }
+    return cell_kept(c[0], c[1], c[2]);
+  };
+  // The grid edge from node n one step along `axis` in `direction`: any of
+  // the up to 4 cells around it.
+  const auto edge_in_kept_cell = [&](std::size_t n, int axis, int direction) {
+    const std::size_t k = n / slice, j = (n - k * slice) / nx, i = n - k * slice - j * nx;
+    std::size_t low[3] = {i, j, k}, high[3] = {i, j, k};
+    for (int a = 0; a < 3; ++a) {
+      if (a == axis) {
+        if (direction < 0) low[a] = high[a] = low[a] - 1;
+        continue;
+      }
+      if (low[a] > 0) --low[a];
+      if (high[a] + 1 >= field.dims[a]) --high[a];
+    }
+    for (std::size_t kk = low[2]; kk <= high[2]; ++kk)
+      for (std::size_t jj = low[1]; jj <= high[1]; ++jj)
+        for (std::size_t ii = low[0]; ii <= high[0]; ++ii)
+          if (cell_kept(ii, jj, kk)) return true;
+    return false;
+  };
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nz, 1), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t k = r.begin(); k < r.end(); ++k) {
+      SliceSeeds& out = slices[k];
+      // Per row: the cell bits of the (up to) 4 cells at each x index around
+      // the row, then each node ORs its two x positions (8 cells in all).
+      std::vector<std::uint8_t> row(nx);
+      constexpr std::uint8_t kCellBits = kCrossCell | kKeptCell;
+      for (std::size_t j = 0; j < ny; ++j) {
+        const std::uint8_t* here = flags.data() + nx * j + slice * k;
+        const std::uint8_t* below = j > 0 ? here - nx : nullptr;
+        const std::uint8_t* behind = k > 0 ? here - slice : nullptr;
+        const std::uint8_t* below_behind = j > 0 && k > 0 ? here - nx - slice : nullptr;
+        bool any = false;
+        for (std::size_t i = 0; i < nx; ++i) {
+          std::uint8_t bits = here[i];
+          if (below) bits |= below[i];
+          if (behind) bits |= behind[i];
+          if (below_behind) bits |= below_behind[i];
+          row[i] = bits & kCellBits;
+          any |= row[i] != 0;
+        }
+        if (!any) continue;
+        for (std::size_t i = 0; i < nx; ++i) {
+          const std::uint8_t cell_bits = row[i] | (i > 0 ? row[i - 1] : 0);
+          if (!cell_bits) continue;
+          const std::size_t n = i + nx * j + slice * k;
+          bool crossing = (cell_bits & kCrossCell) != 0;
+          const bool kept = (cell_bits & kKeptCell) != 0;
+          if (masked && crossing && !kept) out.orphans.push_back(static_cast<std::uint32_t>(n));
+          if (masked) crossing = kept;
+          if (!crossing) continue;
+          const float value = field.values[n];
+          if (!std::isfinite(value)) continue;  // no usable estimate; reached from neighbours
+          const Vec3 x = field.world(double(i), double(j), double(k));
+          Vec3 point = x;
+          bool projected = true;
+          if (value != iso) {
+            // Candidates: the crossings on the node's own grid edges (linear
+            // interpolation of value and isovalue, exactly where extraction
+            // puts its vertices) and the root of the trilinear field along
+            // the gradient line, which is the foot point on flat stretches.
+            double best = std::numeric_limits<double>::infinity();
+            projected = false;
+            const std::size_t coord[3] = {i, j, k};
+            const std::size_t stride[3] = {1, nx, slice};
+            for (int a = 0; a < 3; ++a) {
+              for (int direction = -1; direction <= 1; direction += 2) {
+                if (direction < 0 ? coord[a] == 0 : coord[a] + 1 == field.dims[a]) continue;
+                const std::size_t m = direction < 0 ? n - stride[a] : n + stride[a];
+                if ((flags[m] & kInside) == (flags[n] & kInside) || !std::isfinite(field.values[m])) continue;
+                if (masked && !edge_in_kept_cell(n, a, direction)) continue;  // a dropped component's crossing
+                const double fraction = (double(iso) - value) / (double(field.values[m]) - value);
+                const double along = std::clamp(fraction, 0.0, 1.0) * field.spacing[a];
+                if (along < best) {
+                  best = along;
+                  point = x;
+                  if (a == 0) point.x += direction * along;
+                  else if (a == 1) point.y += direction * along;
+                  else point.z += direction * along;
+                }
+              }
+            }
+            const Vec3 g = node_gradient(field, i, j, k);
+            const double g_norm = norm(g);
+            if (g_norm > 0) {
+              const Vec3 u = g * (1.0 / g_norm);
+              const double residual = double(value) - options.iso;
+              const double first_order = -residual / g_norm;
+              // Stay inside the box: the interpolation clamps outside it.
+              double reach = search_range;
+              for (int a = 0; a < 3; ++a) {
+                const double toward = first_order > 0 ? u[a] : -u[a];
+                if (toward > 0) reach = std::min(reach, (box_high[a] - x[a]) / toward);
+                else if (toward < 0) reach = std::min(reach, (box_low[a] - x[a]) / toward);
+              }
+              const auto h = [&](double t) { return trilinear_value(field, x + t * u) - options.iso; };
+              double t = 0;
+              // Newton steps along the line from the first-order estimate
+              // usually land within the tolerance in one or two samples; the
+              // bracketed search is the fallback.
+              bool found = false;
+              if (reach > 0 && std::abs(first_order) <= reach) {
+                t = first_order;
+                for (int step = 0; step < 3 && !found; ++step) {
+                  const TrilinearSample sample = trilinear_sample(field, x + t * u);
+                  const double slope = dot(sample.gradient, u);
+                  if (!(slope > 0) || !std::isfinite(sample.value)) break;
+                  const double correction = (sample.value - options.iso) / slope;
+                  t -= correction;
+                  found = std::abs(correction) <= 2e-3 * cell;
+                }
+                found = found && std::abs(t) <= reach && std::isfinite(t);
+              }
+              if (!found && reach > 0)
+                found = detail::find_root_along_line(h, residual, first_order, reach, 0.25 * max_spacing,
+                                                     2e-3 * cell, t);
+              if (found && std::abs(t) < best && (!masked || point_in_kept_cell(x + t * u))) {
+                best = std::abs(t);
+                point = x + t * u;
+                projected = true;
+              }
+            }
+            if (!std::isfinite(best)) continue;  // reached from neighbours
+          }
+          out.nodes.push_back(static_cast<std::uint32_t>(n));
+          out.points.push_back({float(point.x), float(point.y), float(point.z)});
+          out.projected += projected ? 1 : 0;
+        }
+      }
+    }
+  });
+  progress.update(0.2);
+
+  SignedDistanceStatistics stats;
+  stats.nodes = node_count;
+  for (const SliceSeeds& s : slices) {
+    stats.seed_nodes += s.nodes.size();
+    stats.projected_seeds += s.projected;
+  }
+  stats.first_order_seeds = stats.seed_nodes - stats.projected_seeds;
+  if (stats.seed_nodes >= kNoPoint) throw Error(ErrorKind::Unsupported, "too many seed nodes");
+
+  std::vector<float> squared(node_count, std::numeric_limits<float>::infinity());
+  std::vector<std::uint32_t> closest(node_count, kNoPoint);
+  std::vector<Point3f> points;
+  points.reserve(stats.seed_nodes);
+  NodeQueue queue(stats.seed_nodes + stats.seed_nodes / 2);
+  std::vector<std::uint32_t> orphans;
+  for (SliceSeeds& s : slices) {
+    for (std::size_t q = 0; q < s.nodes.size(); ++q) {
+      const std::uint32_t n = s.nodes[q];
+      const std::size_t k = n / slice, j = (n - k * slice) / nx, i = n - k * slice - j * nx;
+      const Vec3 x = field.world(double(i), double(j), double(k));
+      const Point3f& p = s.points[q];
+      const double dx = x.x - p.x, dy = x.y - p.y, dz = x.z - p.z;
+      squared[n] = static_cast<float>(dx * dx + dy * dy + dz * dz);
+      closest[n] = static_cast<std::uint32_t>(points.size()) | kQueuedBit;
+      points.push_back(p);
+      flags[n] |= kSeed;
+      queue.push(n);
+    }
+    orphans.insert(orphans.end(), s.orphans.begin(), s.orphans.end());
+    SliceSeeds().orphans.swap(s.orphans);
+    SliceSeeds().nodes.swap(s.nodes);
+    SliceSeeds().points.swap(s.points);
+  }
+  std::vector<SliceSeeds>().swap(slices);
+
+  stats.seconds_seeding = seconds_since(phase_start);
+  phase_start = Clock::now();
+  // Breadth-first propagation of closest points (float arithmetic: a node's
+  // position is exact to ~1e-7 relative, far below the accuracy sought).
+  const float ox = float(field.origin.x), oy = float(field.origin.y), oz = float(field.origin.z);
+  const float hx = float(field.spacing.x), hy = float(field.spacing.y), hz = float(field.spacing.z);
+  std::size_t pops = 0, updates = 0, peak_queue = queue.size();
+  const double inverse_slice = 1.0 / double(slice), inverse_nx = 1.0 / double(nx);
+  std::size_t peak_queue_bytes = queue.capacity_bytes();
+  const std::size_t report_every = std::size_t{1} << 22;
+  while (!queue.empty()) {
+    const std::uint32_t n = queue.pop();
+    const std::uint32_t c = closest[n] & ~kQueuedBit;
+    closest[n] = c;
+    ++pops;
+    if ((pops & (report_every - 1)) == 0) progress.update(0.2 + 0.7 * std::min(1.0, double(pops) / (3.0 * node_count)));
+    const Point3f p = points[c];
+    // Division by multiplication with the reciprocal, corrected by one step.
+    std::size_t k = static_cast<std::size_t>(double(n) * inverse_slice);
+    if (k * slice > n) --k;
+    else if ((k + 1) * slice <= n) ++k;
+    const std::size_t rest = n - k * slice;
+    std::size_t j = static_cast<std::size_t>(double(rest) * inverse_nx);
+    if (j * nx > rest) --j;
+    else if ((j + 1) * nx <= rest) ++j;
+    const std::size_t i = rest - j * nx;
+    const float x = ox + hx * float(i), y = oy + hy * float(j), z = oz + hz * float(k);
+    const auto offer = [&](std::size_t m, float mx, float my, float mz) {
+      const float dx = mx - p.x, dy = my - p.y, dz = mz - p.z;
+      const float d = dx * dx + dy * dy + dz * dz;
+      if (d < squared[m] && d <= band_squared) {
+        squared[m] = d;
+        ++updates;
+        if (!(closest[m] & kQueuedBit)) queue.push(static_cast<std::uint32_t>(m));
+        closest[m] = c | kQueuedBit;
+      }
+    };
+    if (i > 0) offer(n - 1, x - hx, y, z);
+    if (i + 1 < nx) offer(n + 1, x + hx, y, z);
+    if (j > 0) offer(n - nx, x, y - hy, z);
+    if (j + 1 < ny) offer(n + nx, x, y + hy, z);
+    if (k > 0) offer(n - slice, x, y, z - hz);
+    if (k + 1 < nz) offer(n + slice, x, y, z + hz);
+    peak_queue = std::max(peak_queue, queue.size());
+  }
+  peak_queue_bytes = std::max(peak_queue_bytes, queue.capacity_bytes());
+  stats.queue_pops = pops;
+  stats.updates = updates;
+  stats.peak_queue = peak_queue;
+  stats.peak_bytes = node_count * (sizeof(float) + sizeof(std::uint32_t) + 1) + points.size() * sizeof(Point3f) +
+                     peak_queue_bytes;
+  std::vector<Point3f>().swap(points);
+
+  stats.seconds_propagation = seconds_since(phase_start);
+  phase_start = Clock::now();
+  if (masked) flip_enclosed_regions(field, orphans, flags, stats);
+
+  // Signed distances in place of the squared ones.
+  const float far = static_cast<float>(far_value);
+  const float outside_sign = options.flip ? -1.0f : 1.0f;
+  std::vector<std::size_t> reached_per_slice(nz, 0);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nz), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t k = r.begin(); k < r.end(); ++k) {
+      std::size_t reached = 0;
+      for (std::size_t n = k * slice; n < (k + 1) * slice; ++n) {
+        const bool inside = ((flags[n] & kInside) != 0) != ((flags[n] & kFlip) != 0);
+        const float sign = inside ? -outside_sign : outside_sign;
+        if (closest[n] != kNoPoint) {
+          squared[n] = sign * std::min(std::sqrt(squared[n]), far);
+          ++reached;
+        } else {
+          squared[n] = sign * far;
+        }
+      }
+      reached_per_slice[k] = reached;
+    }
+  });
+  for (std::size_t r : reached_per_slice) stats.reached_nodes += r;
+  stats.seconds_finishing = seconds_since(phase_start);
+
+  SignedDistanceField result;
+  result.distance.dims = field.dims;
+  result.distance.spacing = field.spacing;
+  result.distance.origin = field.origin;
+  result.distance.source_type = ScalarType::Float32;
+  result.distance.values = std::move(squared);
+  result.iso = options.iso;
+  result.flip = options.flip;
+  result.band_cells = options.band_cells;
+  result.far_value = far_value;
+  result.statistics = stats;
+  progress.update(1.0);
+  progress.end_stage();
+  return result;
+}
+
+}  // namespace isowave

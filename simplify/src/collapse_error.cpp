@@ -1,0 +1,52 @@
+#include "isowave/simplify/collapse_error.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace isowave::simplify {
+
+CollapseErrorTerms collapse_error_terms(const Vec3& d, const Vec3* cross_products, std::size_t k) {
+  CollapseErrorTerms terms;
+  const Vec3 half_d = d * 0.5;
+  Vec3 normal_sum;
+  double max_length = 0;
+  for (std::size_t i = 0; i < k; ++i) {
+    const double length = norm(cross_products[i]);
+    max_length = std::max(max_length, length);
+    if (length <= 0) continue;
+    const Vec3 unit = cross_products[i] * (1.0 / length);
+    normal_sum += unit;
+    terms.delta_e0 = std::max(terms.delta_e0, std::abs(dot(half_d, unit)));
+  }
+  const Vec3 average_normal = normalized(normal_sum * (1.0 / static_cast<double>(k)));
+  double ratio = 0;
+  if (max_length > 0) {
+    double min_projection = dot(cross_products[0], average_normal);
+    for (std::size_t i = 1; i < k; ++i) min_projection = std::min(min_projection, dot(cross_products[i], average_normal));
+    ratio = min_projection / max_length;
+  }
+  terms.delta_e1 = std::max(terms.delta_e0, kMinDeltaError);
+  // (2 - ratio)^16 by repeated squaring.
+  double w = 2.0 - ratio;
+  w *= w;
+  w *= w;
+  w *= w;
+  w *= w;
+  terms.weight = w;
+  terms.delta_e = w * terms.delta_e1;
+  return terms;
+}
+
+std::uint32_t priority_bucket(double error, std::uint32_t bucket_count) {
+  static const double kLowest = std::log(1e-10);
+  static const double kRange = std::log(1e10) - std::log(1e-10);
+  if (!(error == error)) return 0;  // NaN: lowest priority
+  if (error <= 0) return bucket_count - 1;
+  const double priority = -std::log(error);  // log(1/E)
+  const double position = (priority - kLowest) / kRange * bucket_count;
+  if (!(position > 0)) return 0;
+  if (position >= bucket_count) return bucket_count - 1;
+  return static_cast<std::uint32_t>(position);
+}
+
+}  // namespace isowave::simplify

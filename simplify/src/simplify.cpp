@@ -1,0 +1,290 @@
+#include "isowave/simplify/simplify.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <stdexcept>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include "edge_removal.h"
+#include "isowave/core/error.h"
+#include "isowave/core/mesh_topology.h"
+#include "isowave/simplify/bucket_queue.h"
+#include "isowave/simplify/collapse_error.h"
+#include "isowave/simplify/collapse_mesh.h"
+#include "surface_distance.h"
+
+namespace isowave::simplify {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point& start) {
+  const Clock::time_point now = Clock::now();
+  const double seconds = std::chrono::duration<double>(now - start).count();
+  start = now;
+  return seconds;
+}
+
+void check_options(const SimplifyOptions& options) {
+  const auto fail = [](const std::string& what) { throw Error(ErrorKind::InvalidArgument, "simplify: " + what); };
+  if (!(options.edge_removal_min_normal_dot >= -1 && options.edge_removal_min_normal_dot <= 1))
+    fail("edge-removal normal threshold must be in [-1, 1]");
+  if (!(options.collapse_min_normal_dot >= -1 && options.collapse_min_normal_dot < 1))
+    fail("collapse normal threshold must be in [-1, 1)");
+  if (options.max_valence < 3 || options.max_valence > 32) fail("maximum valence must be in 3..32");
+  if (options.bucket_count < 1) fail("bucket count must be at least 1");
+}
+
+// Fewest vertices the rules allow for one component (see SimplifyReport).
+std::size_t component_lower_bound(const CollapseMesh::ComponentCounts& counts) {
+  const long long g = counts.genus();
+  const long long b = static_cast<long long>(counts.boundary_loops);
+  long long bound = 0;
+  if (b == 0) bound = std::max(4LL, 6 * g - 6);
+  else bound = std::max(3 * b, (6 * g - 6 + 3 * b + 1) / 2);
+  return static_cast<std::size_t>(std::max(bound, 3LL));
+}
+
+// Face-size and valence histograms of the output.
+void fill_histograms(const PolygonMesh& mesh, int max_valence, SimplifyReport& report) {
+  report.face_size_histogram.clear();
+  for (std::size_t f = 0; f < mesh.face_count(); ++f) {
+    const std::size_t size = mesh.face_size(f);
+    if (report.face_size_histogram.size() <= size) report.face_size_histogram.resize(size + 1, 0);
+    ++report.face_size_histogram[size];
+  }
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> edges;
+  edges.reserve(mesh.face_vertices.size());
+  for (std::size_t f = 0; f < mesh.face_count(); ++f) {
+    const std::uint32_t* face = mesh.face_begin(f);
+    const std::uint32_t size = mesh.face_size(f);
+    for (std::uint32_t k = 0; k < size; ++k) {
+      const std::uint32_t u = face[k], w = face[(k + 1) % size];
+      edges.emplace_back(std::min(u, w), std::max(u, w));
+    }
+  }
+  std::sort(edges.begin(), edges.end());
+  std::vector<std::uint32_t> valence(mesh.vertex_count(), 0);
+  std::vector<std::uint8_t> boundary(mesh.vertex_count(), 0);
+  std::size_t unique_edges = 0;
+  for (std::size_t i = 0; i < edges.size();) {
+    std::size_t j = i + 1;
+    while (j < edges.size() && edges[j] == edges[i]) ++j;
+    ++unique_edges;
+    ++valence[edges[i].first];
+    ++valence[edges[i].second];
+    if (j - i == 1) boundary[edges[i].first] = boundary[edges[i].second] = 1;
+    i = j;
+  }
+  report.output_edges = unique_edges;
+  report.valence_histogram.clear();
+  report.vertices_outside_valence_range = 0;
+  for (std::size_t v = 0; v < mesh.vertex_count(); ++v) {
+    if (report.valence_histogram.size() <= valence[v]) report.valence_histogram.resize(valence[v] + 1, 0);
+    ++report.valence_histogram[valence[v]];
+    const std::uint32_t low = boundary[v] ? 2 : 3;
+    if (valence[v] < low || valence[v] > static_cast<std::uint32_t>(max_valence)) ++report.vertices_outside_valence_range;
+  }
+}
+
+}  // namespace
+
+SimplifyResult simplify(const PolygonMesh& input, const SimplifyOptions& options, ProgressSink& progress) {
+  check_options(options);
+  SimplifyResult result;
+  SimplifyReport& report = result.report;
+  Clock::time_point clock = Clock::now();
+
+  // Input checks (Error for anything wrong with the data).
+  const std::string source = "simplify input";
+  validate_indices(input, source);
+  for (std::size_t f = 0; f < input.face_count(); ++f)
+    if (input.face_size(f) != 3)
+      throw Error(ErrorKind::Unsupported, source + ": face " + std::to_string(f) + " has " +
+                                              std::to_string(input.face_size(f)) +
+                                              " sides; base-mesh construction needs a triangle mesh");
+  if (input.vertex_count() >= (std::size_t{1} << 31) || input.face_vertices.size() >= (std::size_t{1} << 31))
+    throw Error(ErrorKind::Unsupported, source + ": more than 2^31 vertices or corners");
+  require_manifold(input, source);
+  report.input_vertices = input.vertex_count();
+  report.input_faces = input.face_count();
+  report.seconds_check = seconds_since(clock);
+
+  // Corner table and input topology.
+  progress.begin_stage("simplify: build");
+  CollapseRules rules;
+  rules.max_valence = options.max_valence;
+  rules.min_normal_dot = options.collapse_min_normal_dot;
+  CollapseMesh mesh(input, rules);
+  for (const CollapseMesh::ComponentCounts& counts : mesh.components()) {
+    ++report.input_components;
+    report.input_boundary_loops += counts.boundary_loops;
+    report.input_genus += counts.genus();
+    report.lower_bound_vertices += component_lower_bound(counts);
+  }
+  progress.end_stage();
+  report.seconds_build = seconds_since(clock);
+
+  // Initial priorities: every edge evaluated in parallel (evaluate() only
+  // reads), then queued in edge order so that the FIFO order is deterministic.
+  progress.begin_stage("simplify: queue");
+  const std::uint32_t bucket_count = options.bucket_count;
+  BucketQueue queue(mesh.edge_slots(), bucket_count);
+  report.target_vertices = std::min(options.target_vertices, input.vertex_count());
+  const bool collapse_wanted = options.target_vertices < input.vertex_count();
+  if (collapse_wanted) {
+    std::vector<std::uint32_t> initial(mesh.edge_slots(), BucketQueue::kNotQueued);
+    tbb::parallel_for(tbb::blocked_range<std::uint32_t>(0, mesh.edge_slots(), 8192),
+                      [&](const tbb::blocked_range<std::uint32_t>& range) {
+                        for (std::uint32_t e = range.begin(); e != range.end(); ++e) {
+                          const Evaluation evaluation = mesh.evaluate(e);
+                          if (evaluation.legality != Legality::Legal) continue;
+                          mesh.set_latest_delta_error(e, evaluation.delta_error);
+                          initial[e] = priority_bucket(mesh.error(e), bucket_count);
+                        }
+                      });
+    for (std::uint32_t e = 0; e < mesh.edge_slots(); ++e)
+      if (initial[e] != BucketQueue::kNotQueued) queue.push(e, initial[e]);
+  }
+  progress.end_stage();
+  report.seconds_queue = seconds_since(clock);
+
+  // Collapse loop.
+  progress.begin_stage("simplify: collapse");
+  const std::size_t target = report.target_vertices;
+  const std::size_t planned = input.vertex_count() - target;
+  std::vector<std::uint32_t> stencil;
+  stencil.reserve(128);
+  while (collapse_wanted && mesh.alive_vertices() > target && !queue.empty()) {
+    const std::uint32_t e = queue.top();
+    const std::uint32_t queued_bucket = queue.bucket_of(e);
+    queue.remove(e);
+    const Evaluation evaluation = mesh.evaluate(e);
+    if (evaluation.legality != Legality::Legal) {
+      ++report.rejected_at_pop[static_cast<int>(evaluation.legality)];
+      continue;
+    }
+    mesh.set_latest_delta_error(e, evaluation.delta_error);
+    const std::uint32_t bucket = priority_bucket(mesh.error(e), bucket_count);
+    if (bucket < queued_bucket) {  // its neighbourhood changed outside the stencil
+      queue.push(e, bucket);
+      continue;
+    }
+    std::uint32_t removed[3], opposite_vertices[2];
+    const std::uint32_t v = mesh.collapse(e, evaluation.position, removed, opposite_vertices);
+    ++report.collapses;
+    for (std::uint32_t dead : removed)
+      if (dead != CollapseMesh::kNone && queue.contains(dead)) queue.remove(dead);
+
+    // Fig. 8 stencil: new legality and priority.
+    const std::uint32_t centres[3] = {v, opposite_vertices[0], opposite_vertices[1]};
+    stencil.clear();
+    mesh.gather_stencil(centres, 3, stencil);
+    for (std::uint32_t s : stencil) {
+      const Evaluation update = mesh.evaluate(s);
+      if (update.legality != Legality::Legal) {
+        if (queue.contains(s)) queue.remove(s);
+        continue;
+      }
+      mesh.set_latest_delta_error(s, update.delta_error);
+      const std::uint32_t new_bucket = priority_bucket(mesh.error(s), bucket_count);
+      if (queue.contains(s)) {
+        if (queue.bucket_of(s) == new_bucket) continue;  // keeps its place in the FIFO
+        queue.remove(s);
+      }
+      queue.push(s, new_bucket);
+    }
+    if (options.validate_every_collapse) {
+      const std::string problem = mesh.validate();
+      if (!problem.empty())
+        throw std::logic_error("simplify: invariant broken after collapse " + std::to_string(report.collapses) + ": " +
+                               problem);
+    }
+    if ((report.collapses & 0xFFFF) == 0) progress.update(double(report.collapses) / double(planned));
+  }
+  report.vertices_after_collapse = mesh.alive_vertices();
+  report.triangles_after_collapse = mesh.alive_triangles();
+  report.target_reached = mesh.alive_vertices() <= target;
+  if (!collapse_wanted)
+    report.stop_reason = "target at or above the input vertex count: no collapse";
+  else if (report.target_reached)
+    report.stop_reason = "target reached";
+  else
+    report.stop_reason = "no legal collapse remains (" + std::to_string(mesh.alive_vertices()) +
+                         " vertices; the rules allow at best " + std::to_string(report.lower_bound_vertices) + ")";
+  progress.end_stage();
+  report.seconds_collapse = seconds_since(clock);
+
+  // Edge removal.
+  result.base = mesh.to_polygon_mesh();
+  {
+    // Free the corner table before the polygon phase.
+    CollapseMesh released = std::move(mesh);
+  }
+  if (options.edge_removal) {
+    progress.begin_stage("simplify: edge removal");
+    report.edges_removed = remove_edges(result.base, options.edge_removal_min_normal_dot);
+    progress.end_stage();
+  }
+  report.seconds_edge_removal = seconds_since(clock);
+
+  report.output_vertices = result.base.vertex_count();
+  report.output_faces = result.base.face_count();
+  fill_histograms(result.base, options.max_valence, report);
+  report.seconds_output = seconds_since(clock);
+
+  if (options.compute_distance) {
+    progress.begin_stage("simplify: distance");
+    const DistanceStatistics distance = point_to_surface_distance(input.positions, result.base);
+    report.distance_computed = true;
+    report.distance_max = distance.max;
+    report.distance_rms = distance.rms;
+    progress.end_stage();
+    report.seconds_distance = seconds_since(clock);
+  }
+  return result;
+}
+
+std::string format_report(const SimplifyReport& r) {
+  std::string out;
+  char line[512];
+  const auto add = [&](const char* format, auto... values) {
+    std::snprintf(line, sizeof line, format, values...);
+    out += line;
+  };
+  add("input: %zu vertices, %zu triangles, %zu components, genus %lld, %zu boundary loops\n", r.input_vertices,
+      r.input_faces, r.input_components, r.input_genus, r.input_boundary_loops);
+  add("target: %zu vertices (lower bound from topology and valence <= 8: %zu)\n", r.target_vertices,
+      r.lower_bound_vertices);
+  add("collapse: %zu collapses -> %zu vertices, %zu triangles; %s\n", r.collapses, r.vertices_after_collapse,
+      r.triangles_after_collapse, r.stop_reason.c_str());
+  std::string rejected;
+  for (int k = 1; k < kLegalityCount; ++k)
+    if (r.rejected_at_pop[k]) rejected += std::string(rejected.empty() ? "" : ", ") + to_string(Legality(k)) + " " +
+                                          std::to_string(r.rejected_at_pop[k]);
+  if (!rejected.empty()) add("rejected when popped: %s\n", rejected.c_str());
+  add("edge removal: %zu edges removed\n", r.edges_removed);
+  add("base mesh: %zu vertices, %zu edges, %zu faces\n", r.output_vertices, r.output_edges, r.output_faces);
+  std::string sizes;
+  for (std::size_t s = 0; s < r.face_size_histogram.size(); ++s)
+    if (r.face_size_histogram[s]) sizes += " " + std::to_string(s) + ":" + std::to_string(r.face_size_histogram[s]);
+  add("face sizes:%s\n", sizes.c_str());
+  std::string valences;
+  for (std::size_t k = 0; k < r.valence_histogram.size(); ++k)
+    if (r.valence_histogram[k]) valences += " " + std::to_string(k) + ":" + std::to_string(r.valence_histogram[k]);
+  add("valences:%s (%zu outside 3..8 / 2..8 on the boundary)\n", valences.c_str(), r.vertices_outside_valence_range);
+  if (r.distance_computed)
+    add("distance input vertices -> base surface: max %.6g, rms %.6g\n", r.distance_max, r.distance_rms);
+  add("time: check %.3f s, build %.3f s, queue %.3f s, collapse %.3f s, edge removal %.3f s, output %.3f s, "
+      "distance %.3f s, total %.3f s\n",
+      r.seconds_check, r.seconds_build, r.seconds_queue, r.seconds_collapse, r.seconds_edge_removal, r.seconds_output,
+      r.seconds_distance, r.seconds_total());
+  return out;
+}
+
+}  // namespace isowave::simplify

@@ -1,0 +1,213 @@
+// The .isw file: round trips within the quantization tolerance, exact
+// progressive truncation, stable re-encoding, statistics that match an
+// independent recomputation, and hostile bytes (every truncation point,
+// random corruption) that never crash or over-allocate.
+#include <cstring>
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "codec_test_data.h"
+#include "isowave/codec/importance.h"
+#include "isowave/codec/isw_format.h"
+#include "isowave/codec/statistics.h"
+#include "isowave/core/error.h"
+
+namespace isowave {
+namespace {
+
+IswMetadata sample_metadata() {
+  IswMetadata m;
+  m.values["source"] = "generated";
+  m.values["cell_size"] = "0.05";
+  return m;
+}
+
+struct Encoded {
+  test::CodedSurface surface;
+  std::string bytes;
+  double step;
+};
+
+Encoded encode_sample(PolygonMesh base, int levels, double step = 1e-3) {
+  Encoded e{test::make_coded_surface(std::move(base), levels, 0.05, 9), {}, step};
+  IswEncodeOptions options;
+  options.step = step;
+  e.bytes = encode_isw(e.surface.base, levels, e.surface.coefficients, sample_metadata(), options);
+  return e;
+}
+
+TEST(IswFormat, FullDecodeMatchesTheFittedMeshWithinTheQuantizationTolerance) {
+  PolygonMesh base = test::genus_slab(2);
+  base.sharp.assign(base.vertex_count(), 0);
+  base.sharp[3] = 1;
+  const Encoded e = encode_sample(base, 3);
+  const IswDecoded d = decode_isw(e.bytes, "test.isw");
+  EXPECT_FALSE(d.truncated);
+  EXPECT_EQ(d.chunks_decoded, d.chunks_total);
+  EXPECT_EQ(d.metadata.text("source"), "generated");
+  EXPECT_EQ(d.base.face_vertices, base.face_vertices);
+  EXPECT_EQ(d.base.sharp, base.sharp);
+  // Every coefficient within half a step of its class per component.
+  for (std::size_t i = 0; i < d.coefficients.size(); ++i) {
+    const double step = d.step / d.class_weights[static_cast<std::size_t>(coefficient_class(*d.hierarchy, i))];
+    for (int axis = 0; axis < 3; ++axis)
+      ASSERT_LE(std::abs(d.coefficients[i][axis] - e.surface.coefficients[i][axis]), 0.5 * step * (1 + 1e-9)) << i;
+  }
+  // The full reconstruction: RMSE about step / 2 (each class adds the same error).
+  const std::vector<Vec3> full = reconstruct(d, d.ranked.size());
+  const PointErrors errors = point_errors(full, e.surface.fine, full.size());
+  EXPECT_LT(errors.rms, e.step);
+  std::printf("[ report ] %zu fine vertices, %zu bytes = %.2f bits per fine vertex, RMSE %.3g for step %.3g\n",
+              full.size(), e.bytes.size(), 8.0 * e.bytes.size() / full.size(), errors.rms, e.step);
+}
+
+TEST(IswFormat, BaseOnlyDecodeIsTheSubdividedBaseMesh) {
+  const Encoded e = encode_sample(test::mixed_disk(), 3);
+  IswDecodeOptions options;
+  options.max_percent = 0;
+  const IswDecoded d = decode_isw(e.bytes, "test.isw", options);
+  EXPECT_TRUE(d.ranked.empty());
+  EXPECT_FALSE(d.truncated);
+  const std::vector<Vec3> ours = reconstruct(d, 0);
+  const std::vector<Vec3> expected = subdivide(*e.surface.hierarchy, e.surface.base.positions);
+  const double base_step = d.step / d.class_weights[0];
+  // S is an average of base points: the error stays within the base quantization.
+  EXPECT_LE(point_errors(ours, expected, expected.size()).max, std::sqrt(3.0) * 0.5 * base_step * (1 + 1e-9));
+}
+
+TEST(IswFormat, ReencodingADecodedFileIsStable) {
+  const Encoded e = encode_sample(test::genus_slab(1), 3);
+  const IswDecoded d = decode_isw(e.bytes, "test.isw");
+  IswEncodeOptions options;
+  options.step = d.step;
+  const std::string again = encode_isw(d.base, d.levels, d.coefficients, d.metadata, options);
+  EXPECT_EQ(again, e.bytes);
+}
+
+TEST(IswFormat, PartialDecodesKeepTheMostImportantCoefficients) {
+  const Encoded e = encode_sample(test::genus_slab(2), 3);
+  const IswDecoded full = decode_isw(e.bytes, "test.isw");
+  const std::vector<double> importance_full = importance(*full.hierarchy, full.coefficients, full.class_weights);
+  for (std::uint64_t keep : {1ull, 17ull, 500ull, 2000ull}) {
+    IswDecodeOptions options;
+    options.max_coefficients = keep;
+    const IswDecoded part = decode_isw(e.bytes, "test.isw", options);
+    ASSERT_EQ(part.ranked.size(), std::min<std::size_t>(keep, full.ranked.size()));
+    // Kept coefficients are exactly the full decode's top `keep`.
+    double weakest_kept = 1e300;
+    for (std::uint32_t i : part.ranked) {
+      ASSERT_TRUE(part.coefficients[i] == full.coefficients[i]);
+      weakest_kept = std::min(weakest_kept, importance_full[i]);
+    }
+    std::vector<std::uint8_t> kept(full.coefficients.size(), 0);
+    for (std::uint32_t i : part.ranked) kept[i] = 1;
+    for (std::size_t i = full.hierarchy->vertex_count(0); i < kept.size(); ++i)
+      if (!kept[i]) {
+        ASSERT_TRUE(part.coefficients[i] == Vec3{});
+        ASSERT_LE(importance_full[i], weakest_kept);
+      }
+  }
+}
+
+TEST(IswFormat, StatisticsMatchAnIndependentRecomputation) {
+  const Encoded e = encode_sample(test::genus_slab(2), 3);
+  const IswDecoded full = decode_isw(e.bytes, "test.isw");
+  const std::vector<RateDistortionRow> rows = rate_distortion(full, {20, 10, 5});
+  ASSERT_EQ(rows.size(), 4u);
+  EXPECT_TRUE(rows.back().is_base);
+  const std::vector<Vec3> reference = reconstruct(full, full.ranked.size());
+  for (const RateDistortionRow& row : rows) {
+    // Decode the file again at that percentage and compare the two meshes here.
+    IswDecodeOptions options;
+    options.max_percent = row.is_base ? 0 : row.percent;
+    const IswDecoded part = decode_isw(e.bytes, "test.isw", options);
+    std::vector<Vec3> points = part.coefficients;
+    synthesize(*part.hierarchy, points);
+    double sum = 0, worst = 0;
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      const double dx = points[i].x - reference[i].x, dy = points[i].y - reference[i].y, dz = points[i].z - reference[i].z;
+      sum += dx * dx + dy * dy + dz * dz;
+      worst = std::max(worst, std::sqrt(dx * dx + dy * dy + dz * dz));
+    }
+    EXPECT_NEAR(row.rms, std::sqrt(sum / points.size()), 1e-12) << row.percent;
+    EXPECT_NEAR(row.max, worst, 1e-12) << row.percent;
+    // A reader needs no more than the bytes the row reports to decode it.
+    if (!row.is_base) {
+      IswDecodeOptions prefix_options;
+      prefix_options.max_coefficients = row.wavelet_coefficients;
+      const IswDecoded prefix = decode_isw(e.bytes.substr(0, row.bytes), "prefix.isw", prefix_options);
+      EXPECT_EQ(prefix.ranked.size(), std::min<std::size_t>(row.wavelet_coefficients, full.ranked.size()));
+    }
+  }
+  // Errors grow as fewer coefficients are kept.
+  EXPECT_LE(rows[0].rms, rows[1].rms);
+  EXPECT_LE(rows[1].rms, rows[2].rms);
+  EXPECT_LE(rows[2].rms, rows[3].rms);
+}
+
+TEST(IswFormat, EveryTruncationFailsCleanlyOrDecodesTheCompleteChunks) {
+  const Encoded e = encode_sample(test::cube(), 2, 1e-2);
+  const IswDecoded full = decode_isw(e.bytes, "test.isw");
+  ASSERT_GT(full.chunks_total, 1u);
+  std::size_t partial = 0, errors = 0;
+  for (std::size_t length = 0; length < e.bytes.size(); ++length) {
+    try {
+      const IswDecoded d = decode_isw(e.bytes.substr(0, length), "cut.isw");
+      // Only a cut inside the coefficient chunks decodes, and it says so.
+      ++partial;
+      EXPECT_TRUE(d.truncated) << length;
+      EXPECT_FALSE(d.truncation_note.empty());
+      EXPECT_LE(d.chunks_decoded, d.chunks_total);
+      for (std::uint32_t i : d.ranked) EXPECT_TRUE(d.coefficients[i] == full.coefficients[i]);
+    } catch (const Error& error) {
+      ++errors;
+      EXPECT_EQ(error.kind(), ErrorKind::Format) << error.what();
+      EXPECT_NE(std::string(error.what()).find("cut.isw"), std::string::npos);
+    }
+  }
+  EXPECT_GT(partial, 0u);
+  EXPECT_GT(errors, 0u);
+}
+
+TEST(IswFormat, CorruptedBytesNeverCrash) {
+  const Encoded e = encode_sample(test::pentagonal_prism(), 2, 1e-2);
+  std::mt19937 rng(1);
+  std::size_t rejected = 0;
+  for (int trial = 0; trial < 3000; ++trial) {
+    std::string bytes = e.bytes;
+    const int flips = 1 + static_cast<int>(rng() % 3);
+    for (int k = 0; k < flips; ++k) bytes[rng() % bytes.size()] ^= static_cast<char>(1 + rng() % 255);
+    try {
+      decode_isw(bytes, "corrupt.isw");
+    } catch (const Error&) {
+      ++rejected;
+    }
+  }
+  // CRC-32 catches every corruption of section contents.
+  EXPECT_GT(rejected, 2900u);
+}
+
+TEST(IswFormat, HostileHeadersAreRejectedBeforeAllocating) {
+  const Encoded e = encode_sample(test::cube(), 1, 1e-2);
+  // Bad magic and unknown major version.
+  std::string bad = e.bytes;
+  bad[1] = 'X';
+  EXPECT_THROW(decode_isw(bad, "x.isw"), Error);
+  bad = e.bytes;
+  bad[8] = 9;
+  try {
+    decode_isw(bad, "x.isw");
+    ADD_FAILURE();
+  } catch (const Error& error) {
+    EXPECT_EQ(error.kind(), ErrorKind::Unsupported);
+  }
+  // A section claiming an enormous size.
+  bad = e.bytes;
+  const std::uint64_t huge = 1ull << 62;
+  std::memcpy(bad.data() + 16 + 4, &huge, 8);
+  EXPECT_THROW(decode_isw(bad, "x.isw"), Error);
+}
+
+}  // namespace
+}  // namespace isowave

@@ -1,0 +1,156 @@
+// Shrink-wrap fitting: extracted isosurface -> base mesh (isowave simplify) ->
+// signed distance -> shrink-wrap to L = 3, measured with the quality report.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include <tbb/global_control.h>
+
+#include "isowave/core/error.h"
+#include "isowave/extract/builtin_fields.h"
+#include "isowave/extract/isosurface.h"
+#include "isowave/extract/volume_io.h"
+#include "isowave/fit/fit_quality.h"
+#include "isowave/fit/shrink_wrap.h"
+#include "isowave/fit/trilinear.h"
+#include "isowave/fit/signed_distance.h"
+#include "isowave/simplify/simplify.h"
+#include "support/test_meshes.h"
+
+namespace isowave {
+namespace {
+
+struct Pipeline {
+  Volume field;
+  double iso = 0;
+  PolygonMesh extracted, base;
+  SignedDistanceField distance;
+};
+
+Pipeline prepare(Volume field, double iso, std::size_t base_vertices) {
+  Pipeline p;
+  p.field = std::move(field);
+  p.iso = iso;
+  IsosurfaceOptions options;
+  options.iso = iso;
+  p.extracted = extract_isosurface(p.field, options).mesh;
+  simplify::SimplifyOptions simplify_options;
+  simplify_options.target_vertices = base_vertices;
+  simplify_options.compute_distance = false;
+  p.base = simplify::simplify(p.extracted, simplify_options).base;
+  SignedDistanceOptions distance_options;
+  distance_options.iso = iso;
+  distance_options.surface = &p.extracted;
+  distance_options.band_cells = 4;
+  p.distance = compute_signed_distance(p.field, distance_options);
+  return p;
+}
+
+void expect_targets(const Pipeline& p, const std::string& name) {
+  SCOPED_TRACE(name);
+  const SubdivisionHierarchy hierarchy(p.base, 3);
+  const ShrinkWrapResult result = shrink_wrap(hierarchy, p.base.positions, p.distance, p.field);
+  ASSERT_EQ(result.positions.size(), hierarchy.fine_vertex_count());
+  for (const Vec3& v : result.positions) ASSERT_TRUE(is_finite(v));
+  const SurfaceDistance reference(p.extracted);
+  const FitQuality q = measure_fit_quality(hierarchy, 3, result.positions, p.extracted, reference, p.field, p.iso, false);
+  EXPECT_EQ(q.nonfinite_vertices, 0u);
+  EXPECT_LE(q.isosurface_rms, 0.01);
+  EXPECT_LE(q.surface_rms, 0.05);
+  EXPECT_LE(q.surface_max, 0.5);
+  EXPECT_LE(q.coverage_p99, 0.5);
+  EXPECT_LE(q.tangled_fraction, 0.001);
+}
+
+TEST(ShrinkWrap, Genus3MeetsTheTargets) {
+  // Base of 300 vertices (about 1/20 of the 6,000 extracted ones).
+  expect_targets(prepare(make_builtin_field("genus3", 96), 0.0, 300), "genus3");
+}
+
+TEST(ShrinkWrap, HydrogenMeetsTheTargets) {
+  ISOWAVE_REQUIRE_SHARED_FILE(path, "volumes/hydrogen.vti");
+  // Base of about 1/64 of the 9,840 extracted vertices.
+  expect_targets(prepare(read_volume(path), 0.05, 154), "hydrogen");
+}
+
+TEST(ShrinkWrap, ResultDoesNotDependOnThreadCount) {
+  const Pipeline p = prepare(make_builtin_field("marschner-lobb", 48), 0.0, 200);
+  const SubdivisionHierarchy hierarchy(p.base, 2);
+  std::vector<Vec3> one, two;
+  {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
+    one = shrink_wrap(hierarchy, p.base.positions, p.distance, p.field).positions;
+  }
+  {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 2);
+    two = shrink_wrap(hierarchy, p.base.positions, p.distance, p.field).positions;
+  }
+  ASSERT_EQ(one.size(), two.size());
+  for (std::size_t v = 0; v < one.size(); ++v) ASSERT_TRUE(one[v] == two[v]) << "vertex " << v;
+}
+
+TEST(ShrinkWrap, BoundaryVerticesStayOnTheBoxAndSharpOnesNeverMove) {
+  // Marschner-Lobb meets the four side faces of the box.
+  const Pipeline p = prepare(make_builtin_field("marschner-lobb", 48), 0.0, 200);
+  ASSERT_GT(p.base.sharp_count(), 0u);
+  const SubdivisionHierarchy hierarchy(p.base, 2);
+  const ShrinkWrapResult result = shrink_wrap(hierarchy, p.base.positions, p.distance, p.field);
+  const WrapLevelMesh mesh = make_wrap_level_mesh(hierarchy, 2, result.positions, p.field);
+  const Vec3 high = volume_box_max(p.field), low = volume_box_min(p.field);
+  std::size_t on_box = 0;
+  for (std::size_t v = 0; v < mesh.vertex_count; ++v) {
+    const Vec3& x = result.positions[v];
+    for (int a = 0; a < 3; ++a) ASSERT_TRUE(x[a] >= low[a] && x[a] <= high[a]);
+    if (mesh.role[v] == WrapRole::Boundary) {
+      ASSERT_GE(mesh.box_face[v], 0) << "boundary vertex " << v << " not on a box face";
+      const int face = mesh.box_face[v];
+      EXPECT_EQ(x[face >> 1], (face & 1) ? high[face >> 1] : low[face >> 1]);
+      ++on_box;
+    }
+    if (v < p.base.vertex_count() && p.base.is_sharp(v)) {
+      EXPECT_TRUE(x == p.base.positions[v]);
+    }
+  }
+  EXPECT_GT(on_box, 0u);
+}
+
+TEST(ShrinkWrap, RelaxationAveragesWithTheNeighbourCentroid) {
+  // A flat 4x4 grid of quads: an interior vertex moved off the plane comes
+  // half-way back; boundary vertices average only along the boundary.
+  PolygonMesh grid = test::quad_grid(4, 4);
+  for (Vec3& p : grid.positions) p += Vec3{2, 2, 2};
+  Volume box;
+  box.dims = {10, 10, 10};
+  box.values.assign(box.sample_count(), 0.0f);
+  const SubdivisionHierarchy hierarchy(grid, 1);
+  std::vector<Vec3> in = grid.positions;
+  const std::uint32_t centre = 12;  // (2, 2) in the 5x5 vertex grid
+  in[centre].z += 1.0;
+  const WrapLevelMesh mesh = make_wrap_level_mesh(hierarchy, 0, in, box);
+  std::vector<Vec3> out;
+  relax(mesh, box, 0.5, in, out);
+  EXPECT_NEAR(out[centre].z, 2.5, 1e-12);
+  EXPECT_NEAR(out[centre].x, in[centre].x, 1e-12);
+  const std::uint32_t edge = 2;  // (2, 0): on the boundary, neighbours (1, 0) and (3, 0) along it
+  EXPECT_EQ(mesh.role[edge], WrapRole::Boundary);
+  EXPECT_NEAR(out[edge].y, in[edge].y, 1e-12);
+}
+
+TEST(ShrinkWrap, RejectsBadInput) {
+  const Pipeline p = prepare(make_builtin_field("sphere", 24), 0.0, 50);
+  const SubdivisionHierarchy hierarchy(p.base, 1);
+  std::vector<Vec3> positions = p.base.positions;
+  positions.pop_back();
+  EXPECT_THROW(shrink_wrap(hierarchy, positions, p.distance, p.field), Error);
+  positions = p.base.positions;
+  positions[0].x = std::nan("");
+  EXPECT_THROW(shrink_wrap(hierarchy, positions, p.distance, p.field), Error);
+  ShrinkWrapOptions options;
+  options.relaxation_weight = 0;
+  EXPECT_THROW(shrink_wrap(hierarchy, p.base.positions, p.distance, p.field, options), Error);
+  const Volume other = make_builtin_field("sphere", 20);
+  EXPECT_THROW(shrink_wrap(hierarchy, p.base.positions, p.distance, other), Error);
+}
+
+}  // namespace
+}  // namespace isowave

@@ -1,0 +1,164 @@
+// The BFS signed-distance field against the exact distance to the extracted
+// triangle mesh (CGAL AABB tree), on analytic fields and shared volumes.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "isowave/core/error.h"
+#include "isowave/extract/builtin_fields.h"
+#include "isowave/extract/isosurface.h"
+#include "isowave/extract/volume_io.h"
+#include "isowave/fit/signed_distance.h"
+#include "isowave/fit/surface_distance.h"
+#include "support/test_meshes.h"
+
+namespace isowave {
+namespace {
+
+struct Accuracy {
+  std::size_t nodes = 0;
+  double mean = 0, max = 0;  // cells
+  std::size_t wrong_sign = 0;
+};
+
+// Every node within 3 cells of the surface (by the exact distance).
+Accuracy measure(const Volume& field, double iso, const SignedDistanceField& sdf, const PolygonMesh& mesh) {
+  const SurfaceDistance exact(mesh);
+  std::vector<Vec3> nodes;
+  std::vector<std::size_t> index;
+  for (std::size_t k = 0; k < field.dims[2]; ++k)
+    for (std::size_t j = 0; j < field.dims[1]; ++j)
+      for (std::size_t i = 0; i < field.dims[0]; ++i)
+        if (std::abs(sdf.distance.at(i, j, k)) <= 4 * field.cell_size()) {
+          nodes.push_back(field.world(double(i), double(j), double(k)));
+          index.push_back(field.index(i, j, k));
+        }
+  const std::vector<double> distances = exact.distances(nodes);
+  Accuracy a;
+  double sum = 0;
+  for (std::size_t n = 0; n < nodes.size(); ++n) {
+    if (distances[n] > 3 * field.cell_size()) continue;
+    const double value = sdf.distance.values[index[n]];
+    const double error = std::abs(std::abs(value) - distances[n]) / field.cell_size();
+    sum += error;
+    a.max = std::max(a.max, error);
+    ++a.nodes;
+    const bool inside = field.values[index[n]] >= iso;
+    if (value != 0 && (value < 0) != inside) ++a.wrong_sign;
+  }
+  a.mean = a.nodes ? sum / double(a.nodes) : 0;
+  return a;
+}
+
+void expect_accurate(const Volume& field, double iso, const std::string& name) {
+  SCOPED_TRACE(name);
+  IsosurfaceOptions options;
+  options.iso = iso;
+  const PolygonMesh mesh = extract_isosurface(field, options).mesh;
+  ASSERT_GT(mesh.face_count(), 0u);
+  SignedDistanceOptions sdf_options;
+  sdf_options.iso = iso;
+  const SignedDistanceField sdf = compute_signed_distance(field, sdf_options);
+  for (float v : sdf.distance.values) ASSERT_TRUE(std::isfinite(v));
+  const Accuracy a = measure(field, iso, sdf, mesh);
+  EXPECT_GT(a.nodes, 1000u);
+  EXPECT_LE(a.mean, 0.05) << a.nodes << " nodes";
+  EXPECT_LE(a.max, 0.5);
+  EXPECT_EQ(a.wrong_sign, 0u);
+}
+
+TEST(SignedDistance, AnalyticFieldsWithinThreeCells) {
+  for (const char* name : {"sphere", "genus3", "mixing"}) expect_accurate(make_builtin_field(name, 80), 0.0, name);
+}
+
+TEST(SignedDistance, SharedVolumesWithinThreeCells) {
+  ISOWAVE_REQUIRE_SHARED_FILE(hydrogen, "volumes/hydrogen.vti");
+  expect_accurate(read_volume(hydrogen), 0.05, "hydrogen");
+  ISOWAVE_REQUIRE_SHARED_FILE(fingers, "volumes/viscousfingers_099.vti");
+  expect_accurate(read_volume(fingers), 30, "viscous fingers");
+}
+
+TEST(SignedDistance, NarrowBandAgreesInsideTheBandAndClampsOutside) {
+  const Volume field = make_builtin_field("genus3", 64);
+  const SignedDistanceField full = compute_signed_distance(field);
+  SignedDistanceOptions options;
+  options.band_cells = 2.5;
+  const SignedDistanceField band = compute_signed_distance(field, options);
+  const double cell = field.cell_size();
+  EXPECT_LT(band.statistics.queue_pops, full.statistics.queue_pops);
+  std::size_t inside_band = 0;
+  for (std::size_t n = 0; n < field.sample_count(); ++n) {
+    const float f = full.distance.values[n], b = band.distance.values[n];
+    ASSERT_EQ(f < 0, b < 0) << "node " << n;  // sign from the field in both
+    ASSERT_LE(std::abs(b), 2.5 * cell * (1 + 1e-6));
+    if (std::abs(f) < 2.0 * cell) {
+      ++inside_band;
+      EXPECT_NEAR(f, b, 0.05 * cell) << "node " << n;
+    }
+  }
+  EXPECT_GT(inside_band, 1000u);
+}
+
+TEST(SignedDistance, SignFollowsFlip) {
+  const Volume field = make_builtin_field("sphere", 32);
+  SignedDistanceOptions options;
+  const SignedDistanceField normal = compute_signed_distance(field, options);
+  options.flip = true;
+  const SignedDistanceField flipped = compute_signed_distance(field, options);
+  const std::size_t centre = field.index(16, 16, 16), corner = field.index(0, 0, 0);
+  EXPECT_LT(normal.distance.values[centre], 0);  // inside the sphere: higher values
+  EXPECT_GT(normal.distance.values[corner], 0);
+  for (std::size_t n = 0; n < field.sample_count(); ++n) ASSERT_EQ(normal.distance.values[n], -flipped.distance.values[n]);
+}
+
+TEST(SignedDistance, DroppedComponentsLeaveNoZeroCrossing) {
+  // Two spheres; extraction keeps only the large one.
+  Volume field;
+  field.dims = {48, 48, 48};
+  field.values.resize(field.sample_count());
+  for (std::size_t k = 0; k < 48; ++k)
+    for (std::size_t j = 0; j < 48; ++j)
+      for (std::size_t i = 0; i < 48; ++i) {
+        const Vec3 p{double(i), double(j), double(k)};
+        const double big = 12 - norm(p - Vec3{18, 24, 24});
+        const double small = 3 - norm(p - Vec3{38, 24, 24});
+        field.values[field.index(i, j, k)] = static_cast<float>(std::max(big, small));
+      }
+  IsosurfaceOptions extract_options;
+  extract_options.min_component_vertices = 200;
+  const Isosurface surface = extract_isosurface(field, extract_options);
+  ASSERT_EQ(surface.report.after.components, 1u);
+  SignedDistanceOptions options;
+  options.surface = &surface.mesh;
+  const SignedDistanceField sdf = compute_signed_distance(field, options);
+  EXPECT_GT(sdf.statistics.flipped_nodes, 0u);
+  // The small sphere's centre is outside the kept surface: positive, and as far as the big sphere.
+  const double centre = sdf.distance.at(38, 24, 24);
+  EXPECT_NEAR(centre, norm(Vec3{38, 24, 24} - Vec3{18, 24, 24}) - 12, 0.5);
+}
+
+TEST(SignedDistance, RejectsBadInput) {
+  Volume flat;
+  flat.dims = {1, 4, 4};
+  flat.values.assign(16, 0.0f);
+  EXPECT_THROW(compute_signed_distance(flat), Error);
+  const Volume field = make_builtin_field("sphere", 16);
+  SignedDistanceOptions options;
+  options.band_cells = -1;
+  EXPECT_THROW(compute_signed_distance(field, options), Error);
+  options.band_cells = 0;
+  options.iso = std::nan("");
+  EXPECT_THROW(compute_signed_distance(field, options), Error);
+}
+
+TEST(SignedDistance, NoSurfaceGivesFarValueEverywhere) {
+  const Volume field = make_builtin_field("sphere", 16);
+  SignedDistanceOptions options;
+  options.iso = 1e6;  // nothing reaches it: every node outside
+  const SignedDistanceField sdf = compute_signed_distance(field, options);
+  EXPECT_EQ(sdf.statistics.seed_nodes, 0u);
+  for (float v : sdf.distance.values) ASSERT_FLOAT_EQ(v, float(sdf.far_value));
+}
+
+}  // namespace
+}  // namespace isowave

@@ -1,0 +1,368 @@
+// Unit tests of paper Sec. 4.1's building blocks: formulas (4.1)-(4.3), the
+// bucket index, FIFO order, and each collapse-legality rule on hand-built
+// neighbourhoods.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include "isowave/simplify/bucket_queue.h"
+#include "isowave/simplify/collapse_error.h"
+#include "isowave/simplify/collapse_mesh.h"
+#include "simplify_test_meshes.h"
+
+namespace isowave::simplify {
+namespace {
+
+using test::fan_triangulate;
+
+// --- (4.1) and (4.2) ---
+
+TEST(CollapseError, PlanarRingOfEqualTrianglesGivesTheClampedMinimum) {
+  // Flat ring, equal areas: every n_i = n, d in the plane -> dE0 = 0, ratio 1.
+  const std::vector<Vec3> c = {{0, 0, 2}, {0, 0, 2}, {0, 0, 2}, {0, 0, 2}};
+  const CollapseErrorTerms terms = collapse_error_terms({1, 0, 0}, c.data(), c.size());
+  EXPECT_EQ(terms.delta_e0, 0.0);
+  EXPECT_EQ(terms.delta_e1, 1e-8);
+  EXPECT_DOUBLE_EQ(terms.weight, 1.0);
+  EXPECT_DOUBLE_EQ(terms.delta_e, 1e-8);
+}
+
+TEST(CollapseError, UnequalAreasRaiseTheWeight) {
+  // ratio = min(c.n)/max|c| = 1/2 -> weight 1.5^16.
+  const std::vector<Vec3> c = {{0, 0, 1}, {0, 0, 2}};
+  const CollapseErrorTerms terms = collapse_error_terms({0, 3, 0}, c.data(), c.size());
+  EXPECT_NEAR(terms.weight, 656.8408355712891, 1e-9);
+  EXPECT_NEAR(terms.delta_e, 656.8408355712891e-8, 1e-15);
+}
+
+TEST(CollapseError, BentRingByHand) {
+  // n_0 = z, n_1 = y; d/2 = (0, 1, 2): |d/2 . n_0| = 2, |d/2 . n_1| = 1.
+  // n = (0, 1, 1)/sqrt 2; c_i . n = 2/sqrt 2 each; max|c| = 2 -> ratio 1/sqrt 2.
+  const std::vector<Vec3> c = {{0, 0, 2}, {0, 2, 0}};
+  const CollapseErrorTerms terms = collapse_error_terms({0, 2, 4}, c.data(), c.size());
+  EXPECT_DOUBLE_EQ(terms.delta_e0, 2.0);
+  EXPECT_DOUBLE_EQ(terms.delta_e1, 2.0);
+  const double weight = std::pow(2.0 - 1.0 / std::sqrt(2.0), 16);
+  EXPECT_NEAR(terms.weight, weight, 1e-9 * weight);
+  EXPECT_NEAR(terms.delta_e, 2.0 * weight, 1e-9 * weight);
+}
+
+TEST(CollapseError, TangledRingGetsTheLargestWeightOfARatioOfZero) {
+  // Opposite normals cancel: n = 0, so min(c_i . n) = 0 and the weight is 2^16.
+  const std::vector<Vec3> c = {{0, 0, 1}, {0, 0, -1}};
+  const CollapseErrorTerms terms = collapse_error_terms({0, 0, 2}, c.data(), c.size());
+  EXPECT_DOUBLE_EQ(terms.delta_e0, 1.0);
+  EXPECT_DOUBLE_EQ(terms.weight, 65536.0);
+  EXPECT_DOUBLE_EQ(terms.delta_e, 65536.0);
+}
+
+TEST(CollapseError, FoldedRingWeighsMoreThanTwoToTheSixteen) {
+  // Three normals up, one down: n = z, min c.n = -1, max |c| = 1 -> weight 3^16.
+  const std::vector<Vec3> c = {{0, 0, 1}, {0, 0, 1}, {0, 0, 1}, {0, 0, -1}};
+  const CollapseErrorTerms terms = collapse_error_terms({0, 0, 1e-9}, c.data(), c.size());
+  EXPECT_DOUBLE_EQ(terms.weight, 43046721.0);
+  EXPECT_EQ(terms.delta_e1, 1e-8);  // dE0 = 5e-10 is clamped
+}
+
+// --- bucket index ---
+
+TEST(PriorityBucket, MapsLogOneOverEOntoTheRange) {
+  constexpr std::uint32_t kBuckets = 100000;
+  // log(1/E) spans [log 1e-10, log 1e10] = 46.05 units over 1e5 buckets.
+  EXPECT_EQ(priority_bucket(1e-10 * 0.999, kBuckets), kBuckets - 1);
+  EXPECT_EQ(priority_bucket(1e-20, kBuckets), kBuckets - 1);  // clamped
+  EXPECT_EQ(priority_bucket(0.0, kBuckets), kBuckets - 1);
+  EXPECT_EQ(priority_bucket(1e10 * 1.001, kBuckets), 0u);
+  EXPECT_EQ(priority_bucket(1e30, kBuckets), 0u);
+  EXPECT_NEAR(double(priority_bucket(1.0, kBuckets)), 50000.0, 1.0);    // log(1/1) = 0: the middle
+  EXPECT_NEAR(double(priority_bucket(1e-5, kBuckets)), 75000.0, 1.0);   // three quarters up
+  EXPECT_NEAR(double(priority_bucket(1e5, kBuckets)), 25000.0, 1.0);    // one quarter up
+  // One bucket is a factor exp(46.05 / 1e5) = 1.00046 in E.
+  EXPECT_NEAR(double(priority_bucket(1.0, kBuckets)) - double(priority_bucket(1.0015, kBuckets)), 3.25, 1.0);
+  EXPECT_EQ(priority_bucket(1.0, 1), 0u);
+}
+
+TEST(PriorityBucket, SmallerErrorNeverGetsALowerPriority) {
+  std::uint32_t previous = 0;
+  for (double e = 1e12; e > 1e-12; e /= 1.37) {
+    const std::uint32_t bucket = priority_bucket(e, 100000);
+    EXPECT_GE(bucket, previous);
+    previous = bucket;
+  }
+}
+
+// --- bucket queue ---
+
+TEST(BucketQueue, HighestBucketFirstAndFifoInsideABucket) {
+  BucketQueue queue(10, 100000);
+  queue.push(5, 70000);
+  queue.push(2, 70000);
+  queue.push(9, 70000);
+  queue.push(3, 70001);
+  queue.push(1, 12);
+  queue.push(0, 99999);
+  EXPECT_EQ(queue.size(), 6u);
+  EXPECT_EQ(queue.pop(), 0u);
+  EXPECT_EQ(queue.pop(), 3u);
+  EXPECT_EQ(queue.pop(), 5u);
+  queue.push(5, 70000);  // re-entered: now behind 2 and 9
+  EXPECT_EQ(queue.pop(), 2u);
+  EXPECT_EQ(queue.pop(), 9u);
+  EXPECT_EQ(queue.pop(), 5u);
+  EXPECT_EQ(queue.pop(), 1u);
+  EXPECT_TRUE(queue.empty());
+}
+
+TEST(BucketQueue, RemoveFromTheMiddleKeepsTheOrder) {
+  BucketQueue queue(8, 64 * 64 * 3);  // three words of the upper bitmap level
+  for (std::uint32_t item = 0; item < 6; ++item) queue.push(item, 4000);
+  queue.push(7, 5);
+  queue.remove(2);
+  queue.remove(0);
+  queue.remove(5);
+  EXPECT_FALSE(queue.contains(2));
+  EXPECT_EQ(queue.bucket_of(7), 5u);
+  std::vector<std::uint32_t> order;
+  while (!queue.empty()) order.push_back(queue.pop());
+  EXPECT_EQ(order, (std::vector<std::uint32_t>{1, 3, 4, 7}));
+}
+
+// --- legality rules ---
+
+// A planar fan around interior vertex 0 at the origin with its ring 1..5 on
+// the boundary; vertex 1 = (1, 0) is v_j. Collapsing (0, 1) places the new
+// vertex at vertex 1 (a boundary endpoint) and turns triangle (0, 4, 5) into
+// (p, 4, 5), flipped when vertex 5 is placed as given.
+PolygonMesh planar_fan(const Vec3& fifth) {
+  PolygonMesh mesh;
+  mesh.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {-1, 0, 0}, {0, -1, 0}, fifth};
+  mesh.add_face({0, 1, 2});
+  mesh.add_face({0, 2, 3});
+  mesh.add_face({0, 3, 4});
+  mesh.add_face({0, 4, 5});
+  mesh.add_face({0, 5, 1});
+  return mesh;
+}
+
+std::uint32_t edge_between(const CollapseMesh& mesh, std::uint32_t a, std::uint32_t b) {
+  const std::uint32_t e = mesh.find_edge(a, b);
+  EXPECT_NE(e, CollapseMesh::kNone) << "no edge " << a << "-" << b;
+  return e;
+}
+
+TEST(CollapseLegality, NormalFlipIsRejectedAndItsControlIsLegal) {
+  // (0.26, -0.15): the line from vertex 4 = (0, -1) through it passes between
+  // the origin and (1, 0), so (p, 4, 5) turns over.
+  const CollapseMesh flipped(planar_fan({0.26, -0.15, 0}));
+  EXPECT_EQ(flipped.evaluate(edge_between(flipped, 0, 1)).legality, Legality::NormalFlip);
+  const CollapseMesh fine(planar_fan({0.9, -0.5, 0}));
+  const Evaluation legal = fine.evaluate(edge_between(fine, 0, 1));
+  EXPECT_EQ(legal.legality, Legality::Legal);
+  EXPECT_EQ(legal.position, (Vec3{1, 0, 0}));  // interior edge with one boundary endpoint
+}
+
+TEST(CollapseLegality, ZeroAreaResultIsRejected) {
+  // Vertex 5 on the line from (0, -1) to (1, 0): (p, 4, 5) would be degenerate.
+  const CollapseMesh mesh(planar_fan({0.5, -0.5, 0}));
+  EXPECT_EQ(mesh.evaluate(edge_between(mesh, 0, 1)).legality, Legality::DegenerateTriangle);
+}
+
+TEST(CollapseLegality, StricterNormalThresholdRejectsAnyBend) {
+  CollapseRules strict;
+  strict.min_normal_dot = 0.99;
+  const CollapseMesh mesh(test::icosphere(1), strict);
+  const CollapseMesh loose(test::icosphere(1));
+  std::size_t flips = 0, legal = 0;
+  for (std::uint32_t e = 0; e < mesh.edge_slots(); ++e) {
+    if (mesh.evaluate(e).legality == Legality::NormalFlip) ++flips;
+    if (loose.evaluate(e).legality == Legality::Legal) ++legal;
+  }
+  EXPECT_EQ(flips, mesh.edge_slots());
+  EXPECT_GT(legal, 0u);
+}
+
+TEST(CollapseLegality, InteriorEdgeJoiningBoundaryVerticesAndLoopMinimum) {
+  PolygonMesh square;
+  square.positions = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
+  square.add_face({0, 1, 2});
+  square.add_face({0, 2, 3});
+  CollapseMesh mesh(square);
+  EXPECT_EQ(mesh.evaluate(edge_between(mesh, 0, 2)).legality, Legality::InteriorEdgeOnBoundary);
+  const std::uint32_t boundary_edge = edge_between(mesh, 0, 1);
+  const Evaluation evaluation = mesh.evaluate(boundary_edge);
+  ASSERT_EQ(evaluation.legality, Legality::Legal);
+  EXPECT_EQ(evaluation.position, (Vec3{0.5, 0, 0}));  // boundary edges collapse to the midpoint
+  std::uint32_t removed[3], opposite[2];
+  mesh.collapse(boundary_edge, evaluation.position, removed, opposite);
+  EXPECT_EQ(mesh.validate(), "");
+  EXPECT_EQ(mesh.alive_vertices(), 3u);
+  for (std::uint32_t e = 0; e < mesh.edge_slots(); ++e)
+    if (mesh.edge_alive(e)) EXPECT_EQ(mesh.evaluate(e).legality, Legality::BoundaryLoopMinimum);
+}
+
+TEST(CollapseLegality, TetrahedronIsTheMinimumOfAClosedComponent) {
+  const CollapseMesh mesh(test::tetrahedron());
+  for (std::uint32_t e = 0; e < mesh.edge_slots(); ++e)
+    EXPECT_EQ(mesh.evaluate(e).legality, Legality::NewVertexValence);  // 3 + 3 - 4 = 2 < 3
+}
+
+TEST(CollapseLegality, OppositeVertexValence) {
+  // Triangular bipyramid: poles 3, 4 of valence 3; equator edge (0, 1) would
+  // leave its opposite poles with valence 2.
+  PolygonMesh bipyramid;
+  bipyramid.positions = {{1, 0, 0}, {-0.5, 0.87, 0}, {-0.5, -0.87, 0}, {0, 0, 1}, {0, 0, -1}};
+  for (std::uint32_t k = 0; k < 3; ++k) {
+    bipyramid.add_face({k, (k + 1) % 3, 3});
+    bipyramid.add_face({(k + 1) % 3, k, 4});
+  }
+  const CollapseMesh mesh(bipyramid);
+  EXPECT_EQ(mesh.evaluate(edge_between(mesh, 0, 1)).legality, Legality::OppositeVertexValence);
+}
+
+TEST(CollapseLegality, LinkConditionOnAThinTorus) {
+  // 3 x 8 torus: vertices (0, j) and (1, j) share (2, j) besides the two
+  // opposite vertices; all valences 6, so only the link condition fails.
+  const CollapseMesh mesh(fan_triangulate(test::quad_grid(3, 8, true, true)));
+  EXPECT_EQ(mesh.evaluate(edge_between(mesh, 0, 1)).legality, Legality::LinkCondition);
+  const CollapseMesh wide(fan_triangulate(test::quad_grid(8, 8, true, true)));
+  EXPECT_EQ(wide.evaluate(edge_between(wide, 0, 1)).legality, Legality::Legal);
+}
+
+TEST(CollapseLegality, NewVertexValenceAboveEight) {
+  CollapseMesh mesh(fan_triangulate(test::quad_grid(8, 8, true, true)));
+  const std::uint32_t e = edge_between(mesh, 0, 1);
+  const Evaluation evaluation = mesh.evaluate(e);
+  ASSERT_EQ(evaluation.legality, Legality::Legal);
+  std::uint32_t removed[3], opposite[2];
+  const std::uint32_t v = mesh.collapse(e, evaluation.position, removed, opposite);
+  EXPECT_EQ(mesh.valence(v), 8u);  // 6 + 6 - 4
+  EXPECT_EQ(mesh.validate(), "");
+  // Every edge at v now has 8 + 6 - 4 = 10 > 8, or 8 + 5 - 4 = 9 at a and b.
+  std::size_t checked = 0;
+  for (std::uint32_t f = 0; f < mesh.edge_slots(); ++f) {
+    if (!mesh.edge_alive(f)) continue;
+    const std::uint32_t h = mesh.edge_halfedge(f);
+    if (mesh.origin(h) != v && mesh.target(h) != v) continue;
+    EXPECT_EQ(mesh.evaluate(f).legality, Legality::NewVertexValence);
+    ++checked;
+  }
+  EXPECT_EQ(checked, 8u);
+  CollapseRules seven;
+  seven.max_valence = 7;
+  const CollapseMesh strict(fan_triangulate(test::quad_grid(8, 8, true, true)), seven);
+  EXPECT_EQ(strict.evaluate(edge_between(strict, 0, 1)).legality, Legality::NewVertexValence);
+}
+
+TEST(CollapseLegality, SharpEndpoints) {
+  // Planar 8 x 8 grid (vertex i + 9 j at (i, j)): collapsing onto a vertex of
+  // a convex star never flips, so only the sharp rules decide.
+  PolygonMesh grid = fan_triangulate(test::quad_grid(8, 8));
+  grid.sharp.assign(grid.vertex_count(), 0);
+  grid.sharp[0] = grid.sharp[1] = 1;
+  grid.sharp[10] = 1;
+  const CollapseMesh mesh(grid);
+  EXPECT_EQ(mesh.evaluate(edge_between(mesh, 0, 1)).legality, Legality::BothEndpointsSharp);
+  // One sharp endpoint: the new vertex is that endpoint.
+  const Evaluation evaluation = mesh.evaluate(edge_between(mesh, 10, 11));
+  ASSERT_EQ(evaluation.legality, Legality::Legal);
+  EXPECT_EQ(evaluation.position, grid.positions[10]);
+  const Evaluation plain = mesh.evaluate(edge_between(mesh, 20, 21));
+  ASSERT_EQ(plain.legality, Legality::Legal);
+  EXPECT_EQ(plain.position, (grid.positions[20] + grid.positions[21]) * 0.5);
+}
+
+// --- (4.1)-(4.3) through the mesh, and the error propagation ---
+
+// Reference (4.1)-(4.2) written out independently for the test.
+double reference_delta_error(const Vec3& d, const std::vector<Vec3>& c) {
+  double e0 = 0, max_length = 0;
+  Vec3 average;
+  for (const Vec3& ci : c) {
+    const Vec3 n = ci * (1.0 / norm(ci));
+    e0 = std::max(e0, std::fabs(dot(d * 0.5, n)));
+    average += n * (1.0 / double(c.size()));
+    max_length = std::max(max_length, norm(ci));
+  }
+  average = average * (1.0 / norm(average));
+  double min_projection = 1e300;
+  for (const Vec3& ci : c) min_projection = std::min(min_projection, dot(ci, average));
+  return std::pow(2.0 - min_projection / max_length, 16) * std::max(e0, 1e-8);
+}
+
+TEST(CollapseError, MeshEvaluationMatchesTheFormulasOnTheRingAfterCollapse) {
+  PolygonMesh sphere = test::icosphere(2);
+  test::jitter(sphere, 0.02, 7);
+  const CollapseMesh mesh(sphere);
+  std::size_t compared = 0;
+  for (std::uint32_t e = 0; e < mesh.edge_slots(); ++e) {
+    const Evaluation evaluation = mesh.evaluate(e);
+    if (evaluation.legality != Legality::Legal) continue;
+    const std::uint32_t h = mesh.edge_halfedge(e);
+    const std::uint32_t vi = mesh.origin(h), vj = mesh.target(h);
+    const Vec3 p = (sphere.positions[vi] + sphere.positions[vj]) * 0.5;
+    // Ring after collapse straight from the face list: faces with exactly one
+    // endpoint, that endpoint replaced by p, rotated to start at p.
+    std::vector<Vec3> c;
+    for (std::size_t f = 0; f < sphere.face_count(); ++f) {
+      const std::uint32_t* t = sphere.face_begin(f);
+      int hits = 0, at = -1;
+      for (int k = 0; k < 3; ++k)
+        if (t[k] == vi || t[k] == vj) ++hits, at = k;
+      if (hits != 1) continue;
+      c.push_back(cross(sphere.positions[t[(at + 1) % 3]] - p, sphere.positions[t[(at + 2) % 3]] - p));
+    }
+    const double expected = reference_delta_error(sphere.positions[vj] - sphere.positions[vi], c);
+    EXPECT_NEAR(evaluation.delta_error, expected, 1e-9 * expected) << "edge " << e;
+    EXPECT_EQ(evaluation.position, p);
+    ++compared;
+  }
+  EXPECT_GT(compared, 100u);
+}
+
+TEST(CollapseError, AccumulatedErrorIsTheMaximumOfTheFiveDestroyedEdges) {
+  PolygonMesh sphere = test::icosphere(2);
+  test::jitter(sphere, 0.03, 11);
+  CollapseMesh mesh(sphere);
+  for (std::uint32_t e = 0; e < mesh.edge_slots(); ++e) {
+    const Evaluation evaluation = mesh.evaluate(e);
+    if (evaluation.geometry_computed) mesh.set_latest_delta_error(e, evaluation.delta_error);
+  }
+  // Two successive collapses: the second one sees non-zero E_acc.
+  for (int round = 0; round < 2; ++round) {
+    std::uint32_t e = 0;
+    while (mesh.evaluate(e).legality != Legality::Legal) ++e;
+    const Evaluation evaluation = mesh.evaluate(e);
+    mesh.set_latest_delta_error(e, evaluation.delta_error);
+    const std::uint32_t h = mesh.edge_halfedge(e);
+    const std::uint32_t vi = mesh.origin(h), vj = mesh.target(h);
+    const std::uint32_t a = mesh.origin(CollapseMesh::prev(h)), b = mesh.origin(CollapseMesh::prev(mesh.opposite(h)));
+    double expected = mesh.error(e);
+    for (std::uint32_t x : {a, b})
+      for (std::uint32_t y : {vi, vj}) expected = std::max(expected, mesh.error(edge_between(mesh, x, y)));
+    // E_acc before the collapse of the edges that will be around v.
+    std::vector<std::pair<std::uint32_t, float>> before;
+    for (std::uint32_t f = 0; f < mesh.edge_slots(); ++f) {
+      if (!mesh.edge_alive(f)) continue;
+      const std::uint32_t fh = mesh.edge_halfedge(f);
+      const bool at_endpoint = mesh.origin(fh) == vi || mesh.target(fh) == vi || mesh.origin(fh) == vj ||
+                               mesh.target(fh) == vj;
+      if (at_endpoint) before.emplace_back(f, mesh.accumulated_error(f));
+    }
+    std::uint32_t removed[3], opposite[2];
+    const std::uint32_t v = mesh.collapse(e, evaluation.position, removed, opposite);
+    ASSERT_EQ(mesh.validate(), "");
+    std::size_t around = 0;
+    for (const auto& [f, old_acc] : before) {
+      if (!mesh.edge_alive(f)) continue;
+      ++around;
+      EXPECT_FLOAT_EQ(mesh.accumulated_error(f), std::max(old_acc, float(expected)));
+    }
+    EXPECT_EQ(around, mesh.valence(v));
+    EXPECT_GT(expected, 0.0);
+  }
+}
+
+}  // namespace
+}  // namespace isowave::simplify

@@ -1,0 +1,381 @@
+// Whole-stage tests of simplify() (paper Sec. 4.1): topology preserved, face
+// sizes 3..5, valences 3..8 (2..8 on the boundary), 2-manifold and
+// consistently oriented output, target reached, and bad input rejected.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <limits>
+#include <string>
+
+#include "isowave/core/error.h"
+#include "isowave/core/mesh_io.h"
+#include "isowave/core/mesh_topology.h"
+#include "isowave/extract/builtin_fields.h"
+#include "isowave/extract/isosurface.h"
+#include "isowave/extract/volume_io.h"
+#include "isowave/simplify/simplify.h"
+#include "simplify_test_meshes.h"
+
+namespace isowave::simplify {
+namespace {
+
+// Valence and boundary flag per vertex of a polygon mesh, counted directly
+// from the face list (independent of the report).
+void valences(const PolygonMesh& mesh, std::vector<int>& valence, std::vector<bool>& boundary) {
+  std::map<std::pair<std::uint32_t, std::uint32_t>, int> edges;
+  for (std::size_t f = 0; f < mesh.face_count(); ++f) {
+    const std::uint32_t* face = mesh.face_begin(f);
+    for (std::uint32_t k = 0; k < mesh.face_size(f); ++k) {
+      const std::uint32_t u = face[k], w = face[(k + 1) % mesh.face_size(f)];
+      ++edges[{std::min(u, w), std::max(u, w)}];
+    }
+  }
+  valence.assign(mesh.vertex_count(), 0);
+  boundary.assign(mesh.vertex_count(), false);
+  for (const auto& [edge, count] : edges) {
+    ++valence[edge.first];
+    ++valence[edge.second];
+    if (count == 1) boundary[edge.first] = boundary[edge.second] = true;
+  }
+}
+
+int max_valence_of(const PolygonMesh& mesh) {
+  std::vector<int> valence;
+  std::vector<bool> boundary;
+  valences(mesh, valence, boundary);
+  return valence.empty() ? 0 : *std::max_element(valence.begin(), valence.end());
+}
+
+// Checks every property the issue asks of a base mesh built from `input`.
+void expect_valid_base_mesh(const PolygonMesh& input, const SimplifyResult& result, const std::string& name,
+                            bool input_valences_in_range = true) {
+  SCOPED_TRACE(name);
+  const PolygonMesh& base = result.base;
+  ASSERT_NO_THROW(require_manifold(base, name + " base mesh"));
+  const TopologySummary before = summarize_topology(input);
+  const TopologySummary after = summarize_topology(base);
+  EXPECT_EQ(after.genus, before.genus);
+  EXPECT_EQ(after.components, before.components);
+  EXPECT_EQ(after.boundary_loops, before.boundary_loops);
+  EXPECT_EQ(result.report.input_genus, before.genus);
+  EXPECT_EQ(result.report.input_components, before.components);
+  EXPECT_EQ(result.report.input_boundary_loops, before.boundary_loops);
+  for (std::size_t f = 0; f < base.face_count(); ++f) {
+    ASSERT_GE(base.face_size(f), 3u);
+    ASSERT_LE(base.face_size(f), 5u);
+  }
+  std::vector<int> valence;
+  std::vector<bool> boundary;
+  valences(base, valence, boundary);
+  std::size_t outside = 0;
+  for (std::size_t v = 0; v < base.vertex_count(); ++v)
+    if (valence[v] < (boundary[v] ? 2 : 3) || valence[v] > 8) ++outside;
+  if (input_valences_in_range) EXPECT_EQ(outside, 0u);
+  EXPECT_EQ(outside, result.report.vertices_outside_valence_range);
+  EXPECT_EQ(base.vertex_count(), result.report.output_vertices);
+  EXPECT_EQ(base.face_count(), result.report.output_faces);
+  EXPECT_EQ(base.sharp.empty(), input.sharp.empty());
+  // Sharp vertices are never merged away from their position.
+  std::size_t face_total = 0;
+  for (std::size_t s = 0; s < result.report.face_size_histogram.size(); ++s)
+    face_total += result.report.face_size_histogram[s];
+  EXPECT_EQ(face_total, base.face_count());
+}
+
+void expect_target(const SimplifyResult& result, std::size_t target) {
+  if (result.report.vertices_after_collapse <= target + target / 20) return;
+  // Not reached: the report must say why.
+  EXPECT_FALSE(result.report.target_reached);
+  EXPECT_NE(result.report.stop_reason.find("no legal collapse"), std::string::npos) << result.report.stop_reason;
+  ADD_FAILURE() << "target " << target << " not reached: " << result.report.stop_reason;
+}
+
+// --- generated meshes, with the invariant check after every collapse ---
+
+struct Generated {
+  std::string name;
+  PolygonMesh mesh;
+  std::size_t target;
+};
+
+std::vector<Generated> generated_meshes() {
+  std::vector<Generated> meshes;
+  meshes.push_back({"sphere", test::icosphere(3), 40});
+  meshes.push_back({"torus", test::fan_triangulate(test::quad_grid(24, 12, true, true)), 30});
+  meshes.push_back({"cylinder", test::fan_triangulate(test::quad_grid(16, 10, true, false)), 24});
+  meshes.push_back({"disk", test::fan_triangulate(test::quad_grid(12, 12)), 20});
+  meshes.push_back({"genus2_slab", test::fan_triangulate(test::genus_slab(2)), 24});
+  meshes.push_back({"genus3_slab", test::fan_triangulate(test::genus_slab(3)), 32});
+  // Two components: a sphere and a torus side by side.
+  PolygonMesh pair = test::icosphere(2);
+  const PolygonMesh torus = test::fan_triangulate(test::quad_grid(16, 8, true, true));
+  const std::uint32_t offset = static_cast<std::uint32_t>(pair.vertex_count());
+  for (const Vec3& p : torus.positions) pair.positions.push_back(p + Vec3{10, 0, 0});
+  for (std::size_t f = 0; f < torus.face_count(); ++f) {
+    const std::uint32_t* t = torus.face_begin(f);
+    pair.add_face({t[0] + offset, t[1] + offset, t[2] + offset});
+  }
+  meshes.push_back({"sphere_and_torus", pair, 30});
+  return meshes;
+}
+
+TEST(Simplify, GeneratedMeshesKeepTheirTopologyWithInvariantsCheckedAfterEveryCollapse) {
+  for (Generated& generated : generated_meshes()) {
+    test::jitter(generated.mesh, 0.01, 3);
+    SimplifyOptions options;
+    options.target_vertices = generated.target;
+    options.validate_every_collapse = true;
+    const SimplifyResult result = simplify(generated.mesh, options);
+    expect_valid_base_mesh(generated.mesh, result, generated.name);
+    expect_target(result, generated.target);
+    EXPECT_GT(result.report.collapses, 0u);
+  }
+}
+
+TEST(Simplify, AsFarAsPossibleStopsAtALegalMinimumAboveTheLowerBound) {
+  for (Generated& generated : generated_meshes()) {
+    SimplifyOptions options;  // target 0
+    options.validate_every_collapse = generated.mesh.vertex_count() < 400;
+    const SimplifyResult result = simplify(generated.mesh, options);
+    expect_valid_base_mesh(generated.mesh, result, generated.name);
+    EXPECT_FALSE(result.report.target_reached);
+    EXPECT_GE(result.report.vertices_after_collapse, result.report.lower_bound_vertices) << generated.name;
+    EXPECT_NE(result.report.stop_reason.find("no legal collapse"), std::string::npos);
+  }
+}
+
+TEST(Simplify, ClosedComponentsNeverGoBelowATetrahedron) {
+  const SimplifyResult result = simplify(test::icosphere(2));
+  EXPECT_GE(result.base.vertex_count(), 4u);
+  EXPECT_EQ(result.report.lower_bound_vertices, 4u);
+  const SimplifyResult tetra = simplify(test::tetrahedron());
+  EXPECT_EQ(tetra.report.collapses, 0u);
+  EXPECT_EQ(tetra.base.vertex_count(), 4u);
+}
+
+TEST(Simplify, SharpVerticesKeepTheirPositions) {
+  PolygonMesh mesh = test::fan_triangulate(test::quad_grid(20, 20));
+  test::jitter(mesh, 0.05, 5);
+  mesh.sharp.assign(mesh.vertex_count(), 0);
+  for (std::uint32_t v = 0; v < mesh.vertex_count(); v += 7) mesh.sharp[v] = 1;
+  SimplifyOptions options;
+  options.target_vertices = 60;
+  options.validate_every_collapse = true;
+  const SimplifyResult result = simplify(mesh, options);
+  expect_valid_base_mesh(mesh, result, "sharp grid");
+  // Every sharp vertex of the output sits exactly on a sharp input vertex.
+  std::size_t sharp = 0;
+  for (std::size_t v = 0; v < result.base.vertex_count(); ++v) {
+    if (!result.base.is_sharp(v)) continue;
+    ++sharp;
+    bool found = false;
+    for (std::size_t w = 0; w < mesh.vertex_count() && !found; ++w)
+      found = mesh.is_sharp(w) && mesh.positions[w] == result.base.positions[v];
+    EXPECT_TRUE(found) << "sharp vertex " << v << " moved";
+  }
+  EXPECT_GT(sharp, 0u);
+}
+
+TEST(Simplify, BoundaryVerticesStayOnTheInputBoundaryPolyline) {
+  PolygonMesh disk = test::fan_triangulate(test::quad_grid(16, 16));  // the square [0, 16]^2
+  // Sharp corners: otherwise a boundary edge may cut a corner (its midpoint
+  // lies on the chord, not on the square).
+  disk.sharp.assign(disk.vertex_count(), 0);
+  for (std::uint32_t corner : {0u, 16u, 16u * 17u, 17u * 17u - 1u}) disk.sharp[corner] = 1;
+  SimplifyOptions options;
+  options.target_vertices = 40;
+  const SimplifyResult result = simplify(disk, options);
+  expect_valid_base_mesh(disk, result, "disk");
+  std::vector<int> valence;
+  std::vector<bool> boundary;
+  valences(result.base, valence, boundary);
+  for (std::size_t v = 0; v < result.base.vertex_count(); ++v) {
+    if (!boundary[v]) continue;
+    const Vec3& p = result.base.positions[v];
+    const bool on_square = p.x == 0 || p.x == 16 || p.y == 0 || p.y == 16;
+    EXPECT_TRUE(on_square) << "boundary vertex " << v << " left the boundary";
+  }
+}
+
+TEST(Simplify, EdgeRemovalMakesQuadsAndPentagonsAndCanBeTurnedOff) {
+  PolygonMesh torus = test::fan_triangulate(test::quad_grid(40, 20, true, true));
+  SimplifyOptions options;
+  options.target_vertices = 200;
+  const SimplifyResult with = simplify(torus, options);
+  expect_valid_base_mesh(torus, with, "torus with edge removal");
+  ASSERT_GE(with.report.face_size_histogram.size(), 5u);
+  EXPECT_GT(with.report.face_size_histogram[4], 0u);
+  EXPECT_GT(with.report.edges_removed, 0u);
+  EXPECT_EQ(with.report.triangles_after_collapse - with.report.edges_removed, with.base.face_count());
+  options.edge_removal = false;
+  const SimplifyResult without = simplify(torus, options);
+  EXPECT_EQ(without.report.edges_removed, 0u);
+  for (std::size_t f = 0; f < without.base.face_count(); ++f) EXPECT_EQ(without.base.face_size(f), 3u);
+  // Threshold 1.0 allows only exactly coplanar pairs: none on a curved torus.
+  options.edge_removal = true;
+  options.edge_removal_min_normal_dot = 1.0;
+  EXPECT_EQ(simplify(torus, options).report.edges_removed, 0u);
+}
+
+TEST(Simplify, DistanceReportIsSmallForAModestReduction) {
+  const PolygonMesh sphere = test::icosphere(4);  // 1026 vertices on the unit sphere
+  SimplifyOptions options;
+  options.target_vertices = 300;
+  const SimplifyResult result = simplify(sphere, options);
+  ASSERT_TRUE(result.report.distance_computed);
+  // Chords of a 300-vertex sphere are ~0.2 long: sagitta ~0.005; allow 10x.
+  EXPECT_GT(result.report.distance_max, 0.0);
+  EXPECT_LT(result.report.distance_max, 0.05);
+  EXPECT_LE(result.report.distance_rms, result.report.distance_max);
+}
+
+// --- bad input ---
+
+ErrorKind error_kind_of(const PolygonMesh& mesh, const SimplifyOptions& options = {}) {
+  try {
+    simplify(mesh, options);
+  } catch (const Error& error) {
+    return error.kind();
+  }
+  ADD_FAILURE() << "no error";
+  return ErrorKind::Io;
+}
+
+TEST(SimplifyBadInput, NonManifoldEdge) {
+  PolygonMesh mesh = test::tetrahedron();
+  mesh.positions.push_back({0, 0, 5});
+  mesh.add_face({0, 1, 4});  // third face on edge (0, 1)
+  EXPECT_EQ(error_kind_of(mesh), ErrorKind::Topology);
+}
+
+TEST(SimplifyBadInput, RepeatedVertexInATriangle) {
+  PolygonMesh mesh = test::tetrahedron();
+  mesh.face_vertices[1] = mesh.face_vertices[0];
+  EXPECT_EQ(error_kind_of(mesh), ErrorKind::Topology);
+}
+
+TEST(SimplifyBadInput, NanCoordinate) {
+  PolygonMesh mesh = test::icosphere(1);
+  mesh.positions[3].y = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_EQ(error_kind_of(mesh), ErrorKind::Format);
+}
+
+TEST(SimplifyBadInput, QuadsAreNotAccepted) {
+  EXPECT_EQ(error_kind_of(test::cube()), ErrorKind::Unsupported);
+}
+
+TEST(SimplifyBadInput, UnreferencedVertexAndEmptyMesh) {
+  PolygonMesh mesh = test::icosphere(1);
+  mesh.positions.push_back({9, 9, 9});
+  EXPECT_EQ(error_kind_of(mesh), ErrorKind::Topology);
+  EXPECT_EQ(error_kind_of(PolygonMesh{}), ErrorKind::Topology);
+}
+
+TEST(SimplifyBadInput, OptionsOutOfRange) {
+  SimplifyOptions options;
+  options.edge_removal_min_normal_dot = 2;
+  EXPECT_EQ(error_kind_of(test::icosphere(1), options), ErrorKind::InvalidArgument);
+  options = {};
+  options.max_valence = 2;
+  EXPECT_EQ(error_kind_of(test::icosphere(1), options), ErrorKind::InvalidArgument);
+}
+
+TEST(SimplifyBadInput, DegenerateTrianglesAreAcceptedAndNoneIsCreated) {
+  // A flat grid with a row of collinear triangles squashed to zero area.
+  PolygonMesh mesh = test::fan_triangulate(test::quad_grid(10, 10));
+  for (Vec3& p : mesh.positions)
+    if (p.y == 5) p.y = 4;  // rows 4 and 5 coincide: the triangles between them have zero area
+  SimplifyOptions options;
+  options.target_vertices = 30;
+  options.validate_every_collapse = true;
+  const SimplifyResult result = simplify(mesh, options);
+  expect_valid_base_mesh(mesh, result, "degenerate grid");
+}
+
+TEST(SimplifyBadInput, TargetAboveTheInputSizeCollapsesNothing) {
+  const PolygonMesh sphere = test::icosphere(2);
+  SimplifyOptions options;
+  options.target_vertices = sphere.vertex_count() + 100;
+  const SimplifyResult result = simplify(sphere, options);
+  EXPECT_EQ(result.report.collapses, 0u);
+  EXPECT_EQ(result.report.vertices_after_collapse, sphere.vertex_count());
+  EXPECT_EQ(result.report.target_vertices, sphere.vertex_count());
+  EXPECT_NE(result.report.stop_reason.find("at or above"), std::string::npos);
+  expect_valid_base_mesh(sphere, result, "sphere, no collapse");
+}
+
+// --- shared meshes ---
+
+void run_shared_mesh(const std::string& path, double ratio) {
+  PolygonMesh mesh = read_mesh(path);
+  remove_unreferenced_vertices(mesh);
+  const bool input_in_range = max_valence_of(mesh) <= 8;
+  SimplifyOptions options;
+  options.target_vertices = static_cast<std::size_t>(double(mesh.vertex_count()) * ratio);
+  const SimplifyResult result = simplify(mesh, options);
+  // Input vertices of valence > 8 that no collapse touched may remain.
+  expect_valid_base_mesh(mesh, result, path, input_in_range);
+  expect_target(result, options.target_vertices);
+  ASSERT_TRUE(result.report.distance_computed);
+  EXPECT_TRUE(std::isfinite(result.report.distance_rms));
+}
+
+#define SHARED_MESH_TEST(name, file, ratio)                  \
+  TEST(SimplifySharedMeshes, name) {                          \
+    ISOWAVE_REQUIRE_SHARED_FILE(path, "meshes/" file);        \
+    run_shared_mesh(path, ratio);                             \
+  }
+
+SHARED_MESH_TEST(BunnyHoles, "bunny_holes.obj", 0.02)
+SHARED_MESH_TEST(Armadillo, "armadillo.off", 0.02)
+SHARED_MESH_TEST(FertilityGenus4, "fertility_genus4.off", 0.05)
+SHARED_MESH_TEST(CastingGenus9, "casting_genus9.off", 0.05)
+SHARED_MESH_TEST(RockerArmGenus1, "rocker_arm_genus1.obj", 0.03)
+SHARED_MESH_TEST(MushroomDisk, "mushroom_disk.off", 0.05)
+SHARED_MESH_TEST(Mech4Holes, "mech_4holes.off", 0.05)
+SHARED_MESH_TEST(Elephant106Holes, "elephant_106holes.off", 0.5)
+
+// --- extracted isosurfaces ---
+
+void run_isosurface(const Volume& volume, double iso, const std::string& name, double ratio) {
+  IsosurfaceOptions extraction;
+  extraction.iso = iso;
+  const Isosurface surface = extract_isosurface(volume, extraction);
+  ASSERT_GT(surface.mesh.face_count(), 0u) << name;
+  SimplifyOptions options;
+  options.target_vertices = static_cast<std::size_t>(double(surface.mesh.vertex_count()) * ratio);
+  const SimplifyResult result = simplify(surface.mesh, options);
+  expect_valid_base_mesh(surface.mesh, result, name, max_valence_of(surface.mesh) <= 8);
+  // Many tiny components may make the target unreachable: then the report
+  // must say so and the count must respect the lower bound.
+  if (result.report.vertices_after_collapse > options.target_vertices + options.target_vertices / 20) {
+    EXPECT_NE(result.report.stop_reason.find("no legal collapse"), std::string::npos) << name;
+    EXPECT_GE(result.report.vertices_after_collapse, result.report.lower_bound_vertices);
+  }
+}
+
+TEST(SimplifyIsosurfaces, BuiltinFields) {
+  for (const std::string& name : {"sphere", "torus", "genus3", "marschner-lobb"})
+    run_isosurface(make_builtin_field(name, 48), 0.0, "builtin " + name, 0.05);
+}
+
+TEST(SimplifyIsosurfaces, HydrogenVolume) {
+  ISOWAVE_REQUIRE_SHARED_FILE(path, "volumes/hydrogen.vti");
+  run_isosurface(read_volume(path), 0.05, "hydrogen", 0.05);
+}
+
+TEST(SimplifyIsosurfaces, IronProteinVolume) {
+  ISOWAVE_REQUIRE_SHARED_FILE(path, "volumes/ironProt.vtk");
+  run_isosurface(read_volume(path), 128, "ironProt", 0.05);
+}
+
+TEST(SimplifyIsosurfaces, ViscousFingersVolume) {
+  // Many small components: the target may be unreachable, which the report must say.
+  ISOWAVE_REQUIRE_SHARED_FILE(path, "volumes/viscousfingers_099.vti");
+  run_isosurface(read_volume(path), 30, "viscous fingers", 0.02);
+}
+
+}  // namespace
+}  // namespace isowave::simplify
