@@ -1,5 +1,6 @@
 // isowave decode: synthesis with the kept coefficients of an .isw file, written
 // as a mesh at the chosen level (optionally its limit surface).
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 
@@ -67,11 +68,16 @@ int decode(const Args& raw) {
 
   if (!args.has("quiet")) {
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    const double kept = static_cast<double>(decoded.hierarchy->vertex_count(0) + decoded.ranked.size());
-    std::printf("%s: %zu of %llu coefficients kept (%.2f%% of %zu fine control points), level %d%s\n", input.c_str(),
-                decoded.ranked.size(), static_cast<unsigned long long>(decoded.coefficients_total),
-                100.0 * kept / static_cast<double>(decoded.hierarchy->fine_vertex_count()),
-                decoded.hierarchy->fine_vertex_count(), level, args.has("limit") ? ", limit surface" : "");
+    const std::size_t fine = decoded.hierarchy->fine_vertex_count();
+    const std::size_t base = decoded.hierarchy->vertex_count(0);
+    // The paper's count: base vertices plus kept coefficients, zeros included.
+    const double percent = args.has("percent")
+                               ? options.max_percent
+                               : 100.0 * static_cast<double>(base + std::min<std::uint64_t>(options.max_coefficients, fine - base)) /
+                                     static_cast<double>(fine);
+    std::printf("%s: %.2f%% of %zu fine control points: base mesh + %zu non-zero coefficients (of %llu), level %d%s\n",
+                input.c_str(), percent, fine, decoded.ranked.size(),
+                static_cast<unsigned long long>(decoded.coefficients_total), level, args.has("limit") ? ", limit surface" : "");
     std::printf("%s: %zu vertices, %zu faces (%.2f s)\n", output.c_str(), mesh.vertex_count(), mesh.face_count(), seconds);
   }
   return 0;

@@ -64,7 +64,7 @@ int fit(const Args& raw) {
   spec.options.push_back({"iterations", true, "relaxation + attraction rounds per coarse level (default 4)", "N"});
   spec.options.push_back({"final-iterations", true, "rounds on the finest level (default 2)", "N"});
   spec.options.push_back({"reach", true, "attraction reach in edge lengths (default 2)", "R"});
-  spec.options.push_back({"band", true, "signed-distance narrow band in cells, 0 = whole grid (default 4)", "K"});
+  spec.options.push_back({"band", true, "signed-distance narrow band in cells, 0 = whole grid (default 3)", "K"});
   spec.options.push_back({"no-correction", false, "skip the final move onto the exact isosurface", ""});
   spec.options.push_back({"no-report", false, "skip the quality report (it needs distance trees)", ""});
   spec.options.push_back({"ascii", false, "write ASCII PLY instead of binary", ""});
@@ -98,7 +98,7 @@ int fit(const Args& raw) {
   wrap_options.final_correction = !args.has("no-correction");
   const bool report = !args.has("no-report") && !args.has("quiet");
   wrap_options.keep_levels = report;
-  const double band = args.get_double("band", 4.0);
+  const double band = args.get_double("band", 3.0);
   if (!(band >= 0 && band <= 1e6)) throw Error(ErrorKind::InvalidArgument, "--band must be >= 0 cells");
   const VolumeReadOptions read_options = cli::volume_read_options(args);
 

@@ -3,11 +3,15 @@
 // the same run as the peer for the distance field.
 //
 // Default: the miranda isosurface (iso 1.5, min_component_vertices 50), its
-// base mesh simplified as far as topology allows, L = 3, 2 threads. Targets:
-// distance field <= 1.5 s and <= 1.0x OpenVDB; shrink-wrap <= 5 s.
+// base mesh simplified as far as topology allows, L = 3, 2 threads, distance
+// band 3 cells. Targets: distance field <= 1.5 s and <= 1.0x OpenVDB;
+// shrink-wrap <= 5 s. Prints the quality report per level and peak memory.
 //
 // usage: bench_fit [INPUT ISO] [--min-component N] [--base-vertices N]
 //                  [--levels L] [--threads T] [--band K] [--no-quality]
+//                  [--distance-only] [--iterations N] [--final-iterations N]
+//                  [--reach R] [--min-reach C] [--weight W] [--no-correction]
+//                  [--correction-cells C] [--untangle N]
 //   INPUT is a volume file or builtin:NAME[:N]; --base-vertices 0 simplifies
 //   as far as the rules allow (default).
 #include <sys/resource.h>
@@ -64,7 +68,7 @@ int main(int argc, char** argv) {
   double iso = 1.5;
   std::size_t min_component = 50, base_vertices = 0;
   int levels = 3, threads = 2;
-  double band = 0;
+  double band = 3;
   bool quality = true, sdf_only = false, correction = true;
   int untangle_rounds = ShrinkWrapOptions().untangle_rounds;
   double weight = 0.5, correction_cells = ShrinkWrapOptions().correction_max_cells;
@@ -122,7 +126,8 @@ int main(int argc, char** argv) {
                 extracted.vertex_count(), extracted.face_count(), surface.report.after.genus,
                 surface.report.after.components, seconds_since(start));
 
-    // Our distance field, whole grid and narrow band.
+    // Our distance field: the narrow band the fit uses (--band, default 3
+    // cells, OpenVDB's half width) and, for reference, the whole grid.
     SignedDistanceOptions distance_options;
     distance_options.iso = iso;
     distance_options.band_cells = band;
@@ -131,55 +136,22 @@ int main(int argc, char** argv) {
     const SignedDistanceField distance = compute_signed_distance(volume, distance_options);
     const double distance_seconds = seconds_since(start);
     const SignedDistanceStatistics& ds = distance.statistics;
-    std::printf("signed distance (band %s): %.3f s | %zu nodes, %zu seeds (%zu first-order), %zu pops, %zu updates, "
-                "peak queue %zu, working set %.1f MB; %zu nodes on dropped components, %zu flipped\n",
-                band > 0 ? std::to_string(band).c_str() : "none", distance_seconds, ds.nodes, ds.seed_nodes,
-                ds.first_order_seeds, ds.queue_pops, ds.updates, ds.peak_queue, double(ds.peak_bytes) / 1e6,
+    std::printf("signed distance (band %g cells): %.3f s (seeding %.3f, propagation %.3f, finishing %.3f) | %zu nodes, "
+                "%zu seeds, %zu pops, %zu updates, peak queue %zu, working set %.1f MB; %zu nodes on dropped "
+                "components, %zu flipped\n",
+                band, distance_seconds, ds.seconds_seeding, ds.seconds_propagation, ds.seconds_finishing, ds.nodes,
+                ds.seed_nodes, ds.queue_pops, ds.updates, ds.peak_queue, double(ds.peak_bytes) / 1e6,
                 ds.unseeded_crossing_nodes, ds.flipped_nodes);
-    if (std::getenv("FIT_DEBUG")) {
-      const SurfaceDistance reference(extracted);
-      std::vector<Vec3> nodes;
-      std::vector<double> values;
-      const double cell = volume.cell_size();
-      for (std::size_t k = 0; k < volume.dims[2]; ++k)
-        for (std::size_t j = 0; j < volume.dims[1]; ++j)
-          for (std::size_t i = 0; i < volume.dims[0]; ++i) {
-            const double d = distance.distance.at(i, j, k);
-            if (std::abs(d) <= 3 * cell && (i * 7 + j * 13 + k * 5) % 3 == 0) {
-              nodes.push_back(volume.world(double(i), double(j), double(k)));
-              values.push_back(d);
-            }
-          }
-      const std::vector<double> exact = reference.distances(nodes);
-      double sum = 0, max = 0; std::size_t worst = 0;
-      for (std::size_t n = 0; n < nodes.size(); ++n) {
-        const double e = std::abs(std::abs(values[n]) - exact[n]) / cell;
-        sum += e; if (e > max) { max = e; worst = n; }
-      }
-      std::size_t big = 0, big_box = 0;
-      for (std::size_t n = 0; n < nodes.size(); ++n) {
-        const double e = std::abs(std::abs(values[n]) - exact[n]) / cell;
-        if (e > 0.5) {
-          ++big;
-          const Vec3 g = (nodes[n] - volume.origin);
-          if (g.x < 3 || g.y < 3 || g.z < 3 || g.x > volume.dims[0] - 4 || g.y > volume.dims[1] - 4 || g.z > volume.dims[2] - 4) ++big_box;
-          if (big < 10) std::printf("  big error at (%g %g %g): %g vs %g\n", nodes[n].x, nodes[n].y, nodes[n].z, values[n], exact[n]);
-        }
-      }
-      std::printf("  %zu errors > 0.5 cell, %zu within 3 cells of the box\n", big, big_box);
-      std::printf("SDF check: %zu nodes, mean |error| %.4f cell, max %.3f cell at (%g %g %g) value %g exact %g\n", nodes.size(), sum / nodes.size(), max,
-                  nodes[worst].x, nodes[worst].y, nodes[worst].z, values[worst], exact[worst]);
-    }
-    double banded_seconds = 0;
-    if (band == 0) {
-      SignedDistanceOptions banded_options = distance_options;
-      banded_options.band_cells = 3;
+    double whole_seconds = 0;
+    {
+      SignedDistanceOptions whole_options = distance_options;
+      whole_options.band_cells = 0;
       start = std::chrono::steady_clock::now();
-      const SignedDistanceField banded = compute_signed_distance(volume, banded_options);
-      banded_seconds = seconds_since(start);
-      std::printf("signed distance (band 3 cells): %.3f s | %zu pops, %zu updates, reached %zu nodes\n",
-                  banded_seconds, banded.statistics.queue_pops, banded.statistics.updates,
-                  banded.statistics.reached_nodes);
+      const SignedDistanceField whole = compute_signed_distance(volume, whole_options);
+      whole_seconds = seconds_since(start);
+      std::printf("signed distance (whole grid): %.3f s | %zu pops, %zu updates, working set %.1f MB\n",
+                  whole_seconds, whole.statistics.queue_pops, whole.statistics.updates,
+                  double(whole.statistics.peak_bytes) / 1e6);
     }
 
     // Peer: OpenVDB's mesh-to-level-set on the extracted triangles.
@@ -200,9 +172,8 @@ int main(int argc, char** argv) {
       const double vdb_seconds = seconds_since(start);
       std::printf("OpenVDB meshToLevelSet (half width 3): %.3f s, %zu active voxels\n", vdb_seconds,
                   std::size_t(grid->activeVoxelCount()));
-      std::printf("ratio signed distance / OpenVDB: whole grid %.2fx%s (target <= 1.0x)\n",
-                  distance_seconds / vdb_seconds,
-                  banded_seconds > 0 ? (", band 3: " + std::to_string(banded_seconds / vdb_seconds) + "x").c_str() : "");
+      std::printf("ratio signed distance / OpenVDB: band %g %.3fx (target <= 1.0x), whole grid %.3fx\n", band,
+                  distance_seconds / vdb_seconds, whole_seconds / vdb_seconds);
     }
 
     if (sdf_only) return 0;
@@ -211,13 +182,6 @@ int main(int argc, char** argv) {
     simplify_options.target_vertices = base_vertices;
     simplify_options.compute_distance = false;
     const simplify::SimplifyResult simplified = simplify::simplify(extracted, simplify_options);
-    if (std::getenv("FIT_DEBUG")) {
-      const SurfaceDistance reference(extracted);
-      const SubdivisionHierarchy h0(extracted, 0);
-      print_quality(measure_fit_quality(h0, 0, extracted.positions, extracted, reference, volume, iso, false));
-      const SubdivisionHierarchy h1(simplified.base, 0);
-      print_quality(measure_fit_quality(h1, 0, simplified.base.positions, extracted, reference, volume, iso, false));
-    }
     std::printf("base mesh: %zu vertices, %zu faces in %.2f s\n", simplified.base.vertex_count(),
                 simplified.base.face_count(), seconds_since(start));
 
@@ -259,30 +223,6 @@ int main(int argc, char** argv) {
                                           level < levels ? wrapped.level_positions[std::size_t(level)] : wrapped.positions,
                                           extracted, reference, volume, iso, false));
       std::printf("quality measured in %.1f s\n", seconds_since(start));
-      if (std::getenv("FIT_DEBUG")) {
-        const PolygonMesh fine = hierarchy.control_mesh(levels, wrapped.positions);
-        const Vec3 lo = volume_box_min(volume), hi = volume_box_max(volume);
-        std::size_t tangled = 0, near_box = 0, near_sharp_or_boundary = 0;
-        const WrapLevelMesh wm = make_wrap_level_mesh(hierarchy, levels, wrapped.positions, volume);
-        std::vector<int> valence_hist(20, 0);
-        for (std::size_t f = 0; f < fine.face_count(); ++f) {
-          const std::uint32_t* q = fine.face_begin(f);
-          Vec3 n, c;
-          for (int k = 0; k < 4; ++k) { n += cross(fine.positions[q[k]], fine.positions[q[(k + 1) % 4]]); c += fine.positions[q[k]]; }
-          c *= 0.25;
-          const Vec3 g = trilinear_sample(volume, c).gradient;
-          if (dot(n, g) < 0) continue;
-          ++tangled;
-          double d = 1e9;
-          for (int a = 0; a < 3; ++a) d = std::min({d, c[a] - lo[a], hi[a] - c[a]});
-          if (d < 3 * volume.cell_size()) ++near_box;
-          bool b = false;
-          for (int k = 0; k < 4; ++k) b |= wm.role[q[k]] != WrapRole::Free;
-          near_sharp_or_boundary += b;
-          // distance from the base vertex: which level-0 vertex is the face's corner? skip
-        }
-        std::printf("debug: %zu tangled faces, %zu within 3 cells of the box, %zu touching boundary vertices\n", tangled, near_box, near_sharp_or_boundary);
-      }
     }
     std::printf("peak memory: %.0f MB\n", peak_megabytes());
   } catch (const Error& error) {

@@ -4,7 +4,8 @@
 //
 //   bench_simplify [--volume PATH] [--iso X] [--min-component-vertices N]
 //                  [--target-vertices N] [--skip-cgal] [--compare-openmesh]
-//                  [--mesh PATH] [--save-mesh PATH]
+//                  [--mesh PATH] [--save-mesh PATH] [--skip-distance]
+//                  [--no-edge-removal]
 //
 // Prints the isowave report, peak memory during simplify() in bytes per input
 // vertex (Linux VmHWM, reset before the call), CGAL's time and the ratio.
@@ -12,7 +13,8 @@
 // topology checks, ring gathering, (4.1)-(4.2)) over every edge, once on the
 // corner table used by isowave and once on OpenMesh's TriMesh, single-threaded.
 // --mesh reads a triangle mesh instead of extracting one; --save-mesh writes
-// the extracted one (to repeat runs without the extraction).
+// the extracted one (to repeat runs without the extraction). --skip-distance
+// leaves out the second, untimed simplify() that measures the surface distance.
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -76,6 +78,22 @@ struct VertexCountStop {
   }
 };
 
+// FNV-1a over the base mesh's coordinates (bit patterns), faces and sharp
+// flags: equal fingerprints mean an identical result, which is how a speed-up
+// of the simplifier is checked to leave the algorithm unchanged.
+std::uint64_t fingerprint(const isowave::PolygonMesh& mesh) {
+  std::uint64_t hash = 1469598103934665603ull;
+  const auto add = [&](const void* data, std::size_t bytes) {
+    const unsigned char* p = static_cast<const unsigned char*>(data);
+    for (std::size_t i = 0; i < bytes; ++i) hash = (hash ^ p[i]) * 1099511628211ull;
+  };
+  add(mesh.positions.data(), mesh.positions.size() * sizeof(isowave::Vec3));
+  add(mesh.face_vertices.data(), mesh.face_vertices.size() * sizeof(std::uint32_t));
+  add(mesh.face_offsets.data(), mesh.face_offsets.size() * sizeof(mesh.face_offsets[0]));
+  add(mesh.sharp.data(), mesh.sharp.size() * sizeof(mesh.sharp[0]));
+  return hash;
+}
+
 // --- Evaluation kernel on OpenMesh, mirroring CollapseMesh::evaluate() ---
 struct OmTraits : OpenMesh::DefaultTraits {
   typedef OpenMesh::Vec3d Point;
@@ -130,11 +148,12 @@ double openmesh_evaluate_all(const TriMesh& mesh, std::size_t& legal) {
 void compare_openmesh(const isowave::PolygonMesh& triangles) {
   using namespace isowave::simplify;
   CollapseMesh corner_table(triangles);
+  FanCache cache;
   auto start = Clock::now();
   std::size_t legal = 0;
   double sum = 0;
   for (std::uint32_t e = 0; e < corner_table.edge_slots(); ++e) {
-    const Evaluation evaluation = corner_table.evaluate(e);
+    const Evaluation evaluation = corner_table.evaluate(e, cache);
     if (evaluation.legality == Legality::Legal) {
       ++legal;
       sum += evaluation.delta_error;
@@ -164,7 +183,7 @@ int main(int argc, char** argv) {
   std::string volume_path = std::string(ISOWAVE_SHARED_DATA_DIR) + "/volumes/miranda_256x256x256.nrrd";
   double iso = 1.5;
   std::size_t min_component_vertices = 0, target_vertices = 0;
-  bool run_cgal = true, openmesh = false;
+  bool run_cgal = true, openmesh = false, distance = true, edge_removal = true;
   std::string mesh_path, save_path;
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
@@ -180,6 +199,8 @@ int main(int argc, char** argv) {
     else if (arg == "--min-component-vertices") min_component_vertices = std::stoul(value());
     else if (arg == "--target-vertices") target_vertices = std::stoul(value());
     else if (arg == "--skip-cgal") run_cgal = false;
+    else if (arg == "--skip-distance") distance = false;
+    else if (arg == "--no-edge-removal") edge_removal = false;
     else if (arg == "--mesh") mesh_path = value();
     else if (arg == "--save-mesh") save_path = value();
     else if (arg == "--compare-openmesh") openmesh = true;
@@ -218,6 +239,7 @@ int main(int argc, char** argv) {
     isowave::simplify::SimplifyOptions options;
     options.target_vertices = target_vertices;
     options.compute_distance = false;  // timed separately below
+    options.edge_removal = edge_removal;
     reset_peak();
     const double peak_before = peak_bytes();
     start = Clock::now();
@@ -229,12 +251,14 @@ int main(int argc, char** argv) {
     std::printf("isowave simplify: %.3f s; peak memory %.0f MB = %.0f bytes per input vertex "
                 "(input mesh included; %.0f MB resident before the call)\n",
                 isowave_seconds, peak / 1e6, peak / vertices, peak_before / 1e6);
+    std::printf("base mesh fingerprint: %016llx\n", static_cast<unsigned long long>(fingerprint(result.base)));
     const isowave::TopologySummary before = isowave::summarize_topology(triangles);
     const isowave::TopologySummary after = isowave::summarize_topology(result.base);
     std::printf("topology preserved: genus %lld -> %lld, components %zu -> %zu, boundary loops %zu -> %zu\n",
                 before.genus, after.genus, before.components, after.components, before.boundary_loops,
                 after.boundary_loops);
 
+    if (distance) {
     isowave::simplify::SimplifyOptions collapse_only = options;
     collapse_only.edge_removal = false;
     collapse_only.compute_distance = true;
@@ -244,6 +268,7 @@ int main(int argc, char** argv) {
                 "(%.2f s)\n",
                 with_distance.report.distance_max, with_distance.report.distance_rms,
                 with_distance.report.seconds_distance);
+    }
 
     if (run_cgal) {
       SurfaceMesh mesh = to_cgal(triangles);

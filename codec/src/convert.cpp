@@ -180,6 +180,7 @@ ConvertResult convert_volume(const Volume& volume, const std::string& source, co
   }
   progress.end_stage();
   result.seconds.evaluate = seconds_since(start);
+  if (options.keep_extracted_mesh) result.extracted_mesh = std::move(surface.mesh);
   return result;
 }
 

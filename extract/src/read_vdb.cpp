@@ -1,12 +1,16 @@
 // OpenVDB (.vdb) float and double grids, copied into a dense volume over the
 // grid's active bounding box.
 //
-// OpenVDB's readers trust the file (string lengths, counts, unchecked reads
-// past the end), so the file is first walked here: header, metadata and grid
-// descriptors are checked against the file size, and only the chosen grid is
-// handed to openvdb::io::Stream, re-packed in memory with the file metadata
-// and the grid's non-essential metadata dropped, through a stream that throws
-// on any read past the end.
+// OpenVDB's readers trust the file: string lengths allocate unchecked, a
+// chunk marked "uncompressed" is read into a fixed-size buffer before its
+// size is checked, a Blosc chunk's own header is believed, and reads past the
+// end leave variables uninitialised. So the file is first walked here,
+// mirroring OpenVDB 10's reader (file format 222-224) for float and double
+// trees: header, metadata, grid descriptors, transform, topology and every
+// value chunk are checked against the bytes that hold them. Only the chosen
+// grid is then handed to openvdb::io::Stream, re-packed in memory (file
+// metadata and the grid's non-essential metadata dropped) behind a stream
+// that throws on any read past the end.
 #include <openvdb/io/Stream.h>
 #include <openvdb/openvdb.h>
 
@@ -14,6 +18,8 @@
 #include <cmath>
 #include <cstring>
 #include <istream>
+#include <limits>
+#include <map>
 #include <mutex>
 #include <sstream>
 #include <streambuf>
@@ -104,31 +110,14 @@ bool fixed_size_metadata(const std::string& type, std::uint32_t& size) {
   return true;
 }
 
-// Walks a MetaMap; when `keep` is given, appends a MetaMap holding only the
-// fixed-size and string entries (readers for the other types are not safe).
-void walk_metadata(Walker& w, std::vector<char>* keep) {
+// Walks the file-level MetaMap (it is not handed to OpenVDB).
+void walk_metadata(Walker& w) {
   const std::uint32_t count = w.u32("metadata count");
   if (count > w.remaining() / 12) w.fail("corrupt metadata count " + std::to_string(count));
-  std::vector<char> entries;
-  std::uint32_t kept = 0;
   for (std::uint32_t i = 0; i < count; ++i) {
-    const std::uint64_t start = w.pos();
-    const std::string name = w.string("metadata name");
-    const std::string type = w.string("metadata type");
-    const std::uint32_t bytes = w.u32("metadata size");
-    std::uint32_t fixed = 0;
-    const bool is_fixed = fixed_size_metadata(type, fixed);
-    if (is_fixed && bytes != fixed) w.fail("corrupt metadata '" + name + "' (" + type + " of " + std::to_string(bytes) + " bytes)");
-    w.skip(bytes, "metadata value");
-    if (keep && (is_fixed || type == "string")) {
-      const auto entry = w.bytes(start, w.pos());
-      entries.insert(entries.end(), entry.begin(), entry.end());
-      ++kept;
-    }
-  }
-  if (keep) {
-    put_u32(*keep, kept);
-    keep->insert(keep->end(), entries.begin(), entries.end());
+    w.string("metadata name");
+    w.string("metadata type");
+    w.skip(w.u32("metadata size"), "metadata value");
   }
 }
 
@@ -136,27 +125,200 @@ struct GridEntry {
   std::string unique_name;
   std::string name;  // without the uniqueness suffix
   std::string type;  // without _HalfFloat
+  bool half = false;
   std::string instance_parent;
   std::uint64_t descriptor_pos = 0;
-  std::uint64_t grid_pos = 0, end_pos = 0;
+  std::uint64_t grid_pos = 0, block_pos = 0, end_pos = 0;
 };
 
-// Appends a grid (descriptor + data, its metadata filtered) to `out`.
-void pack_grid(Walker& w, const GridEntry& g, std::vector<char>& out) {
+// Bounded reads over one grid's bytes (OpenVDB writes native little-endian).
+class Cursor {
+ public:
+  Cursor(const std::vector<char>& data, const std::string& path, const std::string& grid)
+      : data_(data), path_(path), grid_(grid) {}
+  std::size_t pos() const { return pos_; }
+  std::size_t remaining() const { return data_.size() - pos_; }
+  const std::uint8_t* take(std::size_t n, const char* what) {
+    if (n > remaining()) fail(std::string("truncated or corrupt data (") + what + ")");
+    const auto* p = reinterpret_cast<const std::uint8_t*>(data_.data() + pos_);
+    pos_ += n;
+    return p;
+  }
+  template <typename T>
+  T get(const char* what) {
+    T v;
+    std::memcpy(&v, take(sizeof(T), what), sizeof(T));
+    return v;
+  }
+  [[noreturn]] void fail(const std::string& what) const { format_error(path_, "grid '" + grid_ + "': " + what); }
+
+ private:
+  const std::vector<char>& data_;
+  const std::string& path_;
+  const std::string& grid_;
+  std::size_t pos_ = 0;
+};
+
+std::size_t count_on(const std::uint8_t* mask, std::size_t bytes) {
+  std::size_t n = 0;
+  for (std::size_t i = 0; i < bytes; ++i) n += static_cast<std::size_t>(__builtin_popcount(mask[i]));
+  return n;
+}
+
+struct TreeFormat {
+  std::uint32_t compression = 0;  // per-grid io::COMPRESS_* flags
+  std::size_t value_size = 4;     // sizeof(ValueType)
+  bool half = false;              // values saved as 16-bit halves
+};
+
+// One value chunk as io::readData() reads it.
+void check_chunk(Cursor& c, std::uint64_t bytes, const TreeFormat& f) {
+  if (f.compression & (openvdb::io::COMPRESS_BLOSC | openvdb::io::COMPRESS_ZIP)) {
+    const auto n = c.get<std::int64_t>("chunk size");
+    if (n <= 0) {
+      if (n == std::numeric_limits<std::int64_t>::min() || static_cast<std::uint64_t>(-n) != bytes)
+        c.fail("corrupt uncompressed chunk size");
+      c.take(static_cast<std::size_t>(bytes), "uncompressed chunk");
+      return;
+    }
+    if (static_cast<std::uint64_t>(n) > c.remaining()) c.fail("truncated compressed chunk");
+    const std::uint8_t* chunk = c.take(static_cast<std::size_t>(n), "compressed chunk");
+    if (f.compression & openvdb::io::COMPRESS_BLOSC) {
+      // Blosc header: version, versionlz, flags, typesize, nbytes, blocksize, cbytes.
+      std::uint32_t nbytes = 0, cbytes = 0;
+      if (n < 16) c.fail("corrupt blosc chunk");
+      std::memcpy(&nbytes, chunk + 4, 4);
+      std::memcpy(&cbytes, chunk + 12, 4);
+      if (nbytes != bytes || cbytes != static_cast<std::uint64_t>(n)) c.fail("corrupt blosc chunk header");
+    }
+    return;
+  }
+  c.take(static_cast<std::size_t>(bytes), "values");
+}
+
+// io::readCompressedValues() for a node of `count` values with `mask_bytes`-byte masks.
+void check_values(Cursor& c, std::size_t count, const std::uint8_t* value_mask, std::size_t mask_bytes,
+                  const TreeFormat& f) {
+  const auto metadata = c.get<std::int8_t>("value metadata");
+  if (metadata == 2 || metadata == 4 || metadata == 5) c.take(f.value_size, "inactive value");
+  if (metadata == 5) c.take(f.value_size, "inactive value");
+  if (metadata == 3 || metadata == 4 || metadata == 5) c.take(mask_bytes, "selection mask");
+  std::size_t stored = count;
+  if ((f.compression & openvdb::io::COMPRESS_ACTIVE_MASK) && metadata != 6) stored = count_on(value_mask, mask_bytes);
+  if (f.half && stored == 0) return;  // io::HalfReader reads nothing for no values
+  check_chunk(c, static_cast<std::uint64_t>(stored) * (f.half ? 2 : f.value_size), f);
+}
+
+// InternalNode::readTopology(); returns the number of leaves below.
+std::uint64_t check_internal_topology(Cursor& c, int log2dim, const TreeFormat& f) {
+  const std::size_t values = std::size_t{1} << (3 * log2dim);
+  const std::size_t mask_bytes = values / 8;
+  const std::uint8_t* child_mask = c.take(mask_bytes, "child mask");
+  const std::uint8_t* value_mask = c.take(mask_bytes, "value mask");
+  check_values(c, values, value_mask, mask_bytes, f);
+  const std::size_t children = count_on(child_mask, mask_bytes);
+  if (log2dim == 4) {
+    c.take(children * 64, "leaf value masks");  // LeafNode::readTopology(): the value mask
+    return children;
+  }
+  std::uint64_t leaves = 0;
+  for (std::size_t i = 0; i < children; ++i) leaves += check_internal_topology(c, log2dim - 1, f);
+  return leaves;
+}
+
+// The grid's tree (Tree::readTopology() + readBuffers()) for the standard 5-4-3 configuration.
+void check_tree(Cursor& c, std::size_t topology_end, std::size_t end, const TreeFormat& f) {
+  c.get<std::int32_t>("buffer count");
+  c.take(f.value_size, "background");
+  const auto tiles = c.get<std::uint32_t>("tile count");
+  const auto children = c.get<std::uint32_t>("child count");
+  const std::size_t tile_bytes = 12 + f.value_size + 1;
+  if (tiles > c.remaining() / tile_bytes || children > c.remaining() / (12 + 8192))
+    c.fail("corrupt root node (tile or child count)");
+  std::map<std::array<std::int32_t, 3>, std::uint64_t> table;  // leaves below each root entry
+  for (std::uint32_t t = 0; t < tiles; ++t) {
+    std::array<std::int32_t, 3> key;
+    std::memcpy(key.data(), c.take(12, "tile"), 12);
+    c.take(f.value_size, "tile value");
+    if (c.get<std::uint8_t>("tile state") > 1) c.fail("corrupt root tile");
+    table[key] = 0;
+  }
+  for (std::uint32_t n = 0; n < children; ++n) {
+    std::array<std::int32_t, 3> key;
+    std::memcpy(key.data(), c.take(12, "child origin"), 12);
+    for (std::int32_t v : key) {
+      if (v % 4096 != 0) c.fail("corrupt root child origin");
+    }
+    table[key] = check_internal_topology(c, 5, f);
+  }
+  if (c.pos() != topology_end) c.fail("corrupt topology (it does not end where the grid's data blocks start)");
+  std::uint64_t leaves = 0;
+  for (const auto& entry : table) leaves += entry.second;
+  if (leaves > c.remaining() / (64 + 1)) c.fail("truncated or corrupt leaf data");
+  for (std::uint64_t l = 0; l < leaves; ++l) {
+    const std::uint8_t* mask = c.take(64, "leaf value mask");
+    check_values(c, 512, mask, 64, f);
+  }
+  if (c.pos() != end) c.fail("corrupt data blocks (they do not end where the grid ends)");
+}
+
+// Checks a grid (descriptor + data) and appends it to `out` with its
+// metadata filtered.
+void pack_grid(Walker& w, const GridEntry& g, const std::string& path, std::vector<char>& out) {
   const auto descriptor = w.bytes(g.descriptor_pos, g.grid_pos);
   out.insert(out.end(), descriptor.begin(), descriptor.end());
-  w.seek(g.grid_pos);
-  put_u32(out, w.u32("grid compression flags"));
-  walk_metadata(w, &out);
-  const std::uint64_t transform_pos = w.pos();
-  const std::string map_type = w.string("transform type");
-  if (!openvdb::math::MapRegistry::isRegistered(map_type)) w.fail("unknown transform type '" + map_type.substr(0, 64) + "'");
+  const std::vector<char> data = w.bytes(g.grid_pos, g.end_pos);
+  Cursor c(data, path, g.name);
+
+  TreeFormat format;
+  format.compression = c.get<std::uint32_t>("compression flags");
+  format.value_size = g.type == openvdb::DoubleGrid::gridType() ? 8 : 4;
+  format.half = g.half;
+  put_u32(out, format.compression);
+
+  // Metadata: keep the fixed-size and string entries.
+  const auto count = c.get<std::uint32_t>("metadata count");
+  if (count > c.remaining() / 12) c.fail("corrupt metadata count");
+  std::vector<char> kept;
+  std::uint32_t kept_count = 0;
+  const auto string = [&](const char* what) {
+    const auto n = c.get<std::uint32_t>(what);
+    const std::uint8_t* p = c.take(n, what);
+    return std::string(reinterpret_cast<const char*>(p), n);
+  };
+  for (std::uint32_t i = 0; i < count; ++i) {
+    const std::size_t start_pos = c.pos();
+    const std::string name = string("metadata name");
+    const std::string type = string("metadata type");
+    const auto bytes = c.get<std::uint32_t>("metadata size");
+    const std::uint8_t* value = c.take(bytes, "metadata value");
+    std::uint32_t fixed = 0;
+    const bool is_fixed = fixed_size_metadata(type, fixed);
+    if (is_fixed && bytes != fixed) c.fail("corrupt metadata '" + name + "'");
+    if (type == "bool" && value[0] > 1) c.fail("corrupt metadata '" + name + "'");
+    if (is_fixed || type == "string") {
+      kept.insert(kept.end(), data.begin() + static_cast<std::ptrdiff_t>(start_pos), data.begin() + static_cast<std::ptrdiff_t>(c.pos()));
+      ++kept_count;
+    }
+  }
+  put_u32(out, kept_count);
+  out.insert(out.end(), kept.begin(), kept.end());
+
+  // Transform: a registered map type and its fixed-size parameters.
+  const std::size_t transform_pos = c.pos();
+  const std::string map_type = string("transform type");
+  if (!openvdb::math::MapRegistry::isRegistered(map_type)) c.fail("unknown transform type '" + map_type.substr(0, 64) + "'");
   std::ostringstream probe;
   openvdb::math::MapRegistry::createMap(map_type)->write(probe);
-  w.skip(probe.str().size(), "transform");
-  if (w.pos() > g.end_pos) w.fail("corrupt grid '" + g.name + "' (its transform runs past the grid's end)");
-  const auto rest = w.bytes(transform_pos, g.end_pos);
-  out.insert(out.end(), rest.begin(), rest.end());
+  c.take(probe.str().size(), "transform");
+
+  const std::size_t topology_end = static_cast<std::size_t>(g.block_pos - g.grid_pos);
+  if (g.instance_parent.empty()) {
+    check_tree(c, topology_end, data.size(), format);
+  } else if (c.pos() != data.size()) {
+    c.fail("corrupt instance grid");
+  }
+  out.insert(out.end(), data.begin() + static_cast<std::ptrdiff_t>(transform_pos), data.end());
 }
 
 class MemoryBuffer : public std::streambuf {
@@ -254,7 +416,7 @@ Volume read_vdb(const std::string& path, const VolumeReadOptions& options) {
   w.skip(36, "header UUID");
   const std::uint64_t header_end = w.pos();
 
-  walk_metadata(w, nullptr);
+  walk_metadata(w);
   const std::int64_t grid_count = static_cast<std::int32_t>(w.u32("grid count"));
   if (grid_count < 0 || static_cast<std::uint64_t>(grid_count) > w.remaining() / 36)
     w.fail("corrupt grid count " + std::to_string(grid_count));
@@ -267,16 +429,21 @@ Volume read_vdb(const std::string& path, const VolumeReadOptions& options) {
     g.name = g.unique_name.substr(0, g.unique_name.find('\x1e'));
     g.type = w.string("grid type");
     const std::string half = "_HalfFloat";
-    if (g.type.size() > half.size() && g.type.compare(g.type.size() - half.size(), half.size(), half) == 0)
+    if (g.type.size() > half.size() && g.type.compare(g.type.size() - half.size(), half.size(), half) == 0) {
       g.type.resize(g.type.size() - half.size());
+      g.half = true;
+    }
     g.instance_parent = w.string("grid instance parent");
     const std::int64_t grid_pos = w.i64("grid offsets");
     const std::int64_t block_pos = w.i64("grid offsets");
     const std::int64_t end_pos = w.i64("grid offsets");
-    if (grid_pos != static_cast<std::int64_t>(w.pos()) || block_pos < grid_pos || end_pos < block_pos ||
-        static_cast<std::uint64_t>(end_pos) > file.size())
+    // (OpenVDB leaves the block position of an instance grid at 0.)
+    const bool instance = !g.instance_parent.empty();
+    if (grid_pos != static_cast<std::int64_t>(w.pos()) || end_pos < grid_pos ||
+        (!instance && (block_pos < grid_pos || end_pos < block_pos)) || static_cast<std::uint64_t>(end_pos) > file.size())
       w.fail("truncated or corrupt grid offsets for grid '" + g.name + "'");
     g.grid_pos = static_cast<std::uint64_t>(grid_pos);
+    g.block_pos = static_cast<std::uint64_t>(block_pos);
     g.end_pos = static_cast<std::uint64_t>(end_pos);
     grids.push_back(g);
     w.seek(g.end_pos);
@@ -311,7 +478,7 @@ Volume read_vdb(const std::string& path, const VolumeReadOptions& options) {
   }
   parts.push_back(chosen);
   put_u32(packed, static_cast<std::uint32_t>(parts.size()));
-  for (const auto* g : parts) pack_grid(w, *g, packed);
+  for (const auto* g : parts) pack_grid(w, *g, path, packed);
 
   openvdb::GridBase::Ptr grid;
   try {

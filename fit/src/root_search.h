@@ -11,10 +11,13 @@ inline bool root_side(double h) { return h >= 0; }
 
 // Refines a bracket [a, b] (root_side(ha) != root_side(hb)) by the Illinois
 // variant of regula falsi, falling back to bisection when a value is not
-// finite, until the bracket is narrower than `tolerance`. Returns the end of
-// the final bracket with the smaller |h| (the inside end on a tie).
+// finite, until the bracket is narrower than `tolerance` or a value is within
+// `value_tolerance` of 0 (for distance fields, whose slope is 1, the two agree
+// and the value test ends the search sooner). Returns the end of the final
+// bracket with the smaller |h| (the inside end on a tie).
 template <class H>
-double refine_bracket(const H& h, double a, double ha, double b, double hb, double tolerance) {
+double refine_bracket(const H& h, double a, double ha, double b, double hb, double tolerance,
+                      double value_tolerance = 0.0) {
   double weight_a = ha, weight_b = hb;  // Illinois: the stale end's value is halved
   int stale_side = 0;                   // which end stayed put last time
   for (int iteration = 0; iteration < 100 && std::abs(b - a) > tolerance; ++iteration) {
@@ -27,7 +30,7 @@ double refine_bracket(const H& h, double a, double ha, double b, double hb, doub
       t = 0.5 * (a + b);
     }
     const double ht = h(t);
-    if (ht == 0) return t;
+    if (std::abs(ht) <= value_tolerance) return t;
     if (root_side(ht) == root_side(ha)) {
       a = t;
       ha = weight_a = ht;

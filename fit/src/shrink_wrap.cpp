@@ -277,14 +277,17 @@ template <class G>
 double first_agreeing_crossing(const G& g_of_t, double g0, double sign, double limit, double min_step,
                                double tolerance) {
   double s_previous = 0, g_previous = g0;
-  while (s_previous < limit) {
+  // A line grazing the surface would otherwise take limit / min_step samples.
+  constexpr int kMaxSamples = 24;
+  for (int sample = 0; sample < kMaxSamples && s_previous < limit; ++sample) {
     const double step = std::max(0.9 * std::abs(g_previous), min_step);
     const double s = std::min(s_previous + step, limit);
     const double g = g_of_t(sign * s);
     if (detail::root_side(g) != detail::root_side(g_previous)) {
       const bool agrees = sign > 0 ? (g_previous < 0 && g >= 0) : (g_previous >= 0 && g < 0);
       if (agrees) {
-        const double t = detail::refine_bracket(g_of_t, sign * s_previous, g_previous, sign * s, g, tolerance);
+        const double t =
+            detail::refine_bracket(g_of_t, sign * s_previous, g_previous, sign * s, g, tolerance, tolerance);
         return std::abs(t);
       }
     }
@@ -303,7 +306,7 @@ AttractionStatistics attract(const WrapLevelMesh& mesh, const SignedDistanceFiel
   const Volume& field = distance.distance;
   const Box box(field);
   const double cell = field.cell_size();
-  const double min_step = 0.1 * cell, tolerance = 1e-3 * cell;
+  const double min_step = 0.2 * cell, tolerance = 1e-3 * cell;
   const std::vector<Vec3> normals = vertex_normals(mesh, in);
   enum Outcome : std::uint8_t { kFixed, kAttracted, kOutOfReach, kNoDirection };
   std::vector<std::uint8_t> outcome(mesh.vertex_count);
@@ -401,19 +404,47 @@ bool project_onto_isosurface(const WrapLevelMesh& mesh, const Box& box, const Vo
   box.clip(p, u, t_low, t_high);
   const auto h = [&](double t) { return trilinear_value(field, p + std::clamp(t, t_low, t_high) * u) - iso; };
   double t = 0;
-  const double cell = field.cell_size();
-  if (!detail::find_root_along_line(h, h0, -h0 / slope, range, 0.25 * cell, 1e-5 * cell, t)) return false;
+  const double cell = field.cell_size(), tolerance = 1e-4 * cell;
+  // Newton steps along the line (one or two samples near the surface), then
+  // the bracketed search if they do not settle.
+  bool found = false;
+  double newton = -h0 / slope;
+  for (int step = 0; step < 3 && std::abs(newton) <= range; ++step) {
+    const TrilinearSample sample = trilinear_sample(field, p + std::clamp(newton, t_low, t_high) * u);
+    const double along = dot(sample.gradient, u);
+    if (!(along > 0) || !std::isfinite(sample.value)) break;
+    const double correction = (sample.value - iso) / along;
+    newton -= correction;
+    if (std::abs(correction) <= tolerance) {
+      found = std::abs(newton) <= range && newton >= t_low && newton <= t_high;
+      break;
+    }
+  }
+  if (found) t = newton;
+  else if (!detail::find_root_along_line(h, h0, -h0 / slope, range, 0.25 * cell, tolerance, t)) return false;
   target = place(mesh, box, v, p + std::clamp(t, t_low, t_high) * u);
   return is_finite(target);
 }
 
 // Per face: 1 if its normal disagrees with the field gradient at its centroid.
+// With `moved` and `previous`, faces without a moved corner keep their
+// previous flag.
 std::vector<std::uint8_t> tangled_faces(const WrapLevelMesh& mesh, const Volume& field, bool flip,
-                                        const std::vector<Vec3>& positions) {
+                                        const std::vector<Vec3>& positions,
+                                        const std::vector<std::uint8_t>* moved = nullptr,
+                                        const std::vector<std::uint8_t>* previous = nullptr) {
   const double expected_sign = flip ? 1.0 : -1.0;  // normals toward lower values unless flipped
   std::vector<std::uint8_t> tangled(mesh.face_count());
   for_vertices(mesh.face_count(), [&](std::size_t f) {
     const std::uint32_t begin = mesh.face_offsets[f], size = mesh.face_offsets[f + 1] - begin;
+    if (moved && previous) {
+      bool any = false;
+      for (std::uint32_t k = 0; k < size; ++k) any |= (*moved)[mesh.face_vertices[begin + k]] != 0;
+      if (!any) {
+        tangled[f] = (*previous)[f];
+        return;
+      }
+    }
     Vec3 newell, centroid;
     for (std::uint32_t k = 0; k < size; ++k) {
       const Vec3& a = positions[mesh.face_vertices[begin + k]];
@@ -501,7 +532,8 @@ UntangleStatistics untangle(const WrapLevelMesh& mesh, const Volume& field, doub
       Vec3 target;
       if (project_onto_isosurface(mesh, box, field, iso, range, v, smoothed, target)) next[v] = target;
     });
-    std::vector<std::uint8_t> next_tangled = tangled_faces(mesh, field, flip, next);
+    // Only faces with a moved corner can change.
+    std::vector<std::uint8_t> next_tangled = tangled_faces(mesh, field, flip, next, &selected, &tangled);
     std::size_t count = 0;
     for (std::uint8_t t : next_tangled) count += t;
     if (count >= stats.tangled_after) break;  // a round that does not help is dropped

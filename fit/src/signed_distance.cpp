@@ -22,10 +22,11 @@ namespace {
 // propagation loop touches one array fewer per update.
 constexpr std::uint32_t kQueuedBit = 0x80000000u;
 constexpr std::uint32_t kNoPoint = 0x7fffffffu;
-// Per-node flag bits: sample side, queue membership, "the cell whose lowest
-// corner is this node carries the surface mesh", seed, sign flip, flood visit.
+// Per-node flag bits: the sample's side; the cell whose lowest corner is this
+// node carries the surface mesh (kKeptCell) or has corners on both sides
+// (kCrossCell); seed; and the sign repair's flip, visited and open marks.
 constexpr std::uint8_t kInside = 1, kKeptCell = 4, kSeed = 8, kFlip = 16, kVisited = 32, kOpen = 64,
-                         kCrossCell = 128;  // the cell whose lowest corner is this node has both sides
+                         kCrossCell = 128;
 
 struct Point3f {
   float x, y, z;
@@ -173,7 +174,7 @@ SignedDistanceField compute_signed_distance(const Volume& field, const SignedDis
   const float band_squared =
       banded ? static_cast<float>(far_value * far_value) : std::numeric_limits<float>::infinity();
 
-  // Inside/outside per node; later also the queued bit.
+  // Inside/outside per node; later the cell, seed and sign-repair bits.
   std::vector<std::uint8_t> flags(node_count);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nz), [&](const tbb::blocked_range<std::size_t>& r) {
     for (std::size_t n = r.begin() * slice; n < r.end() * slice; ++n)
@@ -359,7 +360,7 @@ SignedDistanceField compute_signed_distance(const Volume& field, const SignedDis
               bool found = false;
               if (reach > 0 && std::abs(first_order) <= reach) {
                 t = first_order;
-                for (int step = 0; step < 3 && !found; ++step) {
+                for (int step = 0; step < 6 && !found; ++step) {
                   const TrilinearSample sample = trilinear_sample(field, x + t * u);
                   const double slope = dot(sample.gradient, u);
                   if (!(slope > 0) || !std::isfinite(sample.value)) break;
@@ -369,7 +370,10 @@ SignedDistanceField compute_signed_distance(const Volume& field, const SignedDis
                 }
                 found = found && std::abs(t) <= reach && std::isfinite(t);
               }
-              if (!found && reach > 0)
+              // The bracketed search only where Newton failed near the
+              // surface and no edge crossing gives a candidate: elsewhere it
+              // costs more than the rest of the seeding and gains little.
+              if (!found && reach > 0 && std::abs(first_order) <= reach && !std::isfinite(best))
                 found = detail::find_root_along_line(h, residual, first_order, reach, 0.25 * max_spacing,
                                                      2e-3 * cell, t);
               if (found && std::abs(t) < best && (!masked || point_in_kept_cell(x + t * u))) {

@@ -10,9 +10,7 @@ int highest_bit(std::uint64_t word) { return 63 - __builtin_clzll(word); }
 }  // namespace
 
 BucketQueue::BucketQueue(std::size_t item_count, std::uint32_t bucket_count)
-    : next_(item_count, kNil),
-      prev_(item_count, kNil),
-      bucket_(item_count, kNotQueued),
+    : links_(item_count, Links{kNil, kNil, kNotQueued}),
       head_(bucket_count, kNil),
       tail_(bucket_count, kNil),
       occupied_((bucket_count + 63) / 64, 0),
@@ -22,15 +20,15 @@ BucketQueue::BucketQueue(std::size_t item_count, std::uint32_t bucket_count)
 
 void BucketQueue::push(std::uint32_t item, std::uint32_t bucket) {
   assert(!contains(item) && bucket < bucket_count());
-  bucket_[item] = bucket;
-  next_[item] = kNil;
-  prev_[item] = tail_[bucket];
+  links_[item].bucket = bucket;
+  links_[item].next = kNil;
+  links_[item].prev = tail_[bucket];
   if (tail_[bucket] == kNil) {
     head_[bucket] = item;
     occupied_[bucket / 64] |= std::uint64_t{1} << (bucket % 64);
     occupied_words_[bucket / 4096] |= std::uint64_t{1} << ((bucket / 64) % 64);
   } else {
-    next_[tail_[bucket]] = item;
+    links_[tail_[bucket]].next = item;
   }
   tail_[bucket] = item;
   ++size_;
@@ -38,16 +36,16 @@ void BucketQueue::push(std::uint32_t item, std::uint32_t bucket) {
 
 void BucketQueue::remove(std::uint32_t item) {
   assert(contains(item));
-  const std::uint32_t bucket = bucket_[item];
-  const std::uint32_t before = prev_[item], after = next_[item];
-  if (before == kNil) head_[bucket] = after; else next_[before] = after;
-  if (after == kNil) tail_[bucket] = before; else prev_[after] = before;
+  const std::uint32_t bucket = links_[item].bucket;
+  const std::uint32_t before = links_[item].prev, after = links_[item].next;
+  if (before == kNil) head_[bucket] = after; else links_[before].next = after;
+  if (after == kNil) tail_[bucket] = before; else links_[after].prev = before;
   if (head_[bucket] == kNil) {
     std::uint64_t& word = occupied_[bucket / 64];
     word &= ~(std::uint64_t{1} << (bucket % 64));
     if (word == 0) occupied_words_[bucket / 4096] &= ~(std::uint64_t{1} << ((bucket / 64) % 64));
   }
-  bucket_[item] = kNotQueued;
+  links_[item].bucket = kNotQueued;
   --size_;
 }
 

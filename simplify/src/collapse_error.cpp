@@ -2,16 +2,30 @@
 
 #include <algorithm>
 #include <cmath>
+#include <vector>
 
 namespace isowave::simplify {
 
 CollapseErrorTerms collapse_error_terms(const Vec3& d, const Vec3* cross_products, std::size_t k) {
+  constexpr std::size_t kChunk = 64;
+  double squared_norms[kChunk];
+  if (k > kChunk) {
+    std::vector<double> squared(k);
+    for (std::size_t i = 0; i < k; ++i) squared[i] = squared_norm(cross_products[i]);
+    return collapse_error_terms(d, cross_products, squared.data(), k);
+  }
+  for (std::size_t i = 0; i < k; ++i) squared_norms[i] = squared_norm(cross_products[i]);
+  return collapse_error_terms(d, cross_products, squared_norms, k);
+}
+
+CollapseErrorTerms collapse_error_terms(const Vec3& d, const Vec3* cross_products, const double* squared_norms,
+                                        std::size_t k) {
   CollapseErrorTerms terms;
   const Vec3 half_d = d * 0.5;
   Vec3 normal_sum;
   double max_length = 0;
   for (std::size_t i = 0; i < k; ++i) {
-    const double length = norm(cross_products[i]);
+    const double length = std::sqrt(squared_norms[i]);  // = norm(cross_products[i]), bit for bit
     max_length = std::max(max_length, length);
     if (length <= 0) continue;
     const Vec3 unit = cross_products[i] * (1.0 / length);

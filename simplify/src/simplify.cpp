@@ -141,8 +141,9 @@ SimplifyResult simplify(const PolygonMesh& input, const SimplifyOptions& options
     std::vector<std::uint32_t> initial(mesh.edge_slots(), BucketQueue::kNotQueued);
     tbb::parallel_for(tbb::blocked_range<std::uint32_t>(0, mesh.edge_slots(), 8192),
                       [&](const tbb::blocked_range<std::uint32_t>& range) {
+                        FanCache cache;
                         for (std::uint32_t e = range.begin(); e != range.end(); ++e) {
-                          const Evaluation evaluation = mesh.evaluate(e);
+                          const Evaluation evaluation = mesh.evaluate(e, cache);
                           if (evaluation.legality != Legality::Legal) continue;
                           mesh.set_latest_delta_error(e, evaluation.delta_error);
                           initial[e] = priority_bucket(mesh.error(e), bucket_count);
@@ -160,11 +161,12 @@ SimplifyResult simplify(const PolygonMesh& input, const SimplifyOptions& options
   const std::size_t planned = input.vertex_count() - target;
   std::vector<std::uint32_t> stencil;
   stencil.reserve(128);
+  FanCache cache;
   while (collapse_wanted && mesh.alive_vertices() > target && !queue.empty()) {
     const std::uint32_t e = queue.top();
     const std::uint32_t queued_bucket = queue.bucket_of(e);
     queue.remove(e);
-    const Evaluation evaluation = mesh.evaluate(e);
+    const Evaluation evaluation = mesh.evaluate(e, cache);
     if (evaluation.legality != Legality::Legal) {
       ++report.rejected_at_pop[static_cast<int>(evaluation.legality)];
       continue;
@@ -186,7 +188,7 @@ SimplifyResult simplify(const PolygonMesh& input, const SimplifyOptions& options
     stencil.clear();
     mesh.gather_stencil(centres, 3, stencil);
     for (std::uint32_t s : stencil) {
-      const Evaluation update = mesh.evaluate(s);
+      const Evaluation update = mesh.evaluate(s, cache);
       if (update.legality != Legality::Legal) {
         if (queue.contains(s)) queue.remove(s);
         continue;

@@ -13,6 +13,7 @@
 #include <gtest/gtest.h>
 
 #include "isowave/core/error.h"
+#include "isowave/core/atomic_file.h"
 #include "isowave/core/mesh_io.h"
 #include "support/test_meshes.h"
 
@@ -202,6 +203,36 @@ TEST_F(MeshIoTest, ReadsObjVariants) {
   const PolygonMesh mesh = read_mesh(path("v.obj"));
   ASSERT_EQ(mesh.face_count(), 2u);
   EXPECT_EQ(std::vector<std::uint32_t>(mesh.face_begin(1), mesh.face_begin(1) + 3), (std::vector<std::uint32_t>{0, 2, 3}));
+}
+
+}  // namespace
+}  // namespace isowave
+
+namespace isowave {
+namespace {
+
+TEST_F(MeshIoTest, InterruptedWritersLeaveNothingBehind) {
+  // What the signal handler of the isowave command does on SIGINT/SIGTERM.
+  {
+    AtomicFileWriter writer(path("out.isw"));
+    writer.write("partial data");
+    remove_uncommitted_temporary_files();
+    std::size_t files = 0;
+    for (const auto& entry : fs::directory_iterator(directory_)) files += entry.path().empty() ? 0 : 1;
+    EXPECT_EQ(files, 0u);
+  }
+  EXPECT_FALSE(fs::exists(path("out.isw")));
+  // A committed file is not touched.
+  AtomicFileWriter done(path("done.isw"));
+  done.write("complete");
+  done.commit();
+  remove_uncommitted_temporary_files();
+  EXPECT_TRUE(fs::exists(path("done.isw")));
+  // An existing file is kept when the writer may not overwrite it.
+  AtomicFileWriter refused(path("done.isw"), false);
+  refused.write("other");
+  EXPECT_THROW(refused.commit(), Error);
+  EXPECT_EQ(read_bytes("done.isw"), "complete");
 }
 
 }  // namespace

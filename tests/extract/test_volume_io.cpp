@@ -924,6 +924,95 @@ TEST(VolumeIo, VdbFloatAndDoubleGrids) {
   expect_error(path, options, "missing grid 'nope'", "missing grid");
 }
 
+// Every compression setting, half floats, the inactive-value encodings and an
+// instanced grid, against OpenVDB's own reader of the same file.
+template <typename GridT>
+typename GridT::Ptr varied_grid(bool half) {
+  using V = typename GridT::ValueType;
+  auto grid = GridT::create(V(2));
+  grid->setSaveFloatAsHalf(half);
+  grid->setTransform(scale_translate());
+  auto acc = grid->getAccessor();
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> dist(-5, 5);
+  // Leaf A: inactive values background and -background (mask, no stored inactive values).
+  for (int i = 0; i < 40; ++i) acc.setValue(openvdb::Coord(i % 8, (i / 8) % 8, 0), V(dist(rng)));
+  acc.setValueOff(openvdb::Coord(1, 7, 3), V(-2));
+  // Leaf B: two other inactive values (mask and two inactive values).
+  for (int i = 0; i < 30; ++i) acc.setValue(openvdb::Coord(8 + i % 8, i / 8, 1), V(dist(rng)));
+  acc.setValueOff(openvdb::Coord(9, 5, 5), V(0.75));
+  acc.setValueOff(openvdb::Coord(10, 5, 5), V(-1.5));
+  // Leaf C: many distinct inactive values (no mask compression possible).
+  for (int i = 0; i < 20; ++i) acc.setValue(openvdb::Coord(16 + i % 8, i / 8, 2), V(dist(rng)));
+  for (int i = 0; i < 6; ++i) acc.setValueOff(openvdb::Coord(16 + i, 7, 7), V(10 + i));
+  // Leaf D: one inactive value (no mask, one inactive value).
+  for (int i = 0; i < 10; ++i) acc.setValue(openvdb::Coord(-8 + i % 8, -8 + i / 8, -8), V(dist(rng)));
+  acc.setValueOff(openvdb::Coord(-7, -2, -5), V(3.25));
+  // An active tile at the first internal level and one at the second.
+  grid->tree().addTile(1, openvdb::Coord(24, 0, 0), V(7), true);
+  grid->tree().addTile(2, openvdb::Coord(128, 0, 0), V(-3), true);
+  return grid;
+}
+
+template <typename GridT>
+std::vector<float> reference_dense(const std::string& path, const std::string& name, const Volume& shape) {
+  openvdb::io::File file(path);
+  file.open(false);
+  auto grid = openvdb::gridPtrCast<GridT>(file.readGrid(name));
+  file.close();
+  const openvdb::CoordBBox box = grid->evalActiveVoxelBoundingBox();
+  EXPECT_EQ(shape.dims, (std::array<std::size_t, 3>{std::size_t(box.dim().x()), std::size_t(box.dim().y()),
+                                                    std::size_t(box.dim().z())}));
+  std::vector<float> out;
+  auto acc = grid->getConstAccessor();
+  for (int z = box.min().z(); z <= box.max().z(); ++z)
+    for (int y = box.min().y(); y <= box.max().y(); ++y)
+      for (int x = box.min().x(); x <= box.max().x(); ++x) {
+        const openvdb::Coord c(x, y, z);
+        out.push_back(static_cast<float>(acc.isValueOn(c) ? acc.getValue(c) : grid->background()));
+      }
+  return out;
+}
+
+TEST(VolumeIo, VdbCompressionVariants) {
+  init_vdb();
+  TempDir dir;
+  const std::uint32_t settings[] = {
+      openvdb::io::COMPRESS_NONE, openvdb::io::COMPRESS_ZIP, openvdb::io::COMPRESS_ACTIVE_MASK,
+      openvdb::io::COMPRESS_ZIP | openvdb::io::COMPRESS_ACTIVE_MASK, openvdb::io::COMPRESS_BLOSC,
+      openvdb::io::COMPRESS_BLOSC | openvdb::io::COMPRESS_ACTIVE_MASK};
+  int n = 0;
+  for (std::uint32_t compression : settings) {
+    for (bool half : {false, true}) {
+      const std::string path = dir.file("c" + std::to_string(n++) + ".vdb");
+      auto f = varied_grid<openvdb::FloatGrid>(half);
+      f->setName("f");
+      auto d = varied_grid<openvdb::DoubleGrid>(half);
+      d->setName("d");
+      auto instance = f->copyGrid();  // shares f's tree: written as an instance
+      instance->setName("instance");
+      openvdb::io::File file(path);
+      file.setCompression(compression);
+      file.write(openvdb::GridPtrVec{f, d, openvdb::ConstPtrCast<openvdb::GridBase>(instance)});
+      const std::string label = path + " compression " + std::to_string(compression) + (half ? " half" : "");
+      for (const char* name : {"f", "d", "instance"}) {
+        VolumeReadOptions options;
+        options.grid = name;
+        try {
+          const Volume v = read_volume(path, options);
+          const std::vector<float> expected = std::string(name) == "d"
+                                                  ? reference_dense<openvdb::DoubleGrid>(path, name, v)
+                                                  : reference_dense<openvdb::FloatGrid>(path, name, v);
+          expect_values(v, expected, label + " grid " + name);
+          EXPECT_EQ(v.source_type, std::string(name) == "d" ? ScalarType::Float64 : ScalarType::Float32);
+        } catch (const Error& e) {
+          ADD_FAILURE() << label << " grid " << name << ": " << e.what();
+        }
+      }
+    }
+  }
+}
+
 TEST(VolumeIo, VdbRejectsRotatedTransform) {
   init_vdb();
   TempDir dir;
@@ -1359,8 +1448,18 @@ TEST(VolumeIoSweep, Vdb) {
   grid->setName("density");
   grid->setTransform(scale_translate());
   for (int x = 0; x < 4; ++x) grid->tree().setValue(openvdb::Coord(x, x % 2, 1), 0.5f * x);
-  openvdb::io::File(path).write(openvdb::GridPtrVec{grid});
-  sweep(path, {}, "vdb");
+  grid->tree().setValueOff(openvdb::Coord(5, 5, 5), 3.0f);
+  // Default (Blosc + active mask), zip, none, and half floats.
+  const std::uint32_t settings[] = {openvdb::io::COMPRESS_BLOSC | openvdb::io::COMPRESS_ACTIVE_MASK,
+                                    openvdb::io::COMPRESS_ZIP | openvdb::io::COMPRESS_ACTIVE_MASK,
+                                    openvdb::io::COMPRESS_NONE, openvdb::io::COMPRESS_BLOSC};
+  for (std::uint32_t compression : settings) {
+    grid->setSaveFloatAsHalf(compression == openvdb::io::COMPRESS_BLOSC);
+    openvdb::io::File file(path);
+    file.setCompression(compression);
+    file.write(openvdb::GridPtrVec{grid});
+    sweep(path, {}, "vdb compression " + std::to_string(compression));
+  }
 }
 
 }  // namespace

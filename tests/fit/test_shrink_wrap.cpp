@@ -2,6 +2,7 @@
 // signed distance -> shrink-wrap to L = 3, measured with the quality report.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include <tbb/global_control.h>
@@ -41,7 +42,7 @@ Pipeline prepare(Volume field, double iso, std::size_t base_vertices) {
   SignedDistanceOptions distance_options;
   distance_options.iso = iso;
   distance_options.surface = &p.extracted;
-  distance_options.band_cells = 4;
+  distance_options.band_cells = 3;
   p.distance = compute_signed_distance(p.field, distance_options);
   return p;
 }
@@ -63,14 +64,37 @@ void expect_targets(const Pipeline& p, const std::string& name) {
 }
 
 TEST(ShrinkWrap, Genus3MeetsTheTargets) {
-  // Base of 300 vertices (about 1/20 of the 6,000 extracted ones).
-  expect_targets(prepare(make_builtin_field("genus3", 96), 0.0, 300), "genus3");
+  // Base of 150 vertices (about 1/40 of the 6,000 extracted ones).
+  expect_targets(prepare(make_builtin_field("genus3", 96), 0.0, 150), "genus3");
 }
 
 TEST(ShrinkWrap, HydrogenMeetsTheTargets) {
   ISOWAVE_REQUIRE_SHARED_FILE(path, "volumes/hydrogen.vti");
   // Base of about 1/64 of the 9,840 extracted vertices.
   expect_targets(prepare(read_volume(path), 0.05, 154), "hydrogen");
+}
+
+TEST(ShrinkWrap, ViscousFingersMeetsTheTargets) {
+  ISOWAVE_REQUIRE_SHARED_FILE(path, "volumes/viscousfingers_099.vti");
+  // Base of about 1/16 of the 14,000 extracted vertices (genus 1, 5 components, boundaries).
+  expect_targets(prepare(read_volume(path), 30, 874), "viscous fingers");
+}
+
+// The built-in mixing layer has droplets and filaments a few cells across,
+// finer than a base mesh of 1/16 of the extracted vertices can follow: the
+// issue's targets are not met there (see the fit report), but the fit stays
+// finite, on the isosurface where the correction reaches, and on the box.
+TEST(ShrinkWrap, MixingStaysFiniteAndMostlyOnTheIsosurface) {
+  const Pipeline p = prepare(make_builtin_field("mixing", 96), 0.0, 2400);
+  const SubdivisionHierarchy hierarchy(p.base, 3);
+  const ShrinkWrapResult result = shrink_wrap(hierarchy, p.base.positions, p.distance, p.field);
+  for (const Vec3& v : result.positions) ASSERT_TRUE(is_finite(v));
+  EXPECT_GE(double(result.correction.corrected), 0.97 * double(result.correction.movable));
+  const SurfaceDistance reference(p.extracted);
+  const FitQuality q = measure_fit_quality(hierarchy, 3, result.positions, p.extracted, reference, p.field, p.iso, false);
+  EXPECT_EQ(q.nonfinite_vertices, 0u);
+  EXPECT_LE(q.surface_rms, 0.2);
+  EXPECT_LE(q.coverage_p99, 2.0);
 }
 
 TEST(ShrinkWrap, ResultDoesNotDependOnThreadCount) {
@@ -134,6 +158,43 @@ TEST(ShrinkWrap, RelaxationAveragesWithTheNeighbourCentroid) {
   const std::uint32_t edge = 2;  // (2, 0): on the boundary, neighbours (1, 0) and (3, 0) along it
   EXPECT_EQ(mesh.role[edge], WrapRole::Boundary);
   EXPECT_NEAR(out[edge].y, in[edge].y, 1e-12);
+}
+
+TEST(FitQuality, FineFacesAreNumberedByParentFace) {
+  // The evenness figure assigns level-l face j to level-1 face j >> 2(l-1):
+  // each quad's first corner (a v vertex) must be a corner of that parent.
+  const SubdivisionHierarchy hierarchy(test::mixed_disk(), 3);
+  for (int level = 2; level <= 3; ++level) {
+    const PolygonMesh fine = hierarchy.control_mesh(level, std::vector<Vec3>(hierarchy.vertex_count(level)));
+    const PolygonMesh parent = hierarchy.control_mesh(level - 1, std::vector<Vec3>(hierarchy.vertex_count(level - 1)));
+    for (std::size_t f = 0; f < fine.face_count(); ++f) {
+      const std::uint32_t* parent_face = parent.face_begin(f / 4);
+      const std::uint32_t corner = fine.face_begin(f)[0];
+      ASSERT_TRUE(std::find(parent_face, parent_face + 4, corner) != parent_face + 4) << "level " << level << " face " << f;
+    }
+  }
+}
+
+TEST(FitQuality, ReportsDistancesTanglesAndEvenness) {
+  const Pipeline p = prepare(make_builtin_field("sphere", 40), 0.0, 60);
+  const SubdivisionHierarchy hierarchy(p.base, 2);
+  const SurfaceDistance reference(p.extracted);
+  // Perfect fit: the sphere's own subdivided control points pulled onto the isosurface.
+  const ShrinkWrapResult result = shrink_wrap(hierarchy, p.base.positions, p.distance, p.field);
+  const FitQuality good = measure_fit_quality(hierarchy, 2, result.positions, p.extracted, reference, p.field, 0.0, false);
+  EXPECT_EQ(good.tangled_faces, 0u);
+  EXPECT_LT(good.surface_max, 0.5);
+  // The same mesh with reversed orientation is entirely tangled.
+  const FitQuality flipped = measure_fit_quality(hierarchy, 2, result.positions, p.extracted, reference, p.field, 0.0, true);
+  EXPECT_EQ(flipped.tangled_faces, flipped.faces);
+  // Moving one vertex 3 cells outward shows in the maximum distances.
+  std::vector<Vec3> moved = result.positions;
+  const Vec3 centre{19.5, 19.5, 19.5};
+  moved[0] = moved[0] + 3.0 * normalized(moved[0] - centre);
+  const FitQuality bad = measure_fit_quality(hierarchy, 2, moved, p.extracted, reference, p.field, 0.0, false);
+  EXPECT_NEAR(bad.surface_max, 3.0, 0.3);
+  EXPECT_GT(bad.isosurface_max, 2.5);
+  EXPECT_GT(bad.area_ratio_max, good.area_ratio_max);
 }
 
 TEST(ShrinkWrap, RejectsBadInput) {

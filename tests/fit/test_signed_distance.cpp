@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 
 #include "isowave/core/error.h"
 #include "isowave/extract/builtin_fields.h"
@@ -61,6 +62,8 @@ void expect_accurate(const Volume& field, double iso, const std::string& name) {
   const SignedDistanceField sdf = compute_signed_distance(field, sdf_options);
   for (float v : sdf.distance.values) ASSERT_TRUE(std::isfinite(v));
   const Accuracy a = measure(field, iso, sdf, mesh);
+  std::printf("  %s: %zu nodes within 3 cells, mean |error| %.4f cell, max %.4f cell\n", name.c_str(), a.nodes, a.mean,
+              a.max);
   EXPECT_GT(a.nodes, 1000u);
   EXPECT_LE(a.mean, 0.05) << a.nodes << " nodes";
   EXPECT_LE(a.max, 0.5);

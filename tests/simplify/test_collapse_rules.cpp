@@ -7,6 +7,7 @@
 #include <cmath>
 #include <vector>
 
+#include "isowave/core/mesh_topology.h"
 #include "isowave/simplify/bucket_queue.h"
 #include "isowave/simplify/collapse_error.h"
 #include "isowave/simplify/collapse_mesh.h"
@@ -362,6 +363,68 @@ TEST(CollapseError, AccumulatedErrorIsTheMaximumOfTheFiveDestroyedEdges) {
     EXPECT_EQ(around, mesh.valence(v));
     EXPECT_GT(expected, 0.0);
   }
+}
+
+// --- the fan cache and the supplied squared norms are pure speed-ups ---
+
+void expect_identical(const Evaluation& a, const Evaluation& b, std::uint32_t e) {
+  EXPECT_EQ(a.legality, b.legality) << "edge " << e;
+  EXPECT_EQ(a.geometry_computed, b.geometry_computed) << "edge " << e;
+  // Bit-identical, not merely close: the queue order depends on them.
+  EXPECT_EQ(a.delta_error, b.delta_error) << "edge " << e;
+  EXPECT_EQ(a.position, b.position) << "edge " << e;
+}
+
+TEST(FanCache, SharedCacheGivesBitIdenticalEvaluationsAcrossCollapses) {
+  // One cache reused over many collapses (the simplify() loop's pattern, with
+  // boundary loops and the stencil of each collapse) against a fresh gather
+  // for every evaluation.
+  for (const double min_normal_dot : {0.0, 0.3, -0.5}) {
+    PolygonMesh sphere = test::icosphere(3);
+    test::jitter(sphere, 0.05, 3);
+    // Open some holes: drop every 37th face (keeps the fans manifold).
+    PolygonMesh holed;
+    holed.positions = sphere.positions;
+    for (std::size_t f = 0; f < sphere.face_count(); ++f)
+      if (f % 37 != 5) holed.add_face({sphere.face_begin(f)[0], sphere.face_begin(f)[1], sphere.face_begin(f)[2]});
+    ASSERT_NO_THROW(require_manifold(holed, "holed sphere"));
+    CollapseRules rules;
+    rules.min_normal_dot = min_normal_dot;
+    CollapseMesh mesh(holed, rules);
+    FanCache cache;
+    std::size_t legal = 0, collapses = 0;
+    std::vector<std::uint32_t> stencil;
+    for (std::uint32_t e = 0; e < mesh.edge_slots() && collapses < 150; e += 7) {
+      const Evaluation cached = mesh.evaluate(e, cache);
+      expect_identical(cached, mesh.evaluate(e), e);
+      if (cached.legality != Legality::Legal) continue;
+      std::uint32_t removed[3], opposite[2];
+      const std::uint32_t v = mesh.collapse(e, cached.position, removed, opposite);
+      ++collapses;
+      const std::uint32_t centres[3] = {v, opposite[0], opposite[1]};
+      stencil.clear();
+      mesh.gather_stencil(centres, 3, stencil);
+      for (std::uint32_t s : stencil) {
+        const Evaluation update = mesh.evaluate(s, cache);
+        expect_identical(update, mesh.evaluate(s), s);
+        if (update.legality == Legality::Legal) ++legal;
+      }
+    }
+    ASSERT_EQ(mesh.validate(), "");
+    EXPECT_GT(collapses, 100u);
+    EXPECT_GT(legal, 500u);
+  }
+}
+
+TEST(CollapseError, SuppliedSquaredNormsGiveTheSameTerms) {
+  const std::vector<Vec3> c = {{0.1, 0.2, 2}, {0.3, -0.1, 1.5}, {0, 0.4, 0.9}, {-0.2, 0.1, 1.1}};
+  std::vector<double> squared;
+  for (const Vec3& ci : c) squared.push_back(squared_norm(ci));
+  const CollapseErrorTerms plain = collapse_error_terms({0.3, 0.1, 0.2}, c.data(), c.size());
+  const CollapseErrorTerms supplied = collapse_error_terms({0.3, 0.1, 0.2}, c.data(), squared.data(), c.size());
+  EXPECT_EQ(plain.delta_e0, supplied.delta_e0);
+  EXPECT_EQ(plain.weight, supplied.weight);
+  EXPECT_EQ(plain.delta_e, supplied.delta_e);
 }
 
 }  // namespace

@@ -34,6 +34,8 @@ struct ConvertOptions {
   ShrinkWrapOptions shrink_wrap;
   // Percentages for the error summary (the base-mesh row is added).
   std::vector<double> summary_percents{100, 20, 10, 5};
+  // Keep the extracted triangle mesh in the result (for comparisons).
+  bool keep_extracted_mesh = false;
 };
 
 struct ConvertTimings {
@@ -51,6 +53,7 @@ struct ConvertSummaryRow {
 
 struct ConvertResult {
   std::string bytes;  // the .isw file
+  PolygonMesh extracted_mesh;  // with keep_extracted_mesh
   IsosurfaceReport extraction;
   simplify::SimplifyReport simplification;
   ShrinkWrapResult fit;  // positions: the fitted fine control points

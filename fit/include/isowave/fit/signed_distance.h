@@ -8,11 +8,12 @@
 //    sample is finite and >= iso, as in extraction). Each seed's closest
 //    surface point is estimated from the isovalue, its value and the field
 //    gradient: the nearer of (a) the first-order point x - (f - iso) g / |g|^2
-//    (g by central differences) refined by a bracketed root search of the
-//    trilinear field along the gradient line (within sqrt(3) cells and the
-//    box), and (b) the isovalue crossings on the node's own grid edges
-//    (where extraction puts its vertices). A seed with neither is left to
-//    its neighbours.
+//    (g by central differences) refined by Newton steps on the trilinear
+//    field along the gradient line (within sqrt(3) cells and the box; a
+//    bracketed search when Newton does not settle and (b) is empty), and
+//    (b) the isovalue crossings on the node's own grid edges (where
+//    extraction puts its vertices). A seed with neither is left to its
+//    neighbours.
 // 2. A first-in-first-out queue starts with all seeds in index order. The
 //    node at the front is removed and each of its 6 grid neighbours is
 //    updated when the removed node's closest point is closer to it than the

@@ -33,6 +33,10 @@ constexpr double kMinDeltaError = 1e-8;
 // hence the largest weight for a tangled ring of ratio 0). If every c_i is
 // zero the ratio min(c_i . n) / max|c_i| is taken as 0. O(k).
 CollapseErrorTerms collapse_error_terms(const Vec3& d, const Vec3* cross_products, std::size_t k);
+// The same with squared_norms[i] = squared_norm(cross_products[i]) supplied
+// by a caller that has them already (the collapse evaluation does).
+CollapseErrorTerms collapse_error_terms(const Vec3& d, const Vec3* cross_products, const double* squared_norms,
+                                        std::size_t k);
 
 // Priority bucket of a total error E (4.3): the priority log(1/E) is
 // discretised into bucket_count equal buckets over [log 1e-10, log 1e10];

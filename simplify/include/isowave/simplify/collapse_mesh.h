@@ -54,6 +54,49 @@ struct CollapseRules {
   double min_normal_dot = 0.0;
 };
 
+class CollapseMesh;
+
+// The fans of the vertices evaluate() has looked at: for each, its corners in
+// counter-clockwise order, its ring of neighbours with their positions, and the
+// cross product (w_t - v) x (w_{t+1} - v) of each current triangle (the "old"
+// normal of the face-flip test). Evaluating the ~30 edges of one stencil
+// would otherwise walk each fan (a chain of dependent loads) and recompute
+// those cross products about five times. Valid while the mesh's version()
+// does not change; evaluate() refills it as needed. Small (a few hundred
+// fans at most, then it starts over), not thread-safe: one per thread.
+class FanCache {
+ public:
+  FanCache();
+
+ private:
+  friend class CollapseMesh;
+  struct Fan {
+    std::uint32_t vertex;
+    std::uint32_t begin;    // first entry in corners_ and ring_
+    std::uint32_t corners;  // corner count; ring_ holds corners + 1 entries
+  };
+  struct Corner {
+    Vec3 old_cross;
+    double old_squared;
+    std::uint32_t triangle;
+  };
+  struct RingVertex {
+    Vec3 position;
+    std::uint32_t vertex;
+  };
+  static constexpr std::uint32_t kSlots = 512, kMaxFans = 256;
+  void clear(const CollapseMesh* mesh, std::uint64_t version);
+
+  const CollapseMesh* mesh_ = nullptr;
+  std::uint64_t version_ = 0;
+  std::uint32_t stamp_ = 0;
+  // Open-addressing table vertex -> fan, valid where slot_stamp_ == stamp_.
+  std::vector<std::uint32_t> slot_vertex_, slot_fan_, slot_stamp_;
+  std::vector<Fan> fans_;
+  std::vector<Corner> corners_;   // corner t of a fan: triangle (v, ring t, ring t+1)
+  std::vector<RingVertex> ring_;  // ring t = target of corner t; the last one closes the fan
+};
+
 struct Evaluation {
   Legality legality = Legality::DeadEdge;
   bool geometry_computed = false;  // delta_error and position are valid
@@ -68,35 +111,43 @@ class CollapseMesh {
   // Precondition: `mesh` is a triangle mesh that passed require_manifold().
   explicit CollapseMesh(const PolygonMesh& mesh, CollapseRules rules = {});
 
-  std::uint32_t vertex_slots() const { return static_cast<std::uint32_t>(positions_.size()); }
-  std::uint32_t edge_slots() const { return static_cast<std::uint32_t>(edge_halfedge_.size()); }
+  std::uint32_t vertex_slots() const { return static_cast<std::uint32_t>(vertices_.size()); }
+  std::uint32_t edge_slots() const { return static_cast<std::uint32_t>(edges_.size()); }
   std::size_t alive_vertices() const { return alive_vertices_; }
   std::size_t alive_triangles() const { return alive_triangles_; }
 
-  bool vertex_alive(std::uint32_t v) const { return vertex_halfedge_[v] != kNone; }
-  bool edge_alive(std::uint32_t e) const { return edge_halfedge_[e] != kNone; }
-  std::uint32_t edge_halfedge(std::uint32_t e) const { return edge_halfedge_[e]; }
-  std::uint32_t origin(std::uint32_t h) const { return corner_vertex_[h]; }
-  std::uint32_t target(std::uint32_t h) const { return corner_vertex_[next(h)]; }
-  std::uint32_t opposite(std::uint32_t h) const { return opposite_[h]; }
-  std::uint32_t edge_of(std::uint32_t h) const { return corner_edge_[h]; }
+  bool vertex_alive(std::uint32_t v) const { return vertices_[v].halfedge != kNone; }
+  bool edge_alive(std::uint32_t e) const { return edges_[e].halfedge != kNone; }
+  std::uint32_t edge_halfedge(std::uint32_t e) const { return edges_[e].halfedge; }
+  std::uint32_t origin(std::uint32_t h) const { return corners_[h].vertex; }
+  std::uint32_t target(std::uint32_t h) const { return corners_[next(h)].vertex; }
+  std::uint32_t opposite(std::uint32_t h) const { return corners_[h].opposite; }
+  std::uint32_t edge_of(std::uint32_t h) const { return corners_[h].edge; }
   static std::uint32_t next(std::uint32_t h) { return h % 3 == 2 ? h - 2 : h + 1; }
   static std::uint32_t prev(std::uint32_t h) { return h % 3 == 0 ? h + 2 : h - 1; }
-  const Vec3& position(std::uint32_t v) const { return positions_[v]; }
-  std::uint32_t valence(std::uint32_t v) const { return valence_[v]; }
-  bool is_sharp(std::uint32_t v) const { return (flags_[v] & kSharp) != 0; }
-  bool is_boundary(std::uint32_t v) const { return (flags_[v] & kBoundary) != 0; }
+  const Vec3& position(std::uint32_t v) const { return vertices_[v].position; }
+  std::uint32_t valence(std::uint32_t v) const { return vertices_[v].valence; }
+  bool is_sharp(std::uint32_t v) const { return (vertices_[v].flags & kSharp) != 0; }
+  bool is_boundary(std::uint32_t v) const { return (vertices_[v].flags & kBoundary) != 0; }
   // Finds the edge between two vertices, or kNone. O(valence).
   std::uint32_t find_edge(std::uint32_t a, std::uint32_t b) const;
 
-  float accumulated_error(std::uint32_t e) const { return accumulated_error_[e]; }
-  float latest_delta_error(std::uint32_t e) const { return latest_delta_[e]; }
-  void set_latest_delta_error(std::uint32_t e, double delta) { latest_delta_[e] = static_cast<float>(delta); }
+  float accumulated_error(std::uint32_t e) const { return edges_[e].accumulated_error; }
+  float latest_delta_error(std::uint32_t e) const { return edges_[e].latest_delta; }
+  void set_latest_delta_error(std::uint32_t e, double delta) { edges_[e].latest_delta = static_cast<float>(delta); }
   // E (4.3) as of the latest evaluation: E_acc + the latest delta E (0 if none).
-  double error(std::uint32_t e) const { return double(accumulated_error_[e]) + double(latest_delta_[e]); }
+  double error(std::uint32_t e) const {
+    return double(edges_[e].accumulated_error) + double(edges_[e].latest_delta);
+  }
+  // Counts collapses; a FanCache filled at another version is stale.
+  std::uint64_t version() const { return version_; }
 
   // Legality and, if the topological rules pass, the new position and delta
-  // E of collapsing edge e. Thread-safe (reads only). O(valence).
+  // E of collapsing edge e. Thread-safe (reads only; one cache per thread).
+  // O(valence). The cache makes evaluations that share endpoints (the Fig. 8
+  // stencil, or edges in id order) gather each vertex fan once; results are
+  // bit-identical with or without it.
+  Evaluation evaluate(std::uint32_t e, FanCache& cache) const;
   Evaluation evaluate(std::uint32_t e) const;
 
   // Collapses edge e (precondition: evaluate(e) was Legal and nothing changed
@@ -143,26 +194,41 @@ class CollapseMesh {
   // starting at the boundary half-edge for a boundary vertex.
   template <typename Visit>
   void for_each_corner(std::uint32_t v, Visit&& visit) const;
-  // Makes vertex_halfedge_[v] a live outgoing half-edge, the boundary one if v
+  // Index in cache.fans_ of v's fan, gathering it if needed.
+  std::uint32_t fan(std::uint32_t v, FanCache& cache) const;
+  // Makes vertices_[v].halfedge a live outgoing half-edge, the boundary one if v
   // is on the boundary, starting from the live outgoing half-edge `start`.
   void reset_vertex_halfedge(std::uint32_t v, std::uint32_t start);
 
   CollapseRules rules_;
   bool input_had_sharp_ = false;
-  std::vector<Vec3> positions_;
-  std::vector<std::uint32_t> vertex_halfedge_;  // kNone = deleted vertex
-  std::vector<std::uint32_t> valence_;
-  std::vector<std::uint8_t> flags_;
-  std::vector<std::uint32_t> boundary_loop_;     // per vertex, kNone if interior
-  std::vector<std::uint32_t> loop_size_;         // vertices per boundary loop
-  std::vector<std::uint32_t> corner_vertex_;     // kNone = deleted triangle
-  std::vector<std::uint32_t> opposite_;
-  std::vector<std::uint32_t> corner_edge_;
-  std::vector<std::uint32_t> edge_halfedge_;     // kNone = deleted edge
-  std::vector<float> accumulated_error_;
-  std::vector<float> latest_delta_;
-  std::vector<std::uint32_t> edge_stamp_;
+  // Records rather than one array per field: collapses happen at random
+  // places, so each element costs a cache miss per array it is spread over.
+  // The fields one evaluation reads of a vertex, corner or edge sit together.
+  struct VertexRecord {
+    Vec3 position;
+    std::uint32_t halfedge;       // kNone = deleted vertex
+    std::uint32_t valence;
+    std::uint32_t boundary_loop;  // kNone if interior
+    std::uint8_t flags;
+  };
+  std::vector<VertexRecord> vertices_;
+  std::vector<std::uint32_t> loop_size_;  // vertices per boundary loop
+  struct CornerRecord {
+    std::uint32_t vertex;    // kNone = deleted triangle
+    std::uint32_t opposite;  // kNone on the boundary
+    std::uint32_t edge;
+  };
+  std::vector<CornerRecord> corners_;  // triangle t: corners 3t..3t+2, 36 contiguous bytes
+  struct EdgeRecord {
+    std::uint32_t halfedge;  // kNone = deleted edge
+    float accumulated_error;
+    float latest_delta;
+    std::uint32_t stamp;  // gather_stencil()'s "already listed"
+  };
+  std::vector<EdgeRecord> edges_;
   std::uint32_t stamp_ = 0;
+  std::uint64_t version_ = 0;
   std::size_t alive_vertices_ = 0, alive_triangles_ = 0;
 };
 

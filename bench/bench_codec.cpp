@@ -1,0 +1,218 @@
+// The end-to-end figures of the conversion (issue: end to end), on the shared
+// miranda volume (iso 1.5, components under 50 vertices removed, L = 3) and
+// the engine CT (iso 100), or on a volume given on the command line:
+//  - whole convert time and peak memory (targets <= 30 s, <= 2 GB);
+//  - decode at 5% time (target <= 1 s);
+//  - the paper's Table 1 (RMSE in % of a cell at 20/10/5% and the base mesh,
+//    against the fitted control points) next to the paper's figures, with file
+//    bytes and bits per vertex at each percentage, and the RMS distance of the
+//    decoded vertices to the extracted isosurface (comparable with Draco, see
+//    bench/draco_rate_distortion.sh);
+//  - importance weighting against selection by raw magnitude at 5% and 10%;
+//  - coded bits per coefficient against zstd -19 of the same quantized
+//    integers and against raw 32-bit floats.
+//
+// usage: bench_codec [VOLUME --iso V [--min-component-vertices N] [--levels L] [--base-ratio R]]
+#include <sys/resource.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <string>
+#include <unistd.h>
+#include <vector>
+
+#include "isowave/codec/convert.h"
+#include "isowave/codec/importance.h"
+#include "isowave/codec/isw_format.h"
+#include "isowave/codec/statistics.h"
+#include "isowave/core/mesh_io.h"
+#include "isowave/extract/volume_io.h"
+#include "isowave/fit/surface_distance.h"
+#include "isowave/transform/wavelet_transform.h"
+
+using namespace isowave;
+using Clock = std::chrono::steady_clock;
+
+namespace {
+
+double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
+
+double peak_rss_mb() {
+  std::ifstream status("/proc/self/status");
+  std::string line;
+  while (std::getline(status, line))
+    if (line.rfind("VmHWM:", 0) == 0) return std::atof(line.c_str() + 6) / 1024.0;
+  return 0;
+}
+
+// Bytes of zstd -19 on a buffer, through the zstd command (0 if unavailable).
+std::size_t zstd_bytes(const std::string& data) {
+  char path[] = "/tmp/isowave_bench_zstd_XXXXXX";
+  const int fd = mkstemp(path);
+  if (fd < 0) return 0;
+  if (write(fd, data.data(), data.size()) != static_cast<ssize_t>(data.size())) {
+    close(fd);
+    unlink(path);
+    return 0;
+  }
+  close(fd);
+  const std::string command = std::string("zstd -19 -q -c ") + path + " 2>/dev/null | wc -c";
+  std::size_t bytes = 0;
+  if (FILE* pipe = popen(command.c_str(), "r")) {
+    if (std::fscanf(pipe, "%zu", &bytes) != 1) bytes = 0;
+    pclose(pipe);
+  }
+  unlink(path);
+  return bytes;
+}
+
+struct Dataset {
+  std::string name, path;
+  ConvertOptions options;
+  double paper[4];  // the paper's Table 1 at 20, 10, 5% and base (only for the mixing data)
+};
+
+void run(const Dataset& dataset) {
+  std::printf("\n== %s (%s, iso %g", dataset.name.c_str(), dataset.path.c_str(), dataset.options.iso);
+  if (dataset.options.min_component_vertices) std::printf(", --min-component-vertices %zu", dataset.options.min_component_vertices);
+  std::printf(")\n");
+  auto start = Clock::now();
+  const Volume volume = read_volume(dataset.path);
+  const double load = seconds_since(start);
+  ConvertOptions options = dataset.options;
+  options.keep_extracted_mesh = true;
+  options.summary_percents = {100, 20, 10, 5};
+  start = Clock::now();
+  const ConvertResult r = convert_volume(volume, dataset.path, options);
+  const double convert_seconds = seconds_since(start);
+  const double peak = peak_rss_mb();
+  const double cell = r.cell_size;
+  std::printf("isosurface %zu vertices; base mesh %zu vertices (%.2f%% of the fine mesh), %d levels, %zu fine control points\n",
+              r.extracted_vertices, r.base_vertices, 100.0 * r.base_vertices / r.fine_vertices, r.levels, r.fine_vertices);
+  std::printf("convert: %.1f s (load %.2f + extract %.2f, simplify %.2f, distance %.2f, fit %.2f, analysis %.2f, "
+              "encode %.2f, evaluate %.2f)   target <= 30 s\n",
+              load + convert_seconds, load, r.seconds.extract, r.seconds.simplify, r.seconds.distance, r.seconds.fit,
+              r.seconds.analysis, r.seconds.encode, r.seconds.evaluate);
+  std::printf("peak memory (whole process, volume included): %.0f MB   target <= 2048 MB\n", peak);
+  for (const std::string& warning : r.warnings) std::printf("warning: %s\n", warning.c_str());
+
+  // Decode at 5%: read, synthesize, build the mesh (median of 5).
+  std::vector<double> times;
+  for (int k = 0; k < 5; ++k) {
+    start = Clock::now();
+    IswDecodeOptions decode_options;
+    decode_options.max_percent = 5;
+    const IswDecoded d = decode_isw(r.bytes, "memory", decode_options);
+    const PolygonMesh mesh = d.hierarchy->control_mesh(d.levels, reconstruct(d, d.ranked.size()));
+    times.push_back(seconds_since(start));
+  }
+  std::sort(times.begin(), times.end());
+  std::printf("decode at 5%%: %.3f s (median of 5, from memory)   target <= 1 s\n", times[2]);
+
+  // Table 1 with sizes and the distance to the extracted surface.
+  const IswDecoded full = decode_isw(r.bytes, "memory");
+  const SurfaceDistance reference(r.extracted_mesh);
+  std::printf("\n%9s %12s %14s %14s %10s %10s %10s %18s\n", "percent", "coefficients", "RMSE [% cell]", "paper [% cell]",
+              "bytes", "bits/fine", "bits/iso", "surface RMS [% cell]");
+  int row_index = 0;
+  for (const ConvertSummaryRow& row : r.summary) {
+    const std::vector<Vec3> points = reconstruct(full, row.is_base ? 0 : coefficients_for_percent(*full.hierarchy, row.percent));
+    const std::vector<double> distances = reference.distances(points);
+    double sum = 0;
+    for (double d : distances) sum += d * d;
+    char paper[32] = "-";
+    if (row.percent < 99.99 && dataset.paper[0] > 0) std::snprintf(paper, sizeof paper, "%.1f", dataset.paper[row_index++]);
+    std::printf("%9.2f %12zu %14.2f %14s %10llu %10.3f %10.3f %18.2f%s\n", row.percent, row.kept, 100 * row.rms / cell,
+                paper, static_cast<unsigned long long>(row.bytes), 8.0 * row.bytes / r.fine_vertices,
+                8.0 * row.bytes / r.extracted_vertices, 100 * std::sqrt(sum / distances.size()) / cell,
+                row.is_base ? "  (base mesh)" : "");
+  }
+
+  // Importance weighting against raw magnitude.
+  const SubdivisionHierarchy& h = *full.hierarchy;
+  std::vector<Vec3> coefficients = r.fit.positions;
+  analyze(h, coefficients);
+  const std::vector<double> unit(full.class_weights.size(), 1.0);
+  for (double percent : {5.0, 10.0}) {
+    std::vector<Vec3> weighted = coefficients, raw = coefficients;
+    keep_most_important(h, weighted, full.class_weights, coefficients_for_percent(h, percent));
+    keep_most_important(h, raw, unit, coefficients_for_percent(h, percent));
+    synthesize(h, weighted);
+    synthesize(h, raw);
+    std::printf("%g%%: RMSE with importance weights %.2f%% of a cell, with raw magnitude %.2f%%\n", percent,
+                100 * point_errors(weighted, r.fit.positions, r.fine_vertices).rms / cell,
+                100 * point_errors(raw, r.fit.positions, r.fine_vertices).rms / cell);
+  }
+
+  // Bits per coefficient.
+  std::string integers;
+  for (int c = 1; c < coefficient_class_count(h); ++c) {
+    const double step = full.step / full.class_weights[static_cast<std::size_t>(c)];
+    const auto [first, last] = coefficient_class_range(h, c);
+    for (std::size_t i = first; i < last; ++i)
+      for (int axis = 0; axis < 3; ++axis) {
+        const auto q = static_cast<std::int32_t>(std::llround(full.coefficients[i][axis] / step));
+        integers.append(reinterpret_cast<const char*>(&q), 4);
+      }
+  }
+  std::uint64_t chunk_bytes = 0;
+  for (const IswSectionInfo& s : full.sections)
+    if (s.tag == "CHNK") chunk_bytes += s.bytes;
+  const double wavelets = static_cast<double>(h.fine_vertex_count() - h.vertex_count(0));
+  const std::size_t zstd = zstd_bytes(integers);
+  std::printf("wavelet coefficients (vectors): %.0f, %llu non-zero after quantization (step %.3g cell)\n", wavelets,
+              static_cast<unsigned long long>(full.coefficients_total), full.step / cell);
+  std::printf("bits per coefficient: isowave %.2f", 8.0 * chunk_bytes / wavelets);
+  if (zstd) std::printf(", zstd -19 of the same quantized int32 %.2f (%.2fx isowave)", 8.0 * zstd / wavelets, double(zstd) / chunk_bytes);
+  else std::printf(", zstd unavailable");
+  std::printf(", raw float32 96.00 (%.1fx isowave)\n", 96.0 * wavelets / (8.0 * chunk_bytes));
+  std::printf("whole file %zu bytes = %.2f bits per fine vertex, %.2f bits per isosurface vertex\n", r.bytes.size(),
+              8.0 * r.bytes.size() / r.fine_vertices, 8.0 * r.bytes.size() / r.extracted_vertices);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    std::vector<Dataset> datasets;
+    if (argc >= 2) {
+      Dataset d{argv[1], argv[1], {}, {0, 0, 0, 0}};
+      for (int i = 2; i + 1 < argc; i += 2) {
+        const std::string flag = argv[i];
+        if (flag == "--iso") d.options.iso = std::atof(argv[i + 1]);
+        else if (flag == "--min-component-vertices") d.options.min_component_vertices = std::strtoul(argv[i + 1], nullptr, 10);
+        else if (flag == "--levels") d.options.levels = std::atoi(argv[i + 1]);
+        else if (flag == "--base-ratio") d.options.base_ratio = std::atof(argv[i + 1]);
+        else throw std::runtime_error("unknown option " + flag);
+      }
+      datasets.push_back(d);
+    } else {
+      const std::string shared = ISOWAVE_SHARED_DATA_DIR;
+      if (!std::ifstream(shared + "/volumes/miranda_256x256x256.nrrd")) {
+        std::printf("shared data absent (%s): nothing to measure\n", shared.c_str());
+        return 0;
+      }
+      Dataset miranda{"miranda", shared + "/volumes/miranda_256x256x256.nrrd", {}, {7.6, 20.5, 41.7, 71.3}};
+      miranda.options.iso = 1.5;
+      miranda.options.min_component_vertices = 50;
+      miranda.options.levels = 3;
+      miranda.options.base_ratio = 0.017;
+      Dataset engine{"engine", shared + "/volumes/engine_256x256x128.nrrd", {}, {7.6, 20.5, 41.7, 71.3}};
+      engine.options.iso = 100;
+      engine.options.levels = 3;
+      engine.options.base_ratio = 0.017;
+      datasets = {miranda, engine};
+    }
+    std::printf("the paper's Table 1 (turbulent mixing, 1.19 M fine control points): RMSE 7.6%% of a cell at 20%%, "
+                "20.5%% at 10%%, 41.7%% at 5%%, 71.3%% at the base mesh (1.6%%)\n");
+    for (const Dataset& d : datasets) run(d);
+  } catch (const std::exception& error) {
+    std::fprintf(stderr, "bench_codec: %s\n", error.what());
+    return 1;
+  }
+  return 0;
+}

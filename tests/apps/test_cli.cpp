@@ -1,0 +1,188 @@
+// The isowave command end to end: convert -> decode/stats/info round trips,
+// batches with a bad input, interrupted runs, and bad input giving one line
+// and a non-zero exit code.
+#include <csignal>
+#include <filesystem>
+#include <fstream>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <gtest/gtest.h>
+
+#include "isowave/codec/importance.h"
+#include "isowave/codec/isw_format.h"
+#include "isowave/codec/statistics.h"
+#include "isowave/core/mesh_io.h"
+#include "isowave/transform/wavelet_transform.h"
+
+namespace isowave {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct RunResult {
+  int exit_code = -1;
+  std::string out, err;
+};
+
+// Runs isowave with arguments, capturing stdout and stderr.
+RunResult run(const std::vector<std::string>& arguments, const fs::path& directory) {
+  const fs::path out = directory / "stdout.txt", err = directory / "stderr.txt";
+  std::string command = std::string(ISOWAVE_BINARY);
+  for (const std::string& a : arguments) command += " '" + a + "'";
+  command += " >'" + out.string() + "' 2>'" + err.string() + "'";
+  const int status = std::system(command.c_str());
+  RunResult r;
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  std::ifstream o(out), e(err);
+  r.out.assign(std::istreambuf_iterator<char>(o), {});
+  r.err.assign(std::istreambuf_iterator<char>(e), {});
+  return r;
+}
+
+class CliTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("isowave_cli_" + std::to_string(getpid()) + "_" + ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  std::string path(const std::string& name) const { return (dir_ / name).string(); }
+  fs::path dir_;
+};
+
+// A small NRRD volume of a sphere (surface at 0), written by the test.
+void write_sphere_nrrd(const std::string& file, int n, double radius) {
+  std::ofstream out(file, std::ios::binary);
+  out << "NRRD0004\ntype: float\ndimension: 3\nsizes: " << n << " " << n << " " << n
+      << "\nencoding: raw\nendian: little\nspacings: 0.5 0.5 0.5\n\n";
+  for (int k = 0; k < n; ++k)
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i) {
+        const double x = i - n / 2.0 + 0.31, y = j - n / 2.0 + 0.17, z = k - n / 2.0 + 0.23;
+        const float v = static_cast<float>(radius - std::sqrt(x * x + y * y + z * z));
+        out.write(reinterpret_cast<const char*>(&v), 4);
+      }
+}
+
+TEST_F(CliTest, ConvertDecodeStatsAndInfoRoundTrip) {
+  const RunResult convert = run({"convert", "builtin:genus3:64", "-o", path("g.isw"), "--quiet"}, dir_);
+  ASSERT_EQ(convert.exit_code, 0) << convert.err;
+  ASSERT_TRUE(fs::exists(path("g.isw")));
+  const IswDecoded full = read_isw(path("g.isw"));
+  EXPECT_FALSE(full.truncated);
+  EXPECT_EQ(full.metadata.text("source"), "builtin:genus3:64");
+
+  // decode at 100% writes the finest control mesh; at 0% the subdivided base.
+  for (const char* percent : {"100", "20", "0"}) {
+    const std::string out = path(std::string("d") + percent + ".ply");
+    const RunResult decode = run({"decode", path("g.isw"), "--percent", percent, "-o", out, "--quiet"}, dir_);
+    ASSERT_EQ(decode.exit_code, 0) << decode.err;
+    const PolygonMesh mesh = read_mesh(out);
+    ASSERT_EQ(mesh.vertex_count(), full.hierarchy->fine_vertex_count());
+    IswDecodeOptions options;
+    options.max_percent = std::atof(percent);
+    const IswDecoded part = read_isw(path("g.isw"), options);
+    const std::vector<Vec3> expected = reconstruct(part, part.ranked.size());
+    // PLY stores float coordinates.
+    EXPECT_LE(point_errors(mesh.positions, expected, expected.size()).max, 1e-4) << percent;
+  }
+  // Limit surface and triangulation.
+  const RunResult limit =
+      run({"decode", path("g.isw"), "--coefficients", "1000", "--limit", "--triangulate", "-o", path("l.obj")}, dir_);
+  ASSERT_EQ(limit.exit_code, 0) << limit.err;
+  const PolygonMesh triangles = read_mesh(path("l.obj"));
+  for (std::size_t f = 0; f < triangles.face_count(); ++f) ASSERT_EQ(triangles.face_size(f), 3u);
+
+  const RunResult stats = run({"stats", path("g.isw"), "--json", "--plot", path("plot.svg")}, dir_);
+  ASSERT_EQ(stats.exit_code, 0) << stats.err;
+  EXPECT_NE(stats.out.find("\"rmse_percent_cell\""), std::string::npos);
+  EXPECT_NE(stats.out.find("\"base\": true"), std::string::npos);
+  std::ifstream svg(path("plot.svg"));
+  const std::string svg_text((std::istreambuf_iterator<char>(svg)), {});
+  EXPECT_NE(svg_text.find("RMSE [% of cell edge]"), std::string::npos);
+
+  const RunResult info = run({"info", path("g.isw")}, dir_);
+  ASSERT_EQ(info.exit_code, 0) << info.err;
+  EXPECT_NE(info.out.find("CHNK"), std::string::npos);
+}
+
+TEST_F(CliTest, BatchSkipsAFailingInputAndExitsNonZero) {
+  fs::create_directories(path("in"));
+  write_sphere_nrrd(path("in/a.nrrd"), 24, 6);
+  write_sphere_nrrd(path("in/b.nrrd"), 20, 5);
+  std::ofstream(path("in/broken.nrrd")) << "NRRD0004\ntype: float\nsizes: 10 10\n";  // unreadable
+  const RunResult r = run({"convert", path("in"), "--iso", "0", "--out-dir", path("out"), "--levels", "2"}, dir_);
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find("broken.nrrd"), std::string::npos) << r.err;
+  EXPECT_TRUE(fs::exists(path("out/a.isw")));
+  EXPECT_TRUE(fs::exists(path("out/b.isw")));
+  EXPECT_FALSE(fs::exists(path("out/broken.isw")));
+  EXPECT_NE(r.out.find("FAILED"), std::string::npos);
+
+  // Existing outputs are not overwritten without --force.
+  const auto before = fs::last_write_time(path("out/a.isw"));
+  const RunResult again = run({"convert", path("in/a.nrrd"), "--iso", "0", "--out-dir", path("out")}, dir_);
+  EXPECT_NE(again.exit_code, 0);
+  EXPECT_NE(again.err.find("already exists"), std::string::npos);
+  EXPECT_EQ(fs::last_write_time(path("out/a.isw")), before);
+  const RunResult forced = run({"convert", path("in/a.nrrd"), "--iso", "0", "--out-dir", path("out"), "--force", "--quiet"}, dir_);
+  EXPECT_EQ(forced.exit_code, 0) << forced.err;
+}
+
+TEST_F(CliTest, AnInterruptedRunLeavesNoPartialOutput) {
+  for (int signal_number : {SIGTERM, SIGINT, SIGKILL}) {
+    const pid_t child = fork();
+    ASSERT_GE(child, 0);
+    if (child == 0) {
+      const std::string out = path("killed.isw");
+      execl(ISOWAVE_BINARY, ISOWAVE_BINARY, "convert", "builtin:mixing:128", "-o", out.c_str(), "--quiet", "--force",
+            static_cast<char*>(nullptr));
+      _exit(127);
+    }
+    usleep(1500 * 1000);
+    kill(child, signal_number);
+    int status = 0;
+    waitpid(child, &status, 0);
+    // Whatever stage it was in: no .isw at all, or a complete one.
+    for (const auto& entry : fs::directory_iterator(dir_)) {
+      const std::string name = entry.path().filename().string();
+      if (entry.path().extension() == ".isw") {
+        EXPECT_NO_THROW(read_isw(entry.path().string())) << "partial " << name;
+      }
+      if (signal_number != SIGKILL) {
+        EXPECT_EQ(name.find(".tmp-"), std::string::npos) << "left " << name;
+      }
+    }
+    for (const auto& entry : fs::directory_iterator(dir_)) fs::remove(entry.path());
+  }
+}
+
+TEST_F(CliTest, BadInputGivesOneLineAndANonZeroExitCode) {
+  std::ofstream(path("garbage.isw")) << "not an isw file";
+  std::ofstream(path("garbage.ply")) << "ply\nformat ascii 1.0\nelement vertex 99\n";
+  const std::vector<std::vector<std::string>> cases = {
+      {"decode", path("garbage.isw"), "--percent", "5", "-o", path("x.ply")},
+      {"decode", path("missing.isw"), "--percent", "5", "-o", path("x.ply")},
+      {"decode", path("garbage.isw"), "-o", path("x.ply")},
+      {"stats", path("garbage.isw")},
+      {"info", path("garbage.isw")},
+      {"subdivide", path("garbage.ply"), "--levels", "2", "-o", path("x.ply")},
+      {"convert", "builtin:nonsense", "-o", path("x.isw")},
+      {"convert", "builtin:sphere:32", "--levels", "9", "-o", path("x.isw")},
+      {"nonsense"},
+  };
+  for (const auto& arguments : cases) {
+    const RunResult r = run(arguments, dir_);
+    EXPECT_NE(r.exit_code, 0) << arguments[0];
+    EXPECT_GT(r.exit_code, 0) << arguments[0] << " crashed";
+    EXPECT_LT(r.exit_code, 128) << arguments[0] << " crashed";
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << arguments[0] << ": " << r.err;
+  }
+  EXPECT_FALSE(fs::exists(path("x.ply")));
+  EXPECT_FALSE(fs::exists(path("x.isw")));
+}
+
+}  // namespace
+}  // namespace isowave
