@@ -15,7 +15,7 @@
 #include "isowave/fit/fit_quality.h"
 #include "isowave/fit/shrink_wrap.h"
 #include "isowave/fit/signed_distance.h"
-#include "isowave/fit/surface_distance.h"
+#include "isowave/core/surface_distance.h"
 #include "isowave/transform/hierarchy.h"
 #include "volume_options.h"
 

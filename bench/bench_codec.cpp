@@ -31,7 +31,7 @@
 #include "isowave/codec/statistics.h"
 #include "isowave/core/mesh_io.h"
 #include "isowave/extract/volume_io.h"
-#include "isowave/fit/surface_distance.h"
+#include "isowave/core/surface_distance.h"
 #include "isowave/transform/wavelet_transform.h"
 
 using namespace isowave;

@@ -9,7 +9,7 @@
 #include <cstdlib>
 
 #include "isowave/core/mesh_io.h"
-#include "isowave/fit/surface_distance.h"
+#include "isowave/core/surface_distance.h"
 
 int main(int argc, char** argv) {
   if (argc < 3) {

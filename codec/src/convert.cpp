@@ -113,6 +113,7 @@ ConvertResult convert_volume(const Volume& volume, const std::string& source, co
   distance_options.iso = options.iso;
   distance_options.flip = options.flip;
   distance_options.surface = &surface.mesh;
+  distance_options.band_cells = options.distance_band_cells;
   const SignedDistanceField distance = compute_signed_distance(field, distance_options, progress);
   result.seconds.distance = seconds_since(start);
 

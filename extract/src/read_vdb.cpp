@@ -228,7 +228,7 @@ std::uint64_t check_internal_topology(Cursor& c, int log2dim, const TreeFormat& 
 
 // The grid's tree (Tree::readTopology() + readBuffers()) for the standard 5-4-3 configuration.
 void check_tree(Cursor& c, std::size_t topology_end, std::size_t end, const TreeFormat& f) {
-  c.get<std::int32_t>("buffer count");
+  if (c.get<std::int32_t>("buffer count") != 1) c.fail("corrupt tree (buffer count)");
   c.take(f.value_size, "background");
   const auto tiles = c.get<std::uint32_t>("tile count");
   const auto children = c.get<std::uint32_t>("child count");
@@ -502,12 +502,18 @@ Volume read_vdb(const std::string& path, const VolumeReadOptions& options) {
   }
 
   Volume volume;
-  if (auto f = openvdb::gridPtrCast<openvdb::FloatGrid>(grid)) {
-    volume = densify(*f, path, chosen->name, ScalarType::Float32);
-  } else if (auto d = openvdb::gridPtrCast<openvdb::DoubleGrid>(grid)) {
-    volume = densify(*d, path, chosen->name, ScalarType::Float64);
-  } else {
-    w.fail("grid '" + chosen->name + "' is not a float or double grid");
+  try {
+    if (auto f = openvdb::gridPtrCast<openvdb::FloatGrid>(grid)) {
+      volume = densify(*f, path, chosen->name, ScalarType::Float32);
+    } else if (auto d = openvdb::gridPtrCast<openvdb::DoubleGrid>(grid)) {
+      volume = densify(*d, path, chosen->name, ScalarType::Float64);
+    } else {
+      w.fail("grid '" + chosen->name + "' is not a float or double grid");
+    }
+  } catch (const Error&) {
+    throw;
+  } catch (const std::exception& e) {  // e.g. a singular transform
+    w.fail("corrupt grid '" + chosen->name + "': " + e.what());
   }
   make_spacing_positive(volume);
   check_geometry(volume, path);

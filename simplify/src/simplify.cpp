@@ -15,7 +15,7 @@
 #include "isowave/simplify/bucket_queue.h"
 #include "isowave/simplify/collapse_error.h"
 #include "isowave/simplify/collapse_mesh.h"
-#include "surface_distance.h"
+#include "isowave/core/surface_distance.h"
 
 namespace isowave::simplify {
 
@@ -242,10 +242,14 @@ SimplifyResult simplify(const PolygonMesh& input, const SimplifyOptions& options
 
   if (options.compute_distance) {
     progress.begin_stage("simplify: distance");
-    const DistanceStatistics distance = point_to_surface_distance(input.positions, result.base);
+    const std::vector<double> distances = SurfaceDistance(result.base).distances(input.positions);
+    double sum = 0;
+    for (double d : distances) {
+      sum += d * d;
+      report.distance_max = std::max(report.distance_max, d);
+    }
     report.distance_computed = true;
-    report.distance_max = distance.max;
-    report.distance_rms = distance.rms;
+    report.distance_rms = distances.empty() ? 0.0 : std::sqrt(sum / static_cast<double>(distances.size()));
     progress.end_stage();
     report.seconds_distance = seconds_since(clock);
   }

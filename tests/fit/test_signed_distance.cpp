@@ -10,7 +10,7 @@
 #include "isowave/extract/isosurface.h"
 #include "isowave/extract/volume_io.h"
 #include "isowave/fit/signed_distance.h"
-#include "isowave/fit/surface_distance.h"
+#include "isowave/core/surface_distance.h"
 #include "support/test_meshes.h"
 
 namespace isowave {

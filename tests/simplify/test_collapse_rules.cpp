@@ -394,7 +394,7 @@ TEST(FanCache, SharedCacheGivesBitIdenticalEvaluationsAcrossCollapses) {
     FanCache cache;
     std::size_t legal = 0, collapses = 0;
     std::vector<std::uint32_t> stencil;
-    for (std::uint32_t e = 0; e < mesh.edge_slots() && collapses < 150; e += 7) {
+    for (std::uint32_t e = 0; e < mesh.edge_slots() && collapses < 150; e += 3) {
       const Evaluation cached = mesh.evaluate(e, cache);
       expect_identical(cached, mesh.evaluate(e), e);
       if (cached.legality != Legality::Legal) continue;
@@ -411,7 +411,7 @@ TEST(FanCache, SharedCacheGivesBitIdenticalEvaluationsAcrossCollapses) {
       }
     }
     ASSERT_EQ(mesh.validate(), "");
-    EXPECT_GT(collapses, 100u);
+    EXPECT_GT(collapses, 60u);
     EXPECT_GT(legal, 500u);
   }
 }

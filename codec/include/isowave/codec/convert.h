@@ -31,6 +31,8 @@ struct ConvertOptions {
   // Quantization step in cells (see IswEncodeOptions::step); the expected
   // RMSE it adds is about half of it.
   double step_cells = 0.01;
+  // Narrow band of the signed-distance field in cells (0: the whole grid).
+  double distance_band_cells = 3.0;
   ShrinkWrapOptions shrink_wrap;
   // Percentages for the error summary (the base-mesh row is added).
   std::vector<double> summary_percents{100, 20, 10, 5};

@@ -19,7 +19,7 @@
 
 #include "isowave/core/mesh.h"
 #include "isowave/core/volume.h"
-#include "isowave/fit/surface_distance.h"
+#include "isowave/core/surface_distance.h"
 #include "isowave/transform/hierarchy.h"
 
 namespace isowave {

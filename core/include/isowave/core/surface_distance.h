@@ -1,8 +1,8 @@
 #pragma once
 // Exact Euclidean distance from points to a polygon mesh (faces fanned into
-// triangles from their first vertex), through a CGAL AABB tree. Used by the
-// fit quality report and the tests as the reference the fitted surface and
-// the signed-distance field are measured against. CGAL stays inside the .cpp.
+// triangles from their first vertex), through a CGAL AABB tree: the base-mesh
+// report, the fit quality report, tests and benchmarks measure surfaces with
+// it. CGAL stays inside the .cpp.
 #include <memory>
 #include <vector>
 

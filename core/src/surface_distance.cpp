@@ -1,4 +1,4 @@
-#include "isowave/fit/surface_distance.h"
+#include "isowave/core/surface_distance.h"
 
 #include <CGAL/AABB_traits.h>
 #include <CGAL/AABB_tree.h>
