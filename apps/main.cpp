@@ -20,14 +20,14 @@ struct Subcommand {
 };
 
 const Subcommand kSubcommands[] = {
-    {"subdivide", isowave::commands::subdivide, "apply the wavelet subdivision operator S to a control mesh"},
-    {"extract", isowave::commands::extract, "extract a manifold isosurface from a volume"},
-    {"simplify", isowave::commands::simplify, "build a base mesh by edge collapse and edge removal (paper Sec. 4.1)"},
-    {"fit", isowave::commands::fit, "shrink-wrap a base mesh's subdivision hierarchy onto an isosurface"},
     {"convert", isowave::commands::convert, "convert volumes' isosurfaces into wavelet-compressed .isw files"},
     {"decode", isowave::commands::decode, "reconstruct a mesh from an .isw file at a chosen coefficient percentage"},
     {"stats", isowave::commands::stats, "rate-distortion table of an .isw file (the paper's Table 1)"},
     {"info", isowave::commands::info, "header, counts and bytes per section of an .isw file"},
+    {"extract", isowave::commands::extract, "extract a manifold isosurface from a volume"},
+    {"simplify", isowave::commands::simplify, "build a base mesh by edge collapse and edge removal (paper Sec. 4.1)"},
+    {"fit", isowave::commands::fit, "shrink-wrap a base mesh's subdivision hierarchy onto an isosurface"},
+    {"subdivide", isowave::commands::subdivide, "apply the wavelet subdivision operator S to a control mesh"},
 };
 
 // An interrupted run leaves no half-written output: uncommitted temporary
