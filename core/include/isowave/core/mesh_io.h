@@ -3,11 +3,13 @@
 // chosen by extension (case-insensitive).
 //
 // These readers are our own rather than OpenMesh's IO layer because OpenMesh's
-// importer silently drops faces it cannot add to a halfedge mesh (non-manifold
-// or mis-oriented ones) and reports problems only by printing; isowave must
-// load such files unchanged and say exactly what is wrong with them. Every
-// byte is treated as hostile: counts are checked against the file size before
-// anything is allocated.
+// importer (9.0) cannot represent a non-manifold file and silently changes it:
+// on three triangles sharing one edge it reports success but duplicates the
+// vertices of the face it cannot add (5 vertices become 8), printing only a
+// warning. isowave must load such files unchanged and say exactly what is
+// wrong with them (require_manifold). A test checks that both readers agree on
+// the real meshes. Every byte is treated as hostile: counts are checked
+// against the file size before anything is allocated.
 #include <string>
 
 #include "isowave/core/mesh.h"
