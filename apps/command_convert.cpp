@@ -121,9 +121,6 @@ int convert(const Args& raw) {
       {"levels", true, "subdivision levels 1..6, or 'auto' (default): the fine mesh as large as the isosurface", "L|auto"},
       {"base-vertices", true, "base mesh vertex target", "N"},
       {"base-ratio", true, "base mesh vertex target as a fraction of the isosurface's vertices (default 0.02)", "R"},
-      {"min-component-vertices", true, "drop isosurface components with fewer vertices", "N"},
-      {"smooth", true, "Gaussian pre-filter of the field, in voxels", "SIGMA"},
-      {"flip", false, "orient normals toward higher values", ""},
       {"step", true, "quantization step in cells (default 0.01: adds about 0.5% of a cell RMSE)", "CELLS"},
       {"output", true, "output file (one input and one isovalue)", "OUT.isw"},
       {"out-dir", true, "output directory: NAME.isw, or NAME_isoV.isw with several isovalues", "DIR"},
@@ -132,6 +129,7 @@ int convert(const Args& raw) {
       {"quiet", false, "print nothing but errors", ""},
       {"json", false, "print machine-readable results as one JSON object", ""},
   };
+  cli::add_extraction_options(options);
   cli::add_volume_options(options);
   const cli::CommandSpec spec{
       "convert",
@@ -162,10 +160,10 @@ int convert(const Args& raw) {
   convert_options.base_ratio = args.get_double("base-ratio", 0.02);
   if (!(convert_options.base_ratio > 0 && convert_options.base_ratio <= 1))
     throw Error(ErrorKind::InvalidArgument, "--base-ratio must be in (0, 1]");
-  convert_options.min_component_vertices = static_cast<std::size_t>(args.get_int("min-component-vertices", 0, 0, 1 << 30));
-  convert_options.smooth_sigma = args.get_double("smooth", 0);
-  if (convert_options.smooth_sigma < 0) throw Error(ErrorKind::InvalidArgument, "--smooth must be >= 0");
-  convert_options.flip = args.has("flip");
+  const IsosurfaceOptions extraction = cli::extraction_options(args);
+  convert_options.min_component_vertices = extraction.min_component_vertices;
+  convert_options.smooth_sigma = extraction.smooth_sigma;
+  convert_options.flip = extraction.flip;
   convert_options.step_cells = args.get_double("step", 0.01);
   if (!(convert_options.step_cells > 0)) throw Error(ErrorKind::InvalidArgument, "--step must be positive");
   const int jobs_count = args.get_int("jobs", 1, 1, 64);

@@ -117,9 +117,7 @@ int extract(const Args& raw) {
       1,
       1};
   cli::add_volume_options(spec.options);
-  spec.options.push_back({"min-component-vertices", true, "drop connected components with fewer vertices", "N"});
-  spec.options.push_back({"smooth", true, "Gaussian pre-filter of the field, standard deviation in voxels", "SIGMA"});
-  spec.options.push_back({"flip", false, "orient normals toward higher values", ""});
+  cli::add_extraction_options(spec.options);
   spec.options.push_back({"ascii", false, "write ASCII PLY instead of binary", ""});
   spec.options.push_back({"stats-json", true, "also write the report as JSON", "FILE"});
   spec.options.push_back({"quiet", false, "print nothing on success", ""});
@@ -135,13 +133,8 @@ int extract(const Args& raw) {
     throw Error(ErrorKind::InvalidArgument, output + ": extract writes .ply or .obj");
   if (!args.has("iso") && !cli::is_builtin_volume(input))
     throw Error(ErrorKind::InvalidArgument, "missing required option --iso (only builtin: inputs default to 0)");
-  IsosurfaceOptions options;
+  IsosurfaceOptions options = cli::extraction_options(args);
   options.iso = args.get_double("iso", 0.0);
-  options.flip = args.has("flip");
-  options.min_component_vertices = static_cast<std::size_t>(args.get_int("min-component-vertices", 0, 0, INT_MAX));
-  options.smooth_sigma = args.get_double("smooth", 0.0);
-  if (options.smooth_sigma < 0 || options.smooth_sigma > 100)
-    throw Error(ErrorKind::InvalidArgument, "--smooth must be in 0..100 voxels, got " + args.get("smooth"));
   const VolumeReadOptions read_options = cli::volume_read_options(args);
 
   const auto load_start = Clock::now();

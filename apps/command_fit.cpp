@@ -56,9 +56,7 @@ int fit(const Args& raw) {
       1,
       1};
   cli::add_volume_options(spec.options);
-  spec.options.push_back({"min-component-vertices", true, "drop connected components with fewer vertices", "N"});
-  spec.options.push_back({"smooth", true, "Gaussian pre-filter of the field, standard deviation in voxels", "SIGMA"});
-  spec.options.push_back({"flip", false, "normals toward higher values", ""});
+  cli::add_extraction_options(spec.options);
   spec.options.push_back({"base", true, "base mesh (.ply, .obj, .off), e.g. from the base-mesh stage", "BASE"});
   spec.options.push_back({"levels", true, "subdivision levels, 0..8", "L"});
   spec.options.push_back({"iterations", true, "relaxation + attraction rounds per coarse level (default 4)", "N"});
@@ -83,14 +81,10 @@ int fit(const Args& raw) {
   if (levels < 0) throw Error(ErrorKind::InvalidArgument, "missing required option --levels");
   if (!args.has("iso") && !cli::is_builtin_volume(input))
     throw Error(ErrorKind::InvalidArgument, "missing required option --iso (only builtin: inputs default to 0)");
-  IsosurfaceOptions extract_options;
+  IsosurfaceOptions extract_options = cli::extraction_options(args);
   extract_options.iso = args.get_double("iso", 0.0);
-  extract_options.flip = args.has("flip");
-  extract_options.min_component_vertices =
-      static_cast<std::size_t>(args.get_int("min-component-vertices", 0, 0, INT_MAX));
-  const double smooth = args.get_double("smooth", 0.0);
-  if (!(smooth >= 0 && smooth <= 100))
-    throw Error(ErrorKind::InvalidArgument, "--smooth must be in 0..100 voxels, got " + args.get("smooth"));
+  const double smooth = extract_options.smooth_sigma;
+  extract_options.smooth_sigma = 0;  // applied below to the field the fit also uses
   ShrinkWrapOptions wrap_options;
   wrap_options.iterations = args.get_int("iterations", wrap_options.iterations, 0, 100);
   wrap_options.final_level_iterations = args.get_int("final-iterations", wrap_options.final_level_iterations, 0, 100);

@@ -84,4 +84,20 @@ VolumeReadOptions volume_read_options(const Arguments& args) {
 
 bool is_builtin_volume(const std::string& input) { return input.rfind("builtin:", 0) == 0; }
 
+void add_extraction_options(std::vector<OptionSpec>& options) {
+  options.push_back({"min-component-vertices", true, "drop connected components with fewer vertices", "N"});
+  options.push_back({"smooth", true, "Gaussian pre-filter of the field, standard deviation in voxels", "SIGMA"});
+  options.push_back({"flip", false, "orient normals toward higher values", ""});
+}
+
+IsosurfaceOptions extraction_options(const Arguments& args) {
+  IsosurfaceOptions options;
+  options.flip = args.has("flip");
+  options.min_component_vertices = static_cast<std::size_t>(args.get_int("min-component-vertices", 0, 0, 1 << 30));
+  options.smooth_sigma = args.get_double("smooth", 0.0);
+  if (!(options.smooth_sigma >= 0 && options.smooth_sigma <= 100))
+    throw Error(ErrorKind::InvalidArgument, "--smooth must be in 0..100 voxels, got " + args.get("smooth"));
+  return options;
+}
+
 }  // namespace isowave::cli
