@@ -44,7 +44,7 @@ for qp in 8 10 11 12 14 16; do
   draco_decoder -i "$work/q.drc" -o "$work/q.ply" >/dev/null
   bytes=$(stat -c %s "$work/q.drc")
   read -r rms max < <("$distance" "$work/q.ply" "$work/surface.ply" "$cell")
-  printf "%-22s %12d %14.3f %16.3f %16.3f\n" "draco -qp $qp" "$bytes" "$(echo "8*$bytes/$vertices" | bc -l)" "$rms" "$max"
+  printf "%-22s %12d %14.3f %16.3f %16.3f\n" "draco -qp $qp" "$bytes" "$(awk -v b="$bytes" -v v="$vertices" 'BEGIN { print 8 * b / v }')" "$rms" "$max"
 done
 
 "$isowave" convert "$volume" --iso "$iso" "${options[@]}" -o "$work/surface.isw" --quiet --force
@@ -56,5 +56,5 @@ while IFS=, read -r coefficients percent rmse max bytes bits_fine bits_iso base;
   if [ "$base" = 1 ]; then decode_percent=0; label="isowave base mesh"; fi
   "$isowave" decode "$work/surface.isw" --percent "$decode_percent" -o "$work/d.ply" --quiet
   read -r rms max < <("$distance" "$work/d.ply" "$work/surface.ply" "$cell")
-  printf "%-22s %12d %14.3f %16.3f %16.3f\n" "$label" "$bytes" "$(echo "8*$bytes/$vertices" | bc -l)" "$rms" "$max"
+  printf "%-22s %12d %14.3f %16.3f %16.3f\n" "$label" "$bytes" "$(awk -v b="$bytes" -v v="$vertices" 'BEGIN { print 8 * b / v }')" "$rms" "$max"
 done < "$work/stats.csv"
