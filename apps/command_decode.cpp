@@ -71,10 +71,12 @@ int decode(const Args& raw) {
     const std::size_t fine = decoded.hierarchy->fine_vertex_count();
     const std::size_t base = decoded.hierarchy->vertex_count(0);
     // The paper's count: base vertices plus kept coefficients, zeros included.
-    const double percent = args.has("percent")
-                               ? options.max_percent
-                               : 100.0 * static_cast<double>(base + std::min<std::uint64_t>(options.max_coefficients, fine - base)) /
-                                     static_cast<double>(fine);
+    const double base_percent = 100.0 * static_cast<double>(base) / static_cast<double>(fine);
+    const double percent =
+        args.has("percent")
+            ? std::max(options.max_percent, base_percent)
+            : 100.0 * static_cast<double>(base + std::min<std::uint64_t>(options.max_coefficients, fine - base)) /
+                  static_cast<double>(fine);
     std::printf("%s: %.2f%% of %zu fine control points: base mesh + %zu non-zero coefficients (of %llu), level %d%s\n",
                 input.c_str(), percent, fine, decoded.ranked.size(),
                 static_cast<unsigned long long>(decoded.coefficients_total), level, args.has("limit") ? ", limit surface" : "");
