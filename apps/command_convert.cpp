@@ -264,7 +264,7 @@ int convert(const Args& raw) {
                   o.load_seconds, r.seconds.extract, r.seconds.simplify, r.seconds.distance, r.seconds.fit,
                   r.seconds.analysis, r.seconds.encode, r.seconds.evaluate);
       for (std::size_t k = 0; k < r.summary.size(); ++k) {
-        const ConvertSummaryRow& row = r.summary[k];
+        const RateDistortionRow& row = r.summary[k];
         std::printf("%s{\"percent\": %.4f, \"coefficients\": %zu, \"rmse_percent_cell\": %.6g, \"max_percent_cell\": "
                     "%.6g, \"bytes\": %llu, \"base\": %s}",
                     k ? ", " : "", row.percent, row.kept, rmse_percent(r, row.rms), rmse_percent(r, row.max),
@@ -285,7 +285,7 @@ int convert(const Args& raw) {
       const ConvertResult& r = o.result;
       std::string errors;
       char cell[64];
-      for (const ConvertSummaryRow& row : r.summary) {
+      for (const RateDistortionRow& row : r.summary) {
         std::snprintf(cell, sizeof cell, "%s%.4g%%: %.3g", errors.empty() ? "" : "  ", row.percent, rmse_percent(r, row.rms));
         errors += cell;
       }

@@ -119,8 +119,8 @@ void run(const Dataset& dataset) {
   std::printf("\n%9s %12s %14s %14s %10s %10s %10s %18s\n", "percent", "coefficients", "RMSE [% cell]", "paper [% cell]",
               "bytes", "bits/fine", "bits/iso", "surface RMS [% cell]");
   int row_index = 0;
-  for (const ConvertSummaryRow& row : r.summary) {
-    const std::vector<Vec3> points = reconstruct(full, row.is_base ? 0 : coefficients_for_percent(*full.hierarchy, row.percent));
+  for (const RateDistortionRow& row : r.summary) {
+    const std::vector<Vec3> points = reconstruct(full, row.wavelet_coefficients);
     const std::vector<double> distances = reference.distances(points);
     double sum = 0;
     for (double d : distances) sum += d * d;

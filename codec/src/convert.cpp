@@ -152,33 +152,21 @@ ConvertResult convert_volume(const Volume& volume, const std::string& source, co
                                " smooth_sigma=" + number(options.smooth_sigma) + " step_cells=" + number(options.step_cells);
   IswEncodeOptions encode_options;
   encode_options.step = options.step_cells * result.cell_size;
-  // The quantization error is measured after a first encode and recorded.
-  std::string bytes = encode_isw(base, levels, coefficients, metadata, encode_options);
-  const IswDecoded decoded = decode_isw(bytes, source);
-  const std::vector<Vec3> full = reconstruct(decoded, decoded.ranked.size());
-  const PointErrors quantization = point_errors(full, result.fit.positions, full.size());
-  metadata.values["quantization_rmse"] = number(quantization.rms);
-  result.bytes = encode_isw(base, levels, coefficients, metadata, encode_options);
+  encode_options.class_weights = wavelet_norms(hierarchy);
+  // Record the error quantization adds, measured on the coefficients exactly as stored.
+  std::vector<Vec3> quantized =
+      quantize_coefficients(hierarchy, coefficients, encode_options.step, encode_options.class_weights);
+  synthesize(hierarchy, quantized);
+  metadata.values["quantization_rmse"] = number(point_errors(quantized, result.fit.positions, quantized.size()).rms);
+  result.bytes = encode_isw(hierarchy, coefficients, metadata, encode_options);
   progress.end_stage();
   result.seconds.encode = seconds_since(start);
 
   // Error summary against the fitted control points, from the file's content.
   start = Clock::now();
   progress.begin_stage("evaluate");
-  const IswDecoded final_decode = decode_isw(result.bytes, source);
-  const std::vector<RateDistortionRow> rows = rate_distortion(final_decode, options.summary_percents);
-  for (const RateDistortionRow& row : rows) {
-    ConvertSummaryRow summary;
-    summary.percent = row.percent;
-    summary.kept = row.kept;
-    summary.bytes = row.bytes;
-    summary.is_base = row.is_base;
-    const PointErrors e = point_errors(reconstruct(final_decode, row.wavelet_coefficients), result.fit.positions,
-                                       result.fine_vertices);
-    summary.rms = e.rms;
-    summary.max = e.max;
-    result.summary.push_back(summary);
-  }
+  const IswDecoded decoded = decode_isw(result.bytes, source);
+  result.summary = rate_distortion(decoded, options.summary_percents, &result.fit.positions);
   progress.end_stage();
   result.seconds.evaluate = seconds_since(start);
   if (options.keep_extracted_mesh) result.extracted_mesh = std::move(surface.mesh);

@@ -161,13 +161,22 @@ double class_step(double step, const std::vector<double>& weights, int cls) {
   return step / weights[static_cast<std::size_t>(cls)];
 }
 
-// Importance order of the non-zero quantized coefficients: weight times the
+// Importance order of non-zero quantized coefficients: class weight times the
 // dequantized magnitude, ties by index. Encoder and decoder compute it from
 // the same integers and weights, so they agree exactly.
-void rank_by_importance(std::vector<std::uint32_t>& indices, const std::vector<double>& importance) {
-  std::sort(indices.begin(), indices.end(), [&](std::uint32_t a, std::uint32_t b) {
-    return importance[a] > importance[b] || (importance[a] == importance[b] && a < b);
+void rank_by_importance(const SubdivisionHierarchy& hierarchy, const std::vector<QuantizedVector>& q, double step,
+                        const std::vector<double>& weights, std::vector<std::uint32_t>& indices) {
+  std::vector<std::pair<double, std::uint32_t>> keyed(indices.size());
+  for (std::size_t k = 0; k < indices.size(); ++k) {
+    const std::uint32_t i = indices[k];
+    const auto c = static_cast<std::size_t>(coefficient_class(hierarchy, i));
+    const double s = step / weights[c];
+    keyed[k] = {weights[c] * norm(Vec3{q[i][0] * s, q[i][1] * s, q[i][2] * s}), i};
+  }
+  std::sort(keyed.begin(), keyed.end(), [](const auto& a, const auto& b) {
+    return a.first > b.first || (a.first == b.first && a.second < b.second);
   });
+  for (std::size_t k = 0; k < indices.size(); ++k) indices[k] = keyed[k].second;
 }
 
 std::string sanitize(const std::string& text) {
@@ -194,45 +203,83 @@ std::string IswMetadata::text(const std::string& key, const std::string& fallbac
 
 // ================================================================ encoder
 
-std::string encode_isw(const PolygonMesh& base, int levels, const std::vector<Vec3>& coefficients,
-                       const IswMetadata& metadata, const IswEncodeOptions& options) {
-  if (levels < 0 || levels > kMaxLevels)
-    throw Error(ErrorKind::InvalidArgument, "levels must be in 0.." + std::to_string(kMaxLevels));
-  if (!(options.step > 0) || !std::isfinite(options.step))
-    throw Error(ErrorKind::InvalidArgument, "the quantization step must be positive");
-  const SubdivisionHierarchy hierarchy(base, levels);
-  if (coefficients.size() != hierarchy.fine_vertex_count())
-    throw Error(ErrorKind::InvalidArgument, "expected " + std::to_string(hierarchy.fine_vertex_count()) +
-                                                " coefficients, got " + std::to_string(coefficients.size()));
-  const std::vector<double> weights = wavelet_norms(hierarchy);
-  const int classes = coefficient_class_count(hierarchy);
-  const std::size_t fine = hierarchy.fine_vertex_count();
-  const std::size_t base_count = hierarchy.vertex_count(0);
+namespace {
 
-  // Quantize every entry with its class's step.
-  std::vector<QuantizedVector> q(fine);
-  std::vector<double> importance(fine, 0.0);
-  for (int c = 0; c < classes; ++c) {
-    const double s = class_step(options.step, weights, c);
+// Every entry rounded, per component, to a multiple of its class's step; the
+// one quantization both the encoder and quantize_coefficients() use.
+std::vector<QuantizedVector> quantize(const SubdivisionHierarchy& hierarchy, const std::vector<Vec3>& coefficients,
+                                      double step, const std::vector<double>& weights) {
+  std::vector<QuantizedVector> q(hierarchy.fine_vertex_count());
+  for (int c = 0; c < coefficient_class_count(hierarchy); ++c) {
+    const double s = class_step(step, weights, c);
     const auto [first, last] = coefficient_class_range(hierarchy, c);
-    for (std::size_t i = first; i < last; ++i) {
-      double magnitude2 = 0;
+    for (std::size_t i = first; i < last; ++i)
       for (int axis = 0; axis < 3; ++axis) {
         const double scaled = coefficients[i][axis] / s;
         if (!std::isfinite(scaled) || std::abs(scaled) > 1e9)
           throw Error(ErrorKind::InvalidArgument, "coefficient " + std::to_string(i) +
                                                       " is not finite or too large for the quantization step");
         q[i][axis] = std::llround(scaled);
-        const double dequantized = static_cast<double>(q[i][axis]) * s;
-        magnitude2 += dequantized * dequantized;
       }
-      importance[i] = weights[static_cast<std::size_t>(c)] * std::sqrt(magnitude2);
-    }
   }
+  return q;
+}
+
+std::vector<Vec3> dequantize(const SubdivisionHierarchy& hierarchy, const std::vector<QuantizedVector>& q, double step,
+                             const std::vector<double>& weights) {
+  std::vector<Vec3> result(hierarchy.fine_vertex_count());
+  for (int c = 0; c < coefficient_class_count(hierarchy); ++c) {
+    const double s = class_step(step, weights, c);
+    const auto [first, last] = coefficient_class_range(hierarchy, c);
+    for (std::size_t i = first; i < last; ++i) result[i] = {q[i][0] * s, q[i][1] * s, q[i][2] * s};
+  }
+  return result;
+}
+
+void check_encode_arguments(const SubdivisionHierarchy& hierarchy, const std::vector<Vec3>& coefficients, double step,
+                            const std::vector<double>& weights) {
+  if (hierarchy.levels() > kMaxLevels)
+    throw Error(ErrorKind::InvalidArgument, "levels must be in 0.." + std::to_string(kMaxLevels));
+  if (!(step > 0) || !std::isfinite(step))
+    throw Error(ErrorKind::InvalidArgument, "the quantization step must be positive");
+  if (coefficients.size() != hierarchy.fine_vertex_count())
+    throw Error(ErrorKind::InvalidArgument, "expected " + std::to_string(hierarchy.fine_vertex_count()) +
+                                                " coefficients, got " + std::to_string(coefficients.size()));
+  if (weights.size() != static_cast<std::size_t>(coefficient_class_count(hierarchy)))
+    throw Error(ErrorKind::InvalidArgument, "expected one weight per coefficient class");
+}
+
+}  // namespace
+
+std::vector<Vec3> quantize_coefficients(const SubdivisionHierarchy& hierarchy, const std::vector<Vec3>& coefficients,
+                                        double step, const std::vector<double>& class_weights) {
+  check_encode_arguments(hierarchy, coefficients, step, class_weights);
+  return dequantize(hierarchy, quantize(hierarchy, coefficients, step, class_weights), step, class_weights);
+}
+
+std::string encode_isw(const PolygonMesh& base, int levels, const std::vector<Vec3>& coefficients,
+                       const IswMetadata& metadata, const IswEncodeOptions& options) {
+  if (levels < 0 || levels > kMaxLevels)
+    throw Error(ErrorKind::InvalidArgument, "levels must be in 0.." + std::to_string(kMaxLevels));
+  return encode_isw(SubdivisionHierarchy(base, levels), coefficients, metadata, options);
+}
+
+std::string encode_isw(const SubdivisionHierarchy& hierarchy, const std::vector<Vec3>& coefficients,
+                       const IswMetadata& metadata, const IswEncodeOptions& options) {
+  const PolygonMesh& base = hierarchy.base();
+  const int levels = hierarchy.levels();
+  const std::vector<double> weights = options.class_weights.empty() ? wavelet_norms(hierarchy) : options.class_weights;
+  check_encode_arguments(hierarchy, coefficients, options.step, weights);
+  const int classes = coefficient_class_count(hierarchy);
+  const std::size_t fine = hierarchy.fine_vertex_count();
+  const std::size_t base_count = hierarchy.vertex_count(0);
+
+  // Quantize every entry with its class's step; rank by importance.
+  const std::vector<QuantizedVector> q = quantize(hierarchy, coefficients, options.step, weights);
   std::vector<std::uint32_t> ranked;
   for (std::size_t i = base_count; i < fine; ++i)
     if (q[i][0] != 0 || q[i][1] != 0 || q[i][2] != 0) ranked.push_back(static_cast<std::uint32_t>(i));
-  rank_by_importance(ranked, importance);
+  rank_by_importance(hierarchy, q, options.step, weights, ranked);
 
   // Chunk boundaries (cumulative ranks).
   std::vector<std::uint64_t> chunk_ends;
@@ -602,17 +649,8 @@ IswDecoded decode_isw(const std::string& bytes, const std::string& name, const I
       if (found != end - begin) reader.fail("holds fewer coefficients than it declares");
       if (rc.overran()) reader.fail("is corrupt (coded data ends early)");
       // Rank the new coefficients as the encoder did.
-      std::vector<double> importance(hierarchy->fine_vertex_count(), 0.0);
-      for (std::size_t r = first_new; r < result.ranked.size(); ++r) {
-        const std::uint32_t i = result.ranked[r];
-        const int c = coefficient_class(*hierarchy, i);
-        const double s = class_step(result.step, result.class_weights, c);
-        double magnitude2 = 0;
-        for (int axis = 0; axis < 3; ++axis) magnitude2 += (q[i][axis] * s) * (q[i][axis] * s);
-        importance[i] = result.class_weights[static_cast<std::size_t>(c)] * std::sqrt(magnitude2);
-      }
       std::vector<std::uint32_t> fresh(result.ranked.begin() + static_cast<std::ptrdiff_t>(first_new), result.ranked.end());
-      rank_by_importance(fresh, importance);
+      rank_by_importance(*hierarchy, q, result.step, result.class_weights, fresh);
       std::copy(fresh.begin(), fresh.end(), result.ranked.begin() + static_cast<std::ptrdiff_t>(first_new));
       info.coefficients = end - begin;
       ++result.chunks_decoded;
@@ -639,14 +677,7 @@ IswDecoded decode_isw(const std::string& bytes, const std::string& name, const I
                                        std::to_string(result.coefficients_total) + " coefficients)"
                                  : "file ends before its END section (all coefficient chunks were decoded)";
 
-  // Dequantize.
-  result.coefficients.assign(hierarchy->fine_vertex_count(), Vec3{});
-  for (int c = 0; c < coefficient_class_count(*hierarchy); ++c) {
-    const double s = class_step(result.step, result.class_weights, c);
-    const auto [first, last] = coefficient_class_range(*hierarchy, c);
-    for (std::size_t i = first; i < last; ++i)
-      result.coefficients[i] = {q[i][0] * s, q[i][1] * s, q[i][2] * s};
-  }
+  result.coefficients = dequantize(*hierarchy, q, result.step, result.class_weights);
   if (result.ranked.size() > limit) {
     for (std::size_t r = static_cast<std::size_t>(limit); r < result.ranked.size(); ++r)
       result.coefficients[result.ranked[r]] = Vec3{};

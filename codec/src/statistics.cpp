@@ -17,12 +17,16 @@ std::vector<Vec3> reconstruct(const IswDecoded& decoded, std::size_t keep, int l
   return data;
 }
 
-std::vector<RateDistortionRow> rate_distortion(const IswDecoded& decoded, const std::vector<double>& percents) {
+std::vector<RateDistortionRow> rate_distortion(const IswDecoded& decoded, const std::vector<double>& percents,
+                                               const std::vector<Vec3>* reference) {
   if (!decoded.hierarchy || decoded.truncated || decoded.chunks_decoded != decoded.chunks_total)
     throw Error(ErrorKind::InvalidArgument, "statistics need a complete decode of the file");
   const SubdivisionHierarchy& h = *decoded.hierarchy;
-  const std::vector<Vec3> full = reconstruct(decoded, decoded.ranked.size());
   const std::size_t fine = h.fine_vertex_count();
+  if (reference && reference->size() < fine)
+    throw Error(ErrorKind::InvalidArgument, "the reference has fewer points than the fine level");
+  const std::vector<Vec3> full = reference ? std::vector<Vec3>{} : reconstruct(decoded, decoded.ranked.size());
+  const std::vector<Vec3>& compare_to = reference ? *reference : full;
 
   // Bytes before the first chunk, and after each chunk.
   std::uint64_t header_bytes = 16;
@@ -50,7 +54,7 @@ std::vector<RateDistortionRow> rate_distortion(const IswDecoded& decoded, const 
     row.wavelet_coefficients = std::min(wavelets, decoded.ranked.size());
     row.kept = h.vertex_count(0) + wavelets;
     row.percent = 100.0 * static_cast<double>(row.kept) / static_cast<double>(fine);
-    const PointErrors e = point_errors(reconstruct(decoded, wavelets), full, fine);
+    const PointErrors e = point_errors(reconstruct(decoded, wavelets), compare_to, fine);
     row.rms = e.rms;
     row.max = e.max;
     row.bytes = bytes_for(row.wavelet_coefficients);

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "isowave/codec/isw_format.h"
+#include "isowave/codec/statistics.h"
 #include "isowave/core/progress.h"
 #include "isowave/core/volume.h"
 #include "isowave/extract/isosurface.h"
@@ -45,13 +46,6 @@ struct ConvertTimings {
   double total() const { return extract + simplify + distance + fit + analysis + encode + evaluate; }
 };
 
-struct ConvertSummaryRow {
-  double percent = 0;  // of the fine control points (base row: the base's share)
-  std::size_t kept = 0;  // base vertices + wavelet coefficients
-  double rms = 0, max = 0;  // world units, against the fitted (unquantized) fine control points
-  std::uint64_t bytes = 0;  // file prefix a progressive reader needs
-  bool is_base = false;
-};
 
 struct ConvertResult {
   std::string bytes;  // the .isw file
@@ -63,7 +57,8 @@ struct ConvertResult {
   std::size_t extracted_vertices = 0, base_vertices = 0, fine_vertices = 0;
   double cell_size = 1;
   ConvertTimings seconds;
-  std::vector<ConvertSummaryRow> summary;
+  // Against the fitted (unquantized) fine control points; see rate_distortion().
+  std::vector<RateDistortionRow> summary;
   std::vector<std::string> warnings;  // e.g. a base mesh kept large by the topology
 };
 

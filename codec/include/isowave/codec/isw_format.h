@@ -49,6 +49,9 @@ struct IswEncodeOptions {
   // Chunk boundaries in percent of full resolution (fine control points),
   // ascending; the remaining coefficients form the last chunk.
   std::vector<double> chunk_percents{1, 2, 3.5, 5, 7.5, 10, 15, 20, 30, 50, 75};
+  // Per-class wavelet weights (wavelet_norms of the hierarchy); computed when
+  // empty. Callers that already have them skip 1 + 2 L syntheses.
+  std::vector<double> class_weights;
 };
 
 // Encodes a base mesh (topology and sharp flags; must pass require_manifold),
@@ -57,6 +60,15 @@ struct IswEncodeOptions {
 // input. Cost: O(fine vertices log fine vertices).
 std::string encode_isw(const PolygonMesh& base, int levels, const std::vector<Vec3>& coefficients,
                        const IswMetadata& metadata, const IswEncodeOptions& options = {});
+// The same for a hierarchy already built (its base mesh and levels are coded).
+std::string encode_isw(const SubdivisionHierarchy& hierarchy, const std::vector<Vec3>& coefficients,
+                       const IswMetadata& metadata, const IswEncodeOptions& options = {});
+
+// The coefficients exactly as encode_isw() stores them (quantized per class
+// with step / class_weights[c], then scaled back): lets a caller measure the
+// quantization error before encoding.
+std::vector<Vec3> quantize_coefficients(const SubdivisionHierarchy& hierarchy, const std::vector<Vec3>& coefficients,
+                                        double step, const std::vector<double>& class_weights);
 
 struct IswSectionInfo {
   std::string tag;

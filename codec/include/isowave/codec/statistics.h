@@ -21,8 +21,11 @@ struct RateDistortionRow {
 };
 
 // `decoded` must be a complete decode (all chunks). Rows for each percent (in
-// the given order), then the base mesh alone. Cost: one synthesis per row.
-std::vector<RateDistortionRow> rate_distortion(const IswDecoded& decoded, const std::vector<double>& percents);
+// the given order), then the base mesh alone. Errors are measured against
+// `reference` (fine control points, e.g. the unquantized fitted ones) if
+// given, else against the full-resolution decode. Cost: one synthesis per row.
+std::vector<RateDistortionRow> rate_distortion(const IswDecoded& decoded, const std::vector<double>& percents,
+                                               const std::vector<Vec3>* reference = nullptr);
 
 // Control points of the finest level from the `keep` most important decoded
 // coefficients (base always kept).
