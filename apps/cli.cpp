@@ -2,6 +2,7 @@
 
 #include <charconv>
 #include <cmath>
+#include <cstdio>
 
 #include "isowave/core/error.h"
 
@@ -84,6 +85,35 @@ double Arguments::get_double(const std::string& name, double fallback) const {
   if (result.ec != std::errc() || result.ptr != text.data() + text.size() || !std::isfinite(value))
     usage_error("--" + name + " expects a number, got '" + text + "'");
   return value;
+}
+
+std::vector<double> Arguments::get_double_list(const std::string& name, const std::string& fallback, double min,
+                                               double max) const {
+  const std::string text = get(name, fallback);
+  std::vector<double> values;
+  std::size_t start = 0;
+  while (start <= text.size()) {
+    std::size_t comma = text.find(',', start);
+    if (comma == std::string::npos) comma = text.size();
+    const std::string item = text.substr(start, comma - start);
+    double value = 0;
+    const auto result = std::from_chars(item.data(), item.data() + item.size(), value);
+    if (item.empty() || result.ec != std::errc() || result.ptr != item.data() + item.size() || !std::isfinite(value) ||
+        value < min || value > max) {
+      char range[64] = "";
+      if (std::isfinite(min) && std::isfinite(max)) std::snprintf(range, sizeof range, " in %g..%g", min, max);
+      usage_error("--" + name + " expects numbers" + range + " separated by commas, got '" + text + "'");
+    }
+    values.push_back(value);
+    start = comma + 1;
+  }
+  return values;
+}
+
+bool print_help_if_requested(const CommandSpec& spec, const Arguments& args) {
+  if (!args.help_requested()) return false;
+  std::fputs(usage(spec).c_str(), stdout);
+  return true;
 }
 
 std::string usage(const CommandSpec& spec) {

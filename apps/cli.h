@@ -36,6 +36,8 @@ class Arguments {
   std::string require(const std::string& name) const;
   int get_int(const std::string& name, int fallback, int min, int max) const;
   double get_double(const std::string& name, double fallback) const;
+  // Comma-separated numbers in [min, max], e.g. --iso 1.5,2 or --percents 20,10,5.
+  std::vector<double> get_double_list(const std::string& name, const std::string& fallback, double min, double max) const;
   const std::vector<std::string>& positional() const { return positional_; }
 
  private:
@@ -45,5 +47,9 @@ class Arguments {
 };
 
 std::string usage(const CommandSpec& spec);
+
+// Prints the usage on stdout if -h/--help was given; true if it did (the
+// command then returns 0).
+bool print_help_if_requested(const CommandSpec& spec, const Arguments& args);
 
 }  // namespace isowave::cli

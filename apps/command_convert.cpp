@@ -8,7 +8,6 @@
 #include <filesystem>
 #include <glob.h>
 #include <mutex>
-#include <sstream>
 #include <thread>
 
 #include "cli.h"
@@ -70,21 +69,6 @@ std::vector<std::string> expand_inputs(const std::vector<std::string>& arguments
   return inputs;
 }
 
-std::vector<double> parse_isovalues(const std::string& text) {
-  std::vector<double> values;
-  std::stringstream stream(text);
-  std::string item;
-  while (std::getline(stream, item, ',')) {
-    char* end = nullptr;
-    const double v = std::strtod(item.c_str(), &end);
-    if (item.empty() || *end != '\0' || !std::isfinite(v))
-      throw Error(ErrorKind::InvalidArgument, "--iso expects numbers separated by commas, got '" + text + "'");
-    values.push_back(v);
-  }
-  if (values.empty()) throw Error(ErrorKind::InvalidArgument, "--iso is empty");
-  return values;
-}
-
 std::string stem_of(const std::string& input) {
   if (input.rfind("builtin:", 0) == 0) {
     std::string name = input.substr(8);
@@ -143,10 +127,7 @@ int convert(const Args& raw) {
       1,
       -1};
   const cli::Arguments args(spec, raw);
-  if (args.help_requested()) {
-    std::fputs(cli::usage(spec).c_str(), stdout);
-    return 0;
-  }
+  if (cli::print_help_if_requested(spec, args)) return 0;
   if (args.has("output") == args.has("out-dir"))
     throw Error(ErrorKind::InvalidArgument, "give exactly one of -o OUT.isw and --out-dir DIR");
   if (args.has("base-vertices") && args.has("base-ratio"))
@@ -175,7 +156,7 @@ int convert(const Args& raw) {
   std::vector<Job> jobs;
   for (const std::string& input : inputs) {
     std::vector<double> isovalues;
-    if (args.has("iso")) isovalues = parse_isovalues(args.get("iso"));
+    if (args.has("iso")) isovalues = args.get_double_list("iso", "", -HUGE_VAL, HUGE_VAL);
     else if (cli::is_builtin_volume(input)) isovalues = {0.0};
     else throw Error(ErrorKind::InvalidArgument, "missing --iso (needed for " + input + ")");
     for (double iso : isovalues) {

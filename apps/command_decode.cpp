@@ -32,10 +32,7 @@ int decode(const Args& raw) {
       1,
       1};
   const cli::Arguments args(spec, raw);
-  if (args.help_requested()) {
-    std::fputs(cli::usage(spec).c_str(), stdout);
-    return 0;
-  }
+  if (cli::print_help_if_requested(spec, args)) return 0;
   if (args.has("percent") == args.has("coefficients"))
     throw Error(ErrorKind::InvalidArgument, "give exactly one of --percent and --coefficients");
   const std::string output = args.require("output");

@@ -123,10 +123,7 @@ int extract(const Args& raw) {
   spec.options.push_back({"quiet", false, "print nothing on success", ""});
   spec.options.push_back({"output", true, "output mesh (.ply or .obj)", "MESH"});
   const cli::Arguments args(spec, raw);
-  if (args.help_requested()) {
-    std::fputs(cli::usage(spec).c_str(), stdout);
-    return 0;
-  }
+  if (cli::print_help_if_requested(spec, args)) return 0;
   const std::string& input = args.positional()[0];
   const std::string output = args.require("output");
   if (mesh_format_from_path(output) == MeshFormat::Off)

@@ -69,10 +69,7 @@ int fit(const Args& raw) {
   spec.options.push_back({"quiet", false, "print nothing on success", ""});
   spec.options.push_back({"output", true, "output mesh (.ply, .obj or .off)", "FINE"});
   const cli::Arguments args(spec, raw);
-  if (args.help_requested()) {
-    std::fputs(cli::usage(spec).c_str(), stdout);
-    return 0;
-  }
+  if (cli::print_help_if_requested(spec, args)) return 0;
   const std::string& input = args.positional()[0];
   const std::string output = args.require("output");
   mesh_format_from_path(output);  // reject a bad extension before any work

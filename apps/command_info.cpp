@@ -14,10 +14,7 @@ int info(const Args& raw) {
                               1,
                               1};
   const cli::Arguments args(spec, raw);
-  if (args.help_requested()) {
-    std::fputs(cli::usage(spec).c_str(), stdout);
-    return 0;
-  }
+  if (cli::print_help_if_requested(spec, args)) return 0;
   const std::string& input = args.positional()[0];
   IswDecodeOptions options;
   options.headers_only = true;

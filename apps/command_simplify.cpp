@@ -33,10 +33,7 @@ int simplify(const Args& raw) {
       1,
       1};
   const cli::Arguments args(spec, raw);
-  if (args.help_requested()) {
-    std::fputs(cli::usage(spec).c_str(), stdout);
-    return 0;
-  }
+  if (cli::print_help_if_requested(spec, args)) return 0;
   if (args.has("target-vertices") == args.has("ratio"))
     throw Error(ErrorKind::InvalidArgument, "give exactly one of --target-vertices and --ratio");
   const std::string output = args.require("output");

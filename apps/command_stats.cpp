@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <sstream>
 
 #include "cli.h"
 #include "commands.h"
@@ -14,21 +13,6 @@
 
 namespace isowave::commands {
 namespace {
-
-std::vector<double> parse_percents(const std::string& text) {
-  std::vector<double> result;
-  std::stringstream stream(text);
-  std::string item;
-  while (std::getline(stream, item, ',')) {
-    char* end = nullptr;
-    const double value = std::strtod(item.c_str(), &end);
-    if (item.empty() || *end != '\0' || !(value >= 0 && value <= 100))
-      throw Error(ErrorKind::InvalidArgument, "--percents expects numbers in 0..100 separated by commas, got '" + text + "'");
-    result.push_back(value);
-  }
-  if (result.empty()) throw Error(ErrorKind::InvalidArgument, "--percents is empty");
-  return result;
-}
 
 std::string svg_plot(const std::vector<RateDistortionRow>& rows, double cell, const std::string& title) {
   std::vector<RateDistortionRow> sorted = rows;
@@ -108,12 +92,9 @@ int stats(const Args& raw) {
       1,
       1};
   const cli::Arguments args(spec, raw);
-  if (args.help_requested()) {
-    std::fputs(cli::usage(spec).c_str(), stdout);
-    return 0;
-  }
+  if (cli::print_help_if_requested(spec, args)) return 0;
   if (args.has("csv") && args.has("json")) throw Error(ErrorKind::InvalidArgument, "give at most one of --csv and --json");
-  const std::vector<double> percents = parse_percents(args.get("percents", "100,20,10,5"));
+  const std::vector<double> percents = args.get_double_list("percents", "100,20,10,5", 0, 100);
   const std::string& input = args.positional()[0];
   const IswDecoded decoded = read_isw(input);
   if (decoded.truncated) throw Error(ErrorKind::Format, input + ": " + decoded.truncation_note + "; stats need the whole file");

@@ -28,10 +28,7 @@ int subdivide(const Args& raw) {
       1,
       1};
   const cli::Arguments args(spec, raw);
-  if (args.help_requested()) {
-    std::fputs(cli::usage(spec).c_str(), stdout);
-    return 0;
-  }
+  if (cli::print_help_if_requested(spec, args)) return 0;
   const int levels = args.get_int("levels", -1, 0, 8);
   if (levels < 0) throw Error(ErrorKind::InvalidArgument, "missing required option --levels");
   const std::string output = args.require("output");
