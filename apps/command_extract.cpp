@@ -45,7 +45,7 @@ std::string histogram_text(const std::vector<std::size_t>& histogram) {
 }
 
 void print_statistics(const char* label, const SurfaceStatistics& s) {
-  std::printf("%s: %zu vertices, %zu triangles, area %.6g\n", label, s.vertices, s.triangles, s.area);
+  std::printf("%s: %zu vertices, %zu triangles, area %.6g\n", label, s.vertices, s.faces, s.area);
   std::printf("  %zu components (by vertex count %s), %zu boundary loops, Euler characteristic %lld, genus %lld\n",
               s.components, histogram_text(s.component_size_histogram).c_str(), s.boundary_loops,
               s.euler_characteristic, s.genus);
@@ -55,7 +55,7 @@ std::string statistics_json(const SurfaceStatistics& s) {
   std::string histogram;
   for (std::size_t count : s.component_size_histogram)
     histogram += (histogram.empty() ? "" : ", ") + std::to_string(count);
-  return "{\"vertices\": " + std::to_string(s.vertices) + ", \"triangles\": " + std::to_string(s.triangles) +
+  return "{\"vertices\": " + std::to_string(s.vertices) + ", \"triangles\": " + std::to_string(s.faces) +
          ", \"edges\": " + std::to_string(s.edges) + ", \"boundary_edges\": " + std::to_string(s.boundary_edges) +
          ", \"boundary_loops\": " + std::to_string(s.boundary_loops) +
          ", \"components\": " + std::to_string(s.components) +

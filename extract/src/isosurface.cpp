@@ -172,15 +172,7 @@ SurfaceStatistics surface_statistics(const PolygonMesh& mesh) {
     stats.vertices = mesh.vertex_count();
     return stats;
   }
-  const TopologySummary topology = summarize_topology(mesh);
-  stats.vertices = topology.vertices;
-  stats.triangles = topology.faces;
-  stats.edges = topology.edges;
-  stats.boundary_edges = topology.boundary_edges;
-  stats.boundary_loops = topology.boundary_loops;
-  stats.components = topology.components;
-  stats.euler_characteristic = topology.euler_characteristic;
-  stats.genus = topology.genus;
+  static_cast<TopologySummary&>(stats) = summarize_topology(mesh);
   stats.area = surface_area(mesh);
   stats.component_size_histogram = size_histogram(component_sizes(mesh).component_vertices);
   return stats;

@@ -317,8 +317,8 @@ TEST(Isosurface, ReportIsConsistent) {
   const Isosurface result = extract_isosurface(make_builtin_field("mixing", 64), {});
   const SurfaceStatistics& s = result.report.after;
   EXPECT_EQ(s.vertices, result.mesh.vertex_count());
-  EXPECT_EQ(s.triangles, result.mesh.face_count());
-  EXPECT_EQ(s.euler_characteristic, (long long)s.vertices - (long long)s.edges + (long long)s.triangles);
+  EXPECT_EQ(s.faces, result.mesh.face_count());
+  EXPECT_EQ(s.euler_characteristic, (long long)s.vertices - (long long)s.edges + (long long)s.faces);
   EXPECT_EQ(s.euler_characteristic, 2 * (long long)s.components - 2 * s.genus - (long long)s.boundary_loops);
   EXPECT_EQ(std::accumulate(s.component_size_histogram.begin(), s.component_size_histogram.end(), std::size_t{0}),
             s.components);

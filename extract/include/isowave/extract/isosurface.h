@@ -46,6 +46,7 @@
 #include <vector>
 
 #include "isowave/core/mesh.h"
+#include "isowave/core/mesh_topology.h"
 #include "isowave/core/progress.h"
 #include "isowave/core/volume.h"
 
@@ -70,16 +71,9 @@ struct IsosurfaceOptions {
   double smooth_sigma = 0.0;
 };
 
-struct SurfaceStatistics {
-  std::size_t vertices = 0;
-  std::size_t triangles = 0;
-  std::size_t edges = 0;
-  std::size_t boundary_edges = 0;
-  std::size_t boundary_loops = 0;
-  std::size_t components = 0;
-  long long euler_characteristic = 0;  // V - E + F
-  long long genus = 0;                 // summed over components (see TopologySummary)
-  double area = 0.0;                   // world units squared
+// Topology counts (faces = triangles) plus area and component sizes.
+struct SurfaceStatistics : TopologySummary {
+  double area = 0.0;  // world units squared
   // component_size_histogram[b] = components with 10^b <= vertices < 10^(b+1).
   std::vector<std::size_t> component_size_histogram;
 };
