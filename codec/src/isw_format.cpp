@@ -655,7 +655,8 @@ IswDecoded decode_isw(const std::string& bytes, const std::string& name, const I
       info.coefficients = end - begin;
       ++result.chunks_decoded;
       result.sections.push_back(info);
-      if (result.ranked.size() >= limit) break;
+      // Stop at the limit, but read END after the last chunk.
+      if (result.ranked.size() >= limit && result.chunks_decoded < result.chunks_total) break;
       continue;
     } else if (tag == "END ") {
       if (result.chunks_decoded != result.chunks_total) throw Error(ErrorKind::Format, where + ": chunks are missing");

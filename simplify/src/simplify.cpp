@@ -21,6 +21,9 @@ namespace isowave::simplify {
 
 namespace {
 
+// The flip round lowers the endpoints' valences by at most this many flips.
+constexpr int kMaxFlipsPerCollapse = 4;
+
 using Clock = std::chrono::steady_clock;
 
 double seconds_since(Clock::time_point& start) {
@@ -36,6 +39,8 @@ void check_options(const SimplifyOptions& options) {
     fail("edge-removal normal threshold must be in [-1, 1]");
   if (!(options.collapse_min_normal_dot >= -1 && options.collapse_min_normal_dot < 1))
     fail("collapse normal threshold must be in [-1, 1)");
+  if (!(options.flip_min_normal_dot >= -1 && options.flip_min_normal_dot <= 1))
+    fail("flip normal threshold must be in [-1, 1]");
   if (options.max_valence < 3 || options.max_valence > 32) fail("maximum valence must be in 3..32");
   if (options.bucket_count < 1) fail("bucket count must be at least 1");
 }
@@ -120,7 +125,20 @@ SimplifyResult simplify(const PolygonMesh& input, const SimplifyOptions& options
   CollapseRules rules;
   rules.max_valence = options.max_valence;
   rules.min_normal_dot = options.collapse_min_normal_dot;
+  rules.flip_min_normal_dot = options.flip_min_normal_dot;
   CollapseMesh mesh(input, rules);
+  if (options.valence_flips) {
+    // Input vertices above the valence limit (marching cubes makes a few of
+    // valence 9..12) would stay so: no collapse may touch them.
+    std::vector<std::uint32_t> flipped;
+    for (std::uint32_t v = 0; v < mesh.vertex_slots(); ++v) {
+      const int excess = mesh.vertex_alive(v) ? int(mesh.valence(v)) - options.max_valence : 0;
+      if (excess > 0) mesh.lower_valence(v, excess, nullptr, 0, flipped);
+    }
+    report.input_valence_flips = flipped.size();
+    if (options.validate_every_collapse && !mesh.validate().empty())
+      throw std::logic_error("simplify: invariant broken by the input flips: " + mesh.validate());
+  }
   for (const CollapseMesh::ComponentCounts& counts : mesh.components()) {
     ++report.input_components;
     report.input_boundary_loops += counts.boundary_loops;
@@ -155,59 +173,122 @@ SimplifyResult simplify(const PolygonMesh& input, const SimplifyOptions& options
   progress.end_stage();
   report.seconds_queue = seconds_since(clock);
 
-  // Collapse loop.
+  // Collapse loop. First the paper's rules alone; when they stall, a second
+  // round in which an edge blocked only by the valence of its new vertex may
+  // first flip edges at its endpoints (see SimplifyOptions::valence_flips).
   progress.begin_stage("simplify: collapse");
   const std::size_t target = report.target_vertices;
   const std::size_t planned = input.vertex_count() - target;
-  std::vector<std::uint32_t> stencil;
+  const int relaxed_valence = options.max_valence + kMaxFlipsPerCollapse;
+  std::vector<std::uint32_t> stencil, flipped, centres;
   stencil.reserve(128);
   FanCache cache;
-  while (collapse_wanted && mesh.alive_vertices() > target && !queue.empty()) {
-    const std::uint32_t e = queue.top();
-    const std::uint32_t queued_bucket = queue.bucket_of(e);
-    queue.remove(e);
-    const Evaluation evaluation = mesh.evaluate(e, cache);
-    if (evaluation.legality != Legality::Legal) {
-      ++report.rejected_at_pop[static_cast<int>(evaluation.legality)];
-      continue;
-    }
-    mesh.set_latest_delta_error(e, evaluation.delta_error);
-    const std::uint32_t bucket = priority_bucket(mesh.error(e), bucket_count);
-    if (bucket < queued_bucket) {  // its neighbourhood changed outside the stencil
-      queue.push(e, bucket);
-      continue;
-    }
-    std::uint32_t removed[3], opposite_vertices[2];
-    const std::uint32_t v = mesh.collapse(e, evaluation.position, removed, opposite_vertices);
-    ++report.collapses;
-    for (std::uint32_t dead : removed)
-      if (dead != CollapseMesh::kNone && queue.contains(dead)) queue.remove(dead);
-
-    // Fig. 8 stencil: new legality and priority.
-    const std::uint32_t centres[3] = {v, opposite_vertices[0], opposite_vertices[1]};
-    stencil.clear();
-    mesh.gather_stencil(centres, 3, stencil);
-    for (std::uint32_t s : stencil) {
-      const Evaluation update = mesh.evaluate(s, cache);
-      if (update.legality != Legality::Legal) {
-        if (queue.contains(s)) queue.remove(s);
+  bool with_flips = false;
+  // Evaluation of a stencil or popped edge: in the flip round, an edge blocked
+  // by the new vertex's valence gets the priority it would have after flips.
+  const auto evaluate_for_queue = [&](std::uint32_t e) {
+    Evaluation evaluation = mesh.evaluate(e, cache);
+    if (with_flips && evaluation.legality == Legality::NewVertexValence)
+      evaluation = mesh.evaluate(e, cache, relaxed_valence);
+    return evaluation;
+  };
+  const auto undo_flips = [&] {
+    for (std::size_t k = flipped.size(); k-- > 0;) mesh.flip(flipped[k]);
+    report.flips_undone += flipped.size();
+    flipped.clear();
+  };
+  const auto run_queue = [&] {
+    while (mesh.alive_vertices() > target && !queue.empty()) {
+      const std::uint32_t e = queue.top();
+      const std::uint32_t queued_bucket = queue.bucket_of(e);
+      queue.remove(e);
+      Evaluation evaluation = mesh.evaluate(e, cache);
+      flipped.clear();
+      if (with_flips && evaluation.legality == Legality::NewVertexValence) {
+        // Lower the endpoints' valences until the new vertex fits, then look again.
+        const auto [vi, vj, a, b] = mesh.edge_vertices(e);
+        const std::uint32_t keep[4] = {vi, vj, a, b};
+        int excess = int(mesh.valence(vi)) + int(mesh.valence(vj)) - (b == CollapseMesh::kNone ? 3 : 4) -
+                     options.max_valence;
+        for (std::uint32_t endpoint : {vi, vj})
+          if (excess > 0) excess -= mesh.lower_valence(endpoint, excess, keep, 4, flipped);
+        evaluation = excess > 0 ? Evaluation{} : mesh.evaluate(e, cache);
+        if (evaluation.legality != Legality::Legal) {
+          ++report.flip_attempts_failed;
+          undo_flips();
+          continue;
+        }
+      }
+      if (evaluation.legality != Legality::Legal) {
+        ++report.rejected_at_pop[static_cast<int>(evaluation.legality)];
         continue;
       }
-      mesh.set_latest_delta_error(s, update.delta_error);
-      const std::uint32_t new_bucket = priority_bucket(mesh.error(s), bucket_count);
-      if (queue.contains(s)) {
-        if (queue.bucket_of(s) == new_bucket) continue;  // keeps its place in the FIFO
-        queue.remove(s);
+      mesh.set_latest_delta_error(e, evaluation.delta_error);
+      const std::uint32_t bucket = priority_bucket(mesh.error(e), bucket_count);
+      if (bucket < queued_bucket) {  // its neighbourhood changed outside the stencil
+        undo_flips();
+        queue.push(e, bucket);
+        continue;
       }
-      queue.push(s, new_bucket);
+      // The flipped edges' quads join the stencil centres.
+      centres.clear();
+      for (std::uint32_t f : flipped)
+        for (std::uint32_t w : mesh.edge_vertices(f)) centres.push_back(w);
+      report.flips += flipped.size();
+      if (!flipped.empty()) ++report.collapses_after_flips;
+      std::uint32_t removed[3], opposite_vertices[2];
+      const std::uint32_t v = mesh.collapse(e, evaluation.position, removed, opposite_vertices);
+      ++report.collapses;
+      for (std::uint32_t dead : removed)
+        if (dead != CollapseMesh::kNone && queue.contains(dead)) queue.remove(dead);
+
+      // Fig. 8 stencil: new legality and priority.
+      centres.insert(centres.end(), {v, opposite_vertices[0], opposite_vertices[1]});
+      stencil.clear();
+      mesh.gather_stencil(centres.data(), static_cast<int>(centres.size()), stencil);
+      for (std::uint32_t s : stencil) {
+        const Evaluation update = evaluate_for_queue(s);
+        if (update.legality != Legality::Legal) {
+          if (queue.contains(s)) queue.remove(s);
+          continue;
+        }
+        mesh.set_latest_delta_error(s, update.delta_error);
+        const std::uint32_t new_bucket = priority_bucket(mesh.error(s), bucket_count);
+        if (queue.contains(s)) {
+          if (queue.bucket_of(s) == new_bucket) continue;  // keeps its place in the FIFO
+          queue.remove(s);
+        }
+        queue.push(s, new_bucket);
+      }
+      if (options.validate_every_collapse) {
+        const std::string problem = mesh.validate();
+        if (!problem.empty())
+          throw std::logic_error("simplify: invariant broken after collapse " + std::to_string(report.collapses) +
+                                 ": " + problem);
+      }
+      if ((report.collapses & 0xFFFF) == 0) progress.update(double(report.collapses) / double(planned));
     }
-    if (options.validate_every_collapse) {
-      const std::string problem = mesh.validate();
-      if (!problem.empty())
-        throw std::logic_error("simplify: invariant broken after collapse " + std::to_string(report.collapses) + ": " +
-                               problem);
+  };
+  if (collapse_wanted) {
+    run_queue();
+    report.vertices_after_paper_collapse = mesh.alive_vertices();
+    // Flip rounds: queue every edge the relaxed valence rule admits, in edge
+    // order; an edge whose flips failed waits for the next round unless a
+    // later collapse re-evaluates it. Stop when a round gains under 1%.
+    with_flips = options.valence_flips;
+    bool gained = true;
+    while (with_flips && gained && mesh.alive_vertices() > target) {
+      const std::size_t before = mesh.alive_vertices();
+      ++report.flip_rounds;
+      for (std::uint32_t e = 0; e < mesh.edge_slots(); ++e) {
+        const Evaluation evaluation = evaluate_for_queue(e);
+        if (evaluation.legality != Legality::Legal) continue;
+        mesh.set_latest_delta_error(e, evaluation.delta_error);
+        queue.push(e, priority_bucket(mesh.error(e), bucket_count));
+      }
+      run_queue();
+      gained = before - mesh.alive_vertices() > before / 100;
     }
-    if ((report.collapses & 0xFFFF) == 0) progress.update(double(report.collapses) / double(planned));
   }
   report.vertices_after_collapse = mesh.alive_vertices();
   report.triangles_after_collapse = mesh.alive_triangles();
@@ -267,8 +348,14 @@ std::string format_report(const SimplifyReport& r) {
       r.input_faces, r.input_components, r.input_genus, r.input_boundary_loops);
   add("target: %zu vertices (lower bound from topology and valence <= 8: %zu)\n", r.target_vertices,
       r.lower_bound_vertices);
+  if (r.input_valence_flips) add("input: %zu flips to bring valences down to the limit\n", r.input_valence_flips);
   add("collapse: %zu collapses -> %zu vertices, %zu triangles; %s\n", r.collapses, r.vertices_after_collapse,
       r.triangles_after_collapse, r.stop_reason.c_str());
+  if (r.collapses_after_flips)
+    add("valence flips: the paper's rules stalled at %zu vertices; %zu rounds, %zu more collapses after %zu flips "
+        "(%zu flips undone in %zu failed attempts)\n",
+        r.vertices_after_paper_collapse, r.flip_rounds, r.collapses_after_flips, r.flips, r.flips_undone,
+        r.flip_attempts_failed);
   std::string rejected;
   for (int k = 1; k < kLegalityCount; ++k)
     if (r.rejected_at_pop[k]) rejected += std::string(rejected.empty() ? "" : ", ") + to_string(Legality(k)) + " " +

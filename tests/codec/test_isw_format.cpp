@@ -62,6 +62,17 @@ TEST(IswFormat, FullDecodeMatchesTheFittedMeshWithinTheQuantizationTolerance) {
               full.size(), e.bytes.size(), 8.0 * e.bytes.size() / full.size(), errors.rms, e.step);
 }
 
+TEST(IswFormat, FileWhoseEveryCoefficientIsNonZeroDecodesCompletely) {
+  // A step far below the coefficients' size: none quantizes to zero, so the
+  // last chunk reaches the decode limit exactly and END must still be read.
+  const Encoded e = encode_sample(test::genus_slab(1), 2, 1e-5);
+  const IswDecoded d = decode_isw(e.bytes, "test.isw");
+  ASSERT_EQ(d.ranked.size(), d.coefficients_total);
+  ASSERT_EQ(d.coefficients_total, d.hierarchy->fine_vertex_count() - d.hierarchy->vertex_count(0));
+  EXPECT_FALSE(d.truncated) << d.truncation_note;
+  EXPECT_EQ(d.chunks_decoded, d.chunks_total);
+}
+
 TEST(IswFormat, BaseOnlyDecodeIsTheSubdividedBaseMesh) {
   const Encoded e = encode_sample(test::mixed_disk(), 3);
   IswDecodeOptions options;

@@ -1,5 +1,6 @@
 #include "simplify_test_meshes.h"
 
+#include <cmath>
 #include <map>
 #include <utility>
 
@@ -52,6 +53,24 @@ PolygonMesh tetrahedron() {
   mesh.add_face({0, 2, 3});
   mesh.add_face({0, 3, 1});
   mesh.add_face({1, 3, 2});
+  return mesh;
+}
+
+PolygonMesh wheel(std::uint32_t spokes) {
+  PolygonMesh mesh;
+  mesh.positions.push_back({0, 0, 0});
+  for (int radius = 1; radius <= 2; ++radius)
+    for (std::uint32_t k = 0; k < spokes; ++k) {
+      const double angle = 2 * M_PI * (k + 0.5 * (radius - 1)) / spokes;
+      mesh.positions.push_back({radius * std::cos(angle), radius * std::sin(angle), 0});
+    }
+  for (std::uint32_t k = 0; k < spokes; ++k) {
+    const std::uint32_t ring = 1 + k, ring_next = 1 + (k + 1) % spokes;
+    const std::uint32_t outer = 1 + spokes + k, outer_next = 1 + spokes + (k + 1) % spokes;
+    mesh.add_face({0, ring, ring_next});
+    mesh.add_face({ring, outer, ring_next});
+    mesh.add_face({ring_next, outer, outer_next});
+  }
   return mesh;
 }
 

@@ -11,5 +11,7 @@ PolygonMesh fan_triangulate(const PolygonMesh& mesh);
 // Octahedron subdivided `levels` times (each triangle into 4), on the unit sphere.
 PolygonMesh icosphere(int levels);
 PolygonMesh tetrahedron();
+// Planar disk: centre 0 of valence `spokes`, ring 1..spokes, and an outer ring.
+PolygonMesh wheel(std::uint32_t spokes);
 
 }  // namespace isowave::test

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <vector>
 
@@ -272,6 +273,97 @@ TEST(CollapseLegality, SharpEndpoints) {
   const Evaluation plain = mesh.evaluate(edge_between(mesh, 20, 21));
   ASSERT_EQ(plain.legality, Legality::Legal);
   EXPECT_EQ(plain.position, (grid.positions[20] + grid.positions[21]) * 0.5);
+}
+
+// --- edge flips (valence balancing beyond the paper) ---
+
+// Sorted vertex triples of the alive triangles: the triangulation as a set.
+std::vector<std::array<std::uint32_t, 3>> triangle_set(const CollapseMesh& mesh) {
+  const PolygonMesh polygons = mesh.to_polygon_mesh();
+  std::vector<std::array<std::uint32_t, 3>> set;
+  for (std::size_t f = 0; f < polygons.face_count(); ++f) {
+    const std::uint32_t* t = polygons.face_begin(f);
+    std::array<std::uint32_t, 3> sorted{t[0], t[1], t[2]};
+    std::sort(sorted.begin(), sorted.end());
+    set.push_back(sorted);
+  }
+  std::sort(set.begin(), set.end());
+  return set;
+}
+
+TEST(EdgeFlip, FlipMovesValenceAndFlippingAgainRestoresTheTriangulation) {
+  CollapseMesh mesh(fan_triangulate(test::quad_grid(8, 8)));
+  const auto before = triangle_set(mesh);
+  const std::uint32_t e = edge_between(mesh, 20, 30);  // a diagonal of the planar grid
+  const auto [vi, vj, a, b] = mesh.edge_vertices(e);
+  const std::uint32_t valences[4] = {mesh.valence(vi), mesh.valence(vj), mesh.valence(a), mesh.valence(b)};
+  ASSERT_TRUE(mesh.can_flip(e));
+  mesh.flip(e);
+  EXPECT_EQ(mesh.validate(), "");
+  EXPECT_EQ(mesh.find_edge(vi, vj), CollapseMesh::kNone);
+  EXPECT_EQ(mesh.find_edge(a, b), e);
+  EXPECT_EQ(mesh.valence(vi), valences[0] - 1);
+  EXPECT_EQ(mesh.valence(vj), valences[1] - 1);
+  EXPECT_EQ(mesh.valence(a), valences[2] + 1);
+  EXPECT_EQ(mesh.valence(b), valences[3] + 1);
+  EXPECT_NE(triangle_set(mesh), before);
+  ASSERT_TRUE(mesh.can_flip(e));
+  mesh.flip(e);
+  EXPECT_EQ(mesh.validate(), "");
+  EXPECT_EQ(triangle_set(mesh), before);
+}
+
+TEST(EdgeFlip, IllegalFlips) {
+  // Boundary edge; an edge whose flip would duplicate an existing edge.
+  const CollapseMesh grid(fan_triangulate(test::quad_grid(8, 8)));
+  EXPECT_FALSE(grid.can_flip(edge_between(grid, 0, 1)));
+  const CollapseMesh tetrahedron(test::tetrahedron());
+  for (std::uint32_t e = 0; e < tetrahedron.edge_slots(); ++e) EXPECT_FALSE(tetrahedron.can_flip(e));
+  // The octahedron's quads bend by 109 degrees: only a threshold of -1 lets them flip.
+  const CollapseMesh octahedron(test::icosphere(0));
+  CollapseRules any_bend;
+  any_bend.flip_min_normal_dot = -1;
+  const CollapseMesh loose(test::icosphere(0), any_bend);
+  for (std::uint32_t e = 0; e < octahedron.edge_slots(); ++e) {
+    EXPECT_FALSE(octahedron.can_flip(e));
+    EXPECT_TRUE(loose.can_flip(e));
+  }
+  // A sharp endpoint never loses its edge.
+  PolygonMesh sharp = fan_triangulate(test::quad_grid(8, 8));
+  sharp.sharp.assign(sharp.vertex_count(), 0);
+  sharp.sharp[20] = 1;
+  const CollapseMesh with_sharp(sharp);
+  EXPECT_FALSE(with_sharp.can_flip(edge_between(with_sharp, 20, 30)));
+  EXPECT_TRUE(grid.can_flip(edge_between(grid, 20, 30)));
+  // Valence: a and b may not rise above the limit.
+  CollapseRules six;
+  six.max_valence = 6;
+  const CollapseMesh capped(fan_triangulate(test::quad_grid(8, 8)), six);
+  const std::uint32_t e = edge_between(capped, 20, 30);
+  const auto quad = capped.edge_vertices(e);
+  EXPECT_EQ(capped.can_flip(e), capped.valence(quad[2]) < 6 && capped.valence(quad[3]) < 6);
+}
+
+TEST(EdgeFlip, LowerValenceFlipsSpokesAndUndoRestores) {
+  CollapseMesh mesh(test::wheel(12));
+  const auto before = triangle_set(mesh);
+  ASSERT_EQ(mesh.valence(0), 12u);
+  std::vector<std::uint32_t> flipped;
+  EXPECT_EQ(mesh.lower_valence(0, 4, nullptr, 0, flipped), 4);
+  EXPECT_EQ(flipped.size(), 4u);
+  EXPECT_EQ(mesh.valence(0), 8u);
+  EXPECT_EQ(mesh.validate(), "");
+  for (std::size_t k = flipped.size(); k-- > 0;) mesh.flip(flipped[k]);
+  EXPECT_EQ(mesh.validate(), "");
+  EXPECT_EQ(triangle_set(mesh), before);
+  // Kept neighbours keep their edge to the centre.
+  const std::uint32_t keep[2] = {1, 2};
+  flipped.clear();
+  mesh.lower_valence(0, 9, keep, 2, flipped);
+  EXPECT_NE(mesh.find_edge(0, 1), CollapseMesh::kNone);
+  EXPECT_NE(mesh.find_edge(0, 2), CollapseMesh::kNone);
+  EXPECT_GE(mesh.valence(0), 3u);
+  EXPECT_EQ(mesh.validate(), "");
 }
 
 // --- (4.1)-(4.3) through the mesh, and the error propagation ---

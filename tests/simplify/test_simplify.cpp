@@ -146,6 +146,41 @@ TEST(Simplify, AsFarAsPossibleStopsAtALegalMinimumAboveTheLowerBound) {
   }
 }
 
+TEST(Simplify, ValenceFlipsNeverStopEarlierThanThePaperRulesAlone) {
+  std::size_t gained = 0;
+  for (Generated& generated : generated_meshes()) {
+    test::jitter(generated.mesh, 0.01, 11);
+    SimplifyOptions paper;
+    paper.valence_flips = false;
+    paper.compute_distance = false;
+    SimplifyOptions flips = paper;
+    flips.valence_flips = true;
+    flips.validate_every_collapse = generated.mesh.vertex_count() < 400;
+    const SimplifyResult without = simplify(generated.mesh, paper);
+    const SimplifyResult with = simplify(generated.mesh, flips);
+    expect_valid_base_mesh(generated.mesh, with, generated.name);
+    EXPECT_EQ(without.report.flips + without.report.input_valence_flips, 0u);
+    EXPECT_LE(with.report.vertices_after_collapse, without.report.vertices_after_collapse) << generated.name;
+    if (with.report.vertices_after_collapse < without.report.vertices_after_collapse) ++gained;
+  }
+  EXPECT_GT(gained, 0u);
+}
+
+TEST(Simplify, InputVerticesAboveTheValenceLimitAreFlippedDown) {
+  // A planar disk whose centre has valence 12; target = input: no collapse.
+  const PolygonMesh disk = test::wheel(12);
+  SimplifyOptions options;
+  options.target_vertices = disk.vertex_count();
+  options.edge_removal = false;
+  const SimplifyResult flipped = simplify(disk, options);
+  expect_valid_base_mesh(disk, flipped, "disk");
+  EXPECT_EQ(flipped.report.input_valence_flips, 4u);
+  EXPECT_EQ(flipped.report.vertices_outside_valence_range, 0u);
+  options.valence_flips = false;
+  const SimplifyResult paper = simplify(disk, options);
+  EXPECT_EQ(paper.report.vertices_outside_valence_range, 1u);
+}
+
 TEST(Simplify, ClosedComponentsNeverGoBelowATetrahedron) {
   const SimplifyResult result = simplify(test::icosphere(2));
   EXPECT_GE(result.base.vertex_count(), 4u);

@@ -14,6 +14,8 @@
 #include <cstdint>
 #include <vector>
 
+#include "isowave/core/huge_page_vector.h"
+
 namespace isowave::simplify {
 
 class BucketQueue {
@@ -45,7 +47,7 @@ class BucketQueue {
   struct Links {
     std::uint32_t next, prev, bucket;
   };
-  std::vector<Links> links_;                         // per item
+  HugePageVector<Links> links_;                       // per item
   std::vector<std::uint32_t> head_, tail_;           // per bucket
   std::vector<std::uint64_t> occupied_;              // bit per bucket
   std::vector<std::uint64_t> occupied_words_;        // bit per word of occupied_

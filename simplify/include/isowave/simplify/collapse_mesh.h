@@ -24,10 +24,12 @@
 // Deleted triangles, edges and vertices are only marked; to_polygon_mesh()
 // compacts. Every operation is local: evaluate() and collapse() cost
 // O(valence of the two endpoints).
+#include <array>
 #include <cstdint>
 #include <string>
 #include <vector>
 
+#include "isowave/core/huge_page_vector.h"
 #include "isowave/core/mesh.h"
 #include "isowave/core/vec3.h"
 
@@ -51,6 +53,10 @@ constexpr int kLegalityCount = 10;
 
 struct CollapseRules {
   int max_valence = 8;  // paper: valences 3..8 (2..8 on the boundary)
+  // An edge flip (see CollapseMesh::flip) needs every pair of the old and new
+  // triangles' unit normals to have a dot product >= this, so that it only
+  // re-triangulates a nearly flat quad; in [-1, 1].
+  double flip_min_normal_dot = 0.7;
   // A collapse is rejected when a surviving triangle's unit normal n_new has
   // dot(n_old, n_new) < min_normal_dot (Hoppe's face-flip test); 0 allows
   // turns up to 90 degrees.
@@ -152,6 +158,30 @@ class CollapseMesh {
   // bit-identical with or without it.
   Evaluation evaluate(std::uint32_t e, FanCache& cache) const;
   Evaluation evaluate(std::uint32_t e) const;
+  // The same with the new vertex allowed a valence up to `max_valence`
+  // instead of the rules' (a and b are still checked): the priority an edge
+  // would have once flips have lowered its endpoints' valences.
+  Evaluation evaluate(std::uint32_t e, FanCache& cache, int max_valence) const;
+
+  // Edge flips (not in the paper; they let the collapse go on where the
+  // valence rule alone stalls it, see simplify.h). Edge e = (v_i, v_j) between
+  // triangles (v_i, v_j, a) and (v_j, v_i, b) becomes (a, b). Legal when e is
+  // interior, neither endpoint is sharp and a, b are not both sharp, (a, b) is
+  // not already an edge, v_i and v_j keep valence >= 3 (2 on the boundary),
+  // a and b stay <= max_valence, and the quad is nearly flat
+  // (rules.flip_min_normal_dot). O(valence).
+  bool can_flip(std::uint32_t e) const;
+  // Precondition: can_flip(e), or e was flipped last (flipping it again
+  // restores the old diagonal). Keeps the edge id and its E_acc.
+  void flip(std::uint32_t e);
+  // Flips edges at v (never one to a vertex in `keep`) until its valence
+  // has dropped by `count` or no legal flip is left; appends the flipped edge
+  // ids to `flipped` (undo: flip them again in reverse order) and returns how
+  // many it flipped. Prefers flips whose raised vertices have low valence.
+  int lower_valence(std::uint32_t v, int count, const std::uint32_t* keep, int keep_count,
+                    std::vector<std::uint32_t>& flipped);
+  // The four vertices around edge e: v_i, v_j, a, b (b = kNone on the boundary).
+  std::array<std::uint32_t, 4> edge_vertices(std::uint32_t e) const;
 
   // Collapses edge e (precondition: evaluate(e) was Legal and nothing changed
   // since) with the new vertex at `position`, and applies the paper's error
@@ -215,21 +245,21 @@ class CollapseMesh {
     std::uint32_t boundary_loop;  // kNone if interior
     std::uint8_t flags;
   };
-  std::vector<VertexRecord> vertices_;
+  HugePageVector<VertexRecord> vertices_;
   std::vector<std::uint32_t> loop_size_;  // vertices per boundary loop
   struct CornerRecord {
     std::uint32_t vertex;    // kNone = deleted triangle
     std::uint32_t opposite;  // kNone on the boundary
     std::uint32_t edge;
   };
-  std::vector<CornerRecord> corners_;  // triangle t: corners 3t..3t+2, 36 contiguous bytes
+  HugePageVector<CornerRecord> corners_;  // triangle t: corners 3t..3t+2, 36 contiguous bytes
   struct EdgeRecord {
     std::uint32_t halfedge;  // kNone = deleted edge
     float accumulated_error;
     float latest_delta;
     std::uint32_t stamp;  // gather_stencil()'s "already listed"
   };
-  std::vector<EdgeRecord> edges_;
+  HugePageVector<EdgeRecord> edges_;
   std::uint32_t stamp_ = 0;
   std::uint64_t version_ = 0;
   std::size_t alive_vertices_ = 0, alive_triangles_ = 0;

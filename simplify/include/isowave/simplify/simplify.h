@@ -66,6 +66,17 @@ struct SimplifyOptions {
   // Collapse face-flip test: every surviving ring triangle needs
   // dot(n_old, n_new) >= this; in [-1, 1).
   double collapse_min_normal_dot = 0.0;
+  // When the paper's rules stall (typically at mean valence ~7 on high-genus
+  // surfaces, where most edges would make a new vertex of valence > 8), go on:
+  // an edge blocked only by its new vertex's valence first flips up to 4 edges
+  // at its endpoints (each in a nearly flat quad, see flip_min_normal_dot),
+  // moving valence to neighbours that have room; the flips are undone when the
+  // collapse is still illegal. Input vertices above max_valence are flipped
+  // down first. Not in the paper; off reproduces it exactly.
+  bool valence_flips = true;
+  // A flip needs all pairs of the old and new triangles' unit normals to have
+  // a dot product >= this; in [-1, 1].
+  double flip_min_normal_dot = 0.7;
   int max_valence = 8;                  // 3..32
   std::uint32_t bucket_count = 100000;  // >= 1
   // Distance from every input vertex to the base mesh surface (CGAL AABB tree).
@@ -84,7 +95,10 @@ struct SimplifyReport {
   // max(4, 6g - 6) (valence <= 8 forces 2E <= 8V); with b boundary loops:
   // max(3b, ceil((6g - 6 + 3b) / 2)). Not necessarily reachable.
   std::size_t lower_bound_vertices = 0;
-  std::size_t collapses = 0;
+  std::size_t input_valence_flips = 0;  // flips lowering input vertices above max_valence
+  std::size_t collapses = 0;            // all of them, with and without flips
+  std::size_t vertices_after_paper_collapse = 0;  // where the paper's rules alone stalled
+  std::size_t flip_rounds = 0, collapses_after_flips = 0, flips = 0, flips_undone = 0, flip_attempts_failed = 0;
   std::size_t vertices_after_collapse = 0, triangles_after_collapse = 0;
   std::size_t edges_removed = 0;
   std::size_t output_vertices = 0, output_edges = 0, output_faces = 0;
