@@ -11,11 +11,17 @@
 //                  [--levels L] [--threads T] [--band K] [--no-quality]
 //                  [--distance-only] [--iterations N] [--final-iterations N]
 //                  [--reach R] [--min-reach C] [--weight W] [--no-correction]
-//                  [--correction-cells C] [--untangle N]
+//                  [--correction-cells C] [--untangle N] [--base FILE]
+//                  [--write-base FILE] [--no-peer] [--repeat N] [--final-quality]
 //   INPUT is a volume file or builtin:NAME[:N]; --base-vertices 0 simplifies
-//   as far as the rules allow (default).
+//   as far as the rules allow (default). --base reads the base mesh instead of
+//   simplifying (e.g. one saved with --write-base: repeatable runs while the
+//   simplifier changes); --no-peer skips OpenVDB and the whole-grid distance;
+//   --repeat times the distance field and the shrink-wrap N times (noisy
+//   shared machines); --final-quality measures level L only.
 #include <sys/resource.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -27,6 +33,7 @@
 #include <tbb/global_control.h>
 
 #include "isowave/core/error.h"
+#include "isowave/core/mesh_io.h"
 #include "isowave/extract/isosurface.h"
 #include "isowave/extract/volume_io.h"
 #include "isowave/fit/fit_quality.h"
@@ -43,6 +50,14 @@ namespace {
 
 double seconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+// User + system time of the process: less sensitive than wall time to other
+// work on a shared machine.
+double cpu_seconds() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return double(usage.ru_utime.tv_sec + usage.ru_stime.tv_sec) + 1e-6 * double(usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
 }
 
 double peak_megabytes() {
@@ -69,7 +84,9 @@ int main(int argc, char** argv) {
   std::size_t min_component = 50, base_vertices = 0;
   int levels = 3, threads = 2;
   double band = 3;
-  bool quality = true, sdf_only = false, correction = true;
+  bool quality = true, sdf_only = false, correction = true, peer = true, final_quality_only = false;
+  std::string base_input, base_output;
+  int repeat = 1;
   int untangle_rounds = ShrinkWrapOptions().untangle_rounds;
   double weight = 0.5, correction_cells = ShrinkWrapOptions().correction_max_cells;
   double reach = ShrinkWrapOptions().attraction.reach_edges, min_reach = ShrinkWrapOptions().attraction.min_reach_cells;
@@ -99,6 +116,11 @@ int main(int argc, char** argv) {
     else if (arg == "--min-reach") min_reach = std::stod(next());
     else if (arg == "--iterations") iterations = std::stoi(next());
     else if (arg == "--final-iterations") final_iterations = std::stoi(next());
+    else if (arg == "--base") base_input = next();
+    else if (arg == "--write-base") base_output = next();
+    else if (arg == "--no-peer") peer = false;
+    else if (arg == "--repeat") repeat = std::max(1, std::stoi(next()));
+    else if (arg == "--final-quality") final_quality_only = true;
     else positional.push_back(arg);
   }
   if (positional.size() == 2) {
@@ -132,18 +154,25 @@ int main(int argc, char** argv) {
     distance_options.iso = iso;
     distance_options.band_cells = band;
     distance_options.surface = &extracted;
-    start = std::chrono::steady_clock::now();
-    const SignedDistanceField distance = compute_signed_distance(volume, distance_options);
-    const double distance_seconds = seconds_since(start);
+    SignedDistanceField distance;
+    double distance_seconds = 0;
+    for (int run = 0; run < repeat; ++run) {
+      const double cpu_start = cpu_seconds();
+      start = std::chrono::steady_clock::now();
+      distance = compute_signed_distance(volume, distance_options);
+      const double seconds = seconds_since(start);
+      if (repeat > 1) std::printf("  distance run %d: %.3f s (cpu %.3f s)\n", run + 1, seconds, cpu_seconds() - cpu_start);
+      distance_seconds = run == 0 ? seconds : std::min(distance_seconds, seconds);
+    }
     const SignedDistanceStatistics& ds = distance.statistics;
-    std::printf("signed distance (band %g cells): %.3f s (seeding %.3f, propagation %.3f, finishing %.3f) | %zu nodes, "
+    std::printf("signed distance (band %g cells): %.3f s%s (seeding %.3f, propagation %.3f, finishing %.3f) | %zu nodes, "
                 "%zu seeds, %zu pops, %zu updates, peak queue %zu, working set %.1f MB; %zu nodes on dropped "
                 "components, %zu flipped\n",
-                band, distance_seconds, ds.seconds_seeding, ds.seconds_propagation, ds.seconds_finishing, ds.nodes,
+                band, distance_seconds, repeat > 1 ? " best" : "", ds.seconds_seeding, ds.seconds_propagation, ds.seconds_finishing, ds.nodes,
                 ds.seed_nodes, ds.queue_pops, ds.updates, ds.peak_queue, double(ds.peak_bytes) / 1e6,
                 ds.unseeded_crossing_nodes, ds.flipped_nodes);
     double whole_seconds = 0;
-    {
+    if (peer) {
       SignedDistanceOptions whole_options = distance_options;
       whole_options.band_cells = 0;
       start = std::chrono::steady_clock::now();
@@ -155,7 +184,7 @@ int main(int argc, char** argv) {
     }
 
     // Peer: OpenVDB's mesh-to-level-set on the extracted triangles.
-    {
+    if (peer) {
       openvdb::initialize();
       std::vector<openvdb::Vec3s> points;
       std::vector<openvdb::Vec3I> triangles;
@@ -178,18 +207,26 @@ int main(int argc, char** argv) {
 
     if (sdf_only) return 0;
     start = std::chrono::steady_clock::now();
-    simplify::SimplifyOptions simplify_options;
-    simplify_options.target_vertices = base_vertices;
-    simplify_options.compute_distance = false;
-    const simplify::SimplifyResult simplified = simplify::simplify(extracted, simplify_options);
-    std::printf("base mesh: %zu vertices, %zu faces in %.2f s\n", simplified.base.vertex_count(),
-                simplified.base.face_count(), seconds_since(start));
+    PolygonMesh base;
+    if (!base_input.empty()) {
+      base = read_mesh(base_input);
+      std::printf("base mesh: %zu vertices, %zu faces read from %s\n", base.vertex_count(), base.face_count(),
+                  base_input.c_str());
+    } else {
+      simplify::SimplifyOptions simplify_options;
+      simplify_options.target_vertices = base_vertices;
+      simplify_options.compute_distance = false;
+      base = simplify::simplify(extracted, simplify_options).base;
+      std::printf("base mesh: %zu vertices, %zu faces in %.2f s\n", base.vertex_count(), base.face_count(),
+                  seconds_since(start));
+    }
+    if (!base_output.empty()) write_mesh(base_output, base);
 
     start = std::chrono::steady_clock::now();
-    const SubdivisionHierarchy hierarchy(simplified.base, levels);
+    const SubdivisionHierarchy hierarchy(base, levels);
     const double hierarchy_seconds = seconds_since(start);
     ShrinkWrapOptions wrap_options;
-    wrap_options.keep_levels = quality;
+    wrap_options.keep_levels = quality && !final_quality_only;
     wrap_options.attraction.reach_edges = reach;
     wrap_options.attraction.min_reach_cells = min_reach;
     wrap_options.iterations = iterations;
@@ -198,15 +235,25 @@ int main(int argc, char** argv) {
     wrap_options.relaxation_weight = weight;
     wrap_options.correction_max_cells = correction_cells;
     wrap_options.untangle_rounds = untangle_rounds;
-    start = std::chrono::steady_clock::now();
-    const ShrinkWrapResult wrapped = shrink_wrap(hierarchy, simplified.base.positions, distance, volume, wrap_options);
-    const double wrap_seconds = seconds_since(start);
-    std::printf("hierarchy %.3f s; shrink-wrap to %zu fine vertices: %.3f s (target <= 5 s)\n", hierarchy_seconds,
-                hierarchy.fine_vertex_count(), wrap_seconds);
+    ShrinkWrapResult wrapped;
+    double wrap_seconds = 0;
+    for (int run = 0; run < repeat; ++run) {
+      const double cpu_start = cpu_seconds();
+      start = std::chrono::steady_clock::now();
+      wrapped = shrink_wrap(hierarchy, base.positions, distance, volume, wrap_options);
+      const double seconds = seconds_since(start);
+      std::printf("  shrink-wrap run %d: %.3f s (cpu %.3f s)\n", run + 1, seconds, cpu_seconds() - cpu_start);
+      wrap_seconds = run == 0 ? seconds : std::min(wrap_seconds, seconds);
+    }
+    std::printf("hierarchy %.3f s; shrink-wrap to %zu fine vertices: %.3f s%s (target <= 5 s)\n",
+                hierarchy_seconds, hierarchy.fine_vertex_count(), wrap_seconds, repeat > 1 ? " best" : "");
     for (const WrapLevelStatistics& s : wrapped.levels)
-      std::printf("  level %d: %zu vertices (%zu on the box, %zu fixed) %.3f s; last attraction: %zu attracted "
+      std::printf("  level %d: %zu vertices (%zu on the box, %zu fixed) %.3f s (setup %.3f, relax %.3f, attract %.3f, "
+                  "correct %.3f, untangle %.3f); last attraction: %zu attracted "
                   "(mean %.3f, max %.2f cell), %zu out of reach, %zu without direction\n",
-                  s.level, s.vertices, s.boundary_vertices, s.fixed_vertices, s.seconds, s.last_attraction.attracted,
+                  s.level, s.vertices, s.boundary_vertices, s.fixed_vertices, s.seconds, s.seconds_setup,
+                  s.seconds_relaxation, s.seconds_attraction, s.seconds_correction, s.seconds_untangle,
+                  s.last_attraction.attracted,
                   s.last_attraction.mean_move_cells, s.last_attraction.max_move_cells, s.last_attraction.out_of_reach,
                   s.last_attraction.no_direction);
     std::printf("  correction: %zu corrected (mean %.4f, max %.3f cell), %zu failed\n", wrapped.correction.corrected,
@@ -218,7 +265,7 @@ int main(int argc, char** argv) {
     if (quality) {
       start = std::chrono::steady_clock::now();
       const SurfaceDistance reference(extracted);
-      for (int level = 0; level <= levels; ++level)
+      for (int level = final_quality_only ? levels : 0; level <= levels; ++level)
         print_quality(measure_fit_quality(hierarchy, level,
                                           level < levels ? wrapped.level_positions[std::size_t(level)] : wrapped.positions,
                                           extracted, reference, volume, iso, false));

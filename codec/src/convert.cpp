@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <memory>
 #include <sstream>
 
 #include "isowave/codec/importance.h"
@@ -114,14 +115,18 @@ ConvertResult convert_volume(const Volume& volume, const std::string& source, co
   distance_options.flip = options.flip;
   distance_options.surface = &surface.mesh;
   distance_options.band_cells = options.distance_band_cells;
-  const SignedDistanceField distance = compute_signed_distance(field, distance_options, progress);
+  auto distance = std::make_unique<SignedDistanceField>(compute_signed_distance(field, distance_options, progress));
   result.seconds.distance = seconds_since(start);
 
   start = Clock::now();
-  const SubdivisionHierarchy hierarchy(base, levels);
+  const auto shared_hierarchy = std::make_shared<const SubdivisionHierarchy>(base, levels);
+  const SubdivisionHierarchy& hierarchy = *shared_hierarchy;
   result.fine_vertices = hierarchy.fine_vertex_count();
-  result.fit = shrink_wrap(hierarchy, base.positions, distance, field, options.shrink_wrap, progress);
+  result.fit = shrink_wrap(hierarchy, base.positions, *distance, field, options.shrink_wrap, progress);
   result.seconds.fit = seconds_since(start);
+  // What the coding stages no longer need goes before their peak.
+  distance.reset();
+  if (!options.keep_extracted_mesh) surface.mesh = PolygonMesh{};
 
   // Analysis and coding.
   start = Clock::now();
@@ -154,18 +159,23 @@ ConvertResult convert_volume(const Volume& volume, const std::string& source, co
   encode_options.step = options.step_cells * result.cell_size;
   encode_options.class_weights = wavelet_norms(hierarchy);
   // Record the error quantization adds, measured on the coefficients exactly as stored.
-  std::vector<Vec3> quantized =
-      quantize_coefficients(hierarchy, coefficients, encode_options.step, encode_options.class_weights);
-  synthesize(hierarchy, quantized);
-  metadata.values["quantization_rmse"] = number(point_errors(quantized, result.fit.positions, quantized.size()).rms);
+  {
+    std::vector<Vec3> quantized =
+        quantize_coefficients(hierarchy, coefficients, encode_options.step, encode_options.class_weights);
+    synthesize(hierarchy, quantized);
+    metadata.values["quantization_rmse"] = number(point_errors(quantized, result.fit.positions, quantized.size()).rms);
+  }
   result.bytes = encode_isw(hierarchy, coefficients, metadata, encode_options);
+  std::vector<Vec3>().swap(coefficients);
   progress.end_stage();
   result.seconds.encode = seconds_since(start);
 
   // Error summary against the fitted control points, from the file's content.
   start = Clock::now();
   progress.begin_stage("evaluate");
-  const IswDecoded decoded = decode_isw(result.bytes, source);
+  IswDecodeOptions decode_options;
+  decode_options.hierarchy = shared_hierarchy;
+  const IswDecoded decoded = decode_isw(result.bytes, source, decode_options);
   result.summary = rate_distortion(decoded, options.summary_percents, &result.fit.positions);
   progress.end_stage();
   result.seconds.evaluate = seconds_since(start);

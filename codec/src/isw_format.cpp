@@ -8,6 +8,7 @@
 #include <memory>
 #include <numeric>
 
+#include <tbb/parallel_sort.h>
 #include <zlib.h>
 
 #include "isowave/codec/importance.h"
@@ -173,7 +174,8 @@ void rank_by_importance(const SubdivisionHierarchy& hierarchy, const std::vector
     const double s = step / weights[c];
     keyed[k] = {weights[c] * norm(Vec3{q[i][0] * s, q[i][1] * s, q[i][2] * s}), i};
   }
-  std::sort(keyed.begin(), keyed.end(), [](const auto& a, const auto& b) {
+  // A strict total order (ties by index): the parallel sort is deterministic.
+  tbb::parallel_sort(keyed.begin(), keyed.end(), [](const auto& a, const auto& b) {
     return a.first > b.first || (a.first == b.first && a.second < b.second);
   });
   for (std::size_t k = 0; k < indices.size(); ++k) indices[k] = keyed[k].second;
@@ -416,7 +418,7 @@ IswDecoded decode_isw(const std::string& bytes, const std::string& name, const I
   if (reserved != 0) throw Error(ErrorKind::Format, name + ": corrupt file header (reserved field is not zero)");
 
   std::size_t position = kHeaderBytes;
-  std::shared_ptr<SubdivisionHierarchy> hierarchy;
+  std::shared_ptr<const SubdivisionHierarchy> hierarchy;
   std::uint64_t limit = options.max_coefficients;
   std::vector<QuantizedVector> q;
   std::vector<std::uint8_t> significant;
@@ -563,7 +565,13 @@ IswDecoded decode_isw(const std::string& bytes, const std::string& name, const I
       if (estimate > static_cast<double>(kMaxFineVertices) ||
           estimate > static_cast<double>(kFineVerticesPerFileByte * bytes.size() + (1u << 20)))
         reader.fail("describes a hierarchy larger than the file can justify");
-      hierarchy = std::make_shared<SubdivisionHierarchy>(result.base, result.levels);
+      const SubdivisionHierarchy* known = options.hierarchy.get();
+      const bool reuse = known && known->levels() == result.levels &&
+                         known->base().face_offsets == result.base.face_offsets &&
+                         known->base().face_vertices == result.base.face_vertices &&
+                         known->base().sharp_count() == result.base.sharp_count() &&
+                         (result.base.sharp_count() == 0 || known->base().sharp == result.base.sharp);
+      hierarchy = reuse ? options.hierarchy : std::make_shared<SubdivisionHierarchy>(result.base, result.levels);
       result.hierarchy = hierarchy;
       limit = std::min<std::uint64_t>(limit, coefficients_for_percent(*hierarchy, options.max_percent));
       if (nonzero_total > hierarchy->fine_vertex_count() - hierarchy->vertex_count(0))

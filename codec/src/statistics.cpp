@@ -8,12 +8,23 @@
 
 namespace isowave {
 
-std::vector<Vec3> reconstruct(const IswDecoded& decoded, std::size_t keep, int level) {
+namespace {
+
+// reconstruct() into a caller's buffer: repeated calls reuse its pages
+// instead of faulting in a fresh fine-mesh-sized array each time.
+void reconstruct_into(const IswDecoded& decoded, std::size_t keep, int level, std::vector<Vec3>& data) {
   if (!decoded.hierarchy) throw Error(ErrorKind::InvalidArgument, "reconstruct needs a decoded file");
-  std::vector<Vec3> data = decoded.coefficients;
+  data.assign(decoded.coefficients.begin(), decoded.coefficients.end());
   for (std::size_t r = std::min(keep, decoded.ranked.size()); r < decoded.ranked.size(); ++r) data[decoded.ranked[r]] = Vec3{};
   synthesize(*decoded.hierarchy, data, level);
   data.resize(decoded.hierarchy->vertex_count(level < 0 ? decoded.levels : level));
+}
+
+}  // namespace
+
+std::vector<Vec3> reconstruct(const IswDecoded& decoded, std::size_t keep, int level) {
+  std::vector<Vec3> data;
+  reconstruct_into(decoded, keep, level, data);
   return data;
 }
 
@@ -49,12 +60,14 @@ std::vector<RateDistortionRow> rate_distortion(const IswDecoded& decoded, const 
   };
 
   std::vector<RateDistortionRow> rows;
+  std::vector<Vec3> reconstruction;
   const auto add_row = [&](std::size_t wavelets, bool is_base) {
     RateDistortionRow row;
     row.wavelet_coefficients = std::min(wavelets, decoded.ranked.size());
     row.kept = h.vertex_count(0) + wavelets;
     row.percent = 100.0 * static_cast<double>(row.kept) / static_cast<double>(fine);
-    const PointErrors e = point_errors(reconstruct(decoded, wavelets), compare_to, fine);
+    reconstruct_into(decoded, wavelets, -1, reconstruction);
+    const PointErrors e = point_errors(reconstruction, compare_to, fine);
     row.rms = e.rms;
     row.max = e.max;
     row.bytes = bytes_for(row.wavelet_coefficients);

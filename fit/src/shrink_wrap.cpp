@@ -11,8 +11,10 @@
 #include <tbb/parallel_for.h>
 
 #include "isowave/core/error.h"
+#include "isowave/core/huge_page_vector.h"
 #include "isowave/fit/trilinear.h"
 #include "isowave/transform/wavelet_transform.h"
+#include "huge_pages.h"
 #include "root_search.h"
 
 namespace isowave {
@@ -25,6 +27,20 @@ void for_vertices(std::size_t n, const Body& body) {
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
     for (std::size_t v = r.begin(); v < r.end(); ++v) body(v);
   });
+}
+
+// Runs body(begin, end, partial) over fixed blocks of items in parallel and
+// returns the blocks' partial results in order: summing them in that order
+// gives statistics that do not depend on the thread count, without a
+// per-item array.
+constexpr std::size_t kBlock = 4096;
+template <class Partial, class Body>
+std::vector<Partial> for_blocks(std::size_t n, const Body& body) {
+  std::vector<Partial> partials((n + kBlock - 1) / kBlock);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, partials.size(), 1), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t b = r.begin(); b < r.end(); ++b) body(b * kBlock, std::min(n, (b + 1) * kBlock), partials[b]);
+  });
+  return partials;
 }
 
 struct Box {
@@ -249,90 +265,133 @@ void relax(const WrapLevelMesh& mesh, const Volume& box_volume, double weight, c
   });
 }
 
-std::vector<Vec3> vertex_normals(const WrapLevelMesh& mesh, const std::vector<Vec3>& positions) {
+namespace {
+
+// Unit normal of every face.
+template <class Normals>
+void compute_face_normals(const WrapLevelMesh& mesh, const std::vector<Vec3>& positions, Normals& face_normals) {
   const std::size_t faces = mesh.face_count();
-  std::vector<Vec3> face_normals(faces);
+  face_normals.resize(faces);
   for_vertices(faces, [&](std::size_t f) {
     face_normals[f] = face_normal(mesh.face_vertices.data() + mesh.face_offsets[f],
                                   mesh.face_offsets[f + 1] - mesh.face_offsets[f], positions);
   });
+}
+
+template <class Normals>
+Vec3 vertex_normal(const WrapLevelMesh& mesh, const Normals& face_normals, std::size_t v) {
+  Vec3 sum;
+  for (std::uint32_t k = mesh.vertex_face_offsets[v]; k < mesh.vertex_face_offsets[v + 1]; ++k)
+    sum += face_normals[mesh.vertex_faces[k]];
+  return normalized(sum);
+}
+
+}  // namespace
+
+std::vector<Vec3> vertex_normals(const WrapLevelMesh& mesh, const std::vector<Vec3>& positions) {
+  HugePageVector<Vec3> face_normals;
+  compute_face_normals(mesh, positions, face_normals);
   std::vector<Vec3> normals(mesh.vertex_count);
-  for_vertices(mesh.vertex_count, [&](std::size_t v) {
-    Vec3 sum;
-    for (std::uint32_t k = mesh.vertex_face_offsets[v]; k < mesh.vertex_face_offsets[v + 1]; ++k)
-      sum += face_normals[mesh.vertex_faces[k]];
-    normals[v] = normalized(sum);
-  });
+  for_vertices(mesh.vertex_count, [&](std::size_t v) { normals[v] = vertex_normal(mesh, face_normals, v); });
   return normals;
 }
 
 namespace {
 
-// Distance s >= 0 along direction `sign` (+1 or -1 times d) to the first zero
-// crossing of the distance field G(t) = D(p + t d) that G crosses upward in t
-// (field gradient agreeing with d), searching s <= limit; negative if none.
+// A line search for a zero crossing of G(t) = D(p + t d), D the distance
+// field, on one side of p: the last sample (distance s >= 0 from p and its
+// value) and the number of samples taken, so that a search stopped at one
+// limit can go on to a farther one.
+struct CrossingSearch {
+  double s = 0, g = 0;
+  int samples = 0;
+};
+
+// Continues `search` along direction `sign` (+1 or -1 times d) up to s <=
+// limit, to the first zero crossing that G crosses upward in t (field
+// gradient agreeing with d); returns its distance s >= 0, or negative if none.
 // Steps by the distance value (no surface is nearer than |D|), at least
 // min_step.
 template <class G>
-double first_agreeing_crossing(const G& g_of_t, double g0, double sign, double limit, double min_step,
-                               double tolerance) {
-  double s_previous = 0, g_previous = g0;
+double continue_crossing_search(const G& g_of_t, CrossingSearch& search, double sign, double limit, double min_step,
+                                double tolerance) {
   // A line grazing the surface would otherwise take limit / min_step samples.
   constexpr int kMaxSamples = 24;
-  for (int sample = 0; sample < kMaxSamples && s_previous < limit; ++sample) {
-    const double step = std::max(0.9 * std::abs(g_previous), min_step);
-    const double s = std::min(s_previous + step, limit);
+  while (search.samples < kMaxSamples && search.s < limit) {
+    const double step = std::max(0.9 * std::abs(search.g), min_step);
+    const double s = std::min(search.s + step, limit);
     const double g = g_of_t(sign * s);
-    if (detail::root_side(g) != detail::root_side(g_previous)) {
-      const bool agrees = sign > 0 ? (g_previous < 0 && g >= 0) : (g_previous >= 0 && g < 0);
+    ++search.samples;
+    if (detail::root_side(g) != detail::root_side(search.g)) {
+      const bool agrees = sign > 0 ? (search.g < 0 && g >= 0) : (search.g >= 0 && g < 0);
       if (agrees) {
-        const double t =
-            detail::refine_bracket(g_of_t, sign * s_previous, g_previous, sign * s, g, tolerance, tolerance);
+        const double t = detail::refine_bracket(g_of_t, sign * search.s, search.g, sign * s, g, tolerance, tolerance);
         return std::abs(t);
       }
     }
-    s_previous = s;
-    g_previous = g;
+    search.s = s;
+    search.g = g;
   }
   return -1;
 }
 
-}  // namespace
+struct AttractionPartial {
+  std::size_t movable = 0, attracted = 0, out_of_reach = 0, no_direction = 0;
+  double move_sum = 0, move_max = 0;  // cells
+};
 
-AttractionStatistics attract(const WrapLevelMesh& mesh, const SignedDistanceField& distance,
-                             const AttractionOptions& options, const std::vector<Vec3>& in, std::vector<Vec3>& out) {
+// attract() with the face-normal buffer supplied by the caller, which reuses
+// it across rounds (hundreds of megabytes at the finest level).
+AttractionStatistics attract_with(const WrapLevelMesh& mesh, const SignedDistanceField& distance,
+                                  const AttractionOptions& options, const std::vector<Vec3>& in,
+                                  std::vector<Vec3>& out, HugePageVector<Vec3>& face_normals) {
   assert(in.size() >= mesh.vertex_count && &in != &out);
   out.resize(std::max(out.size(), mesh.vertex_count));
   const Volume& field = distance.distance;
+  const TrilinearGrid grid(field);
   const Box box(field);
   const double cell = field.cell_size();
   const double min_step = 0.2 * cell, tolerance = 1e-3 * cell;
-  const std::vector<Vec3> normals = vertex_normals(mesh, in);
-  enum Outcome : std::uint8_t { kFixed, kAttracted, kOutOfReach, kNoDirection };
-  std::vector<std::uint8_t> outcome(mesh.vertex_count);
-  std::vector<float> moved(mesh.vertex_count, 0.0f);
+  // The reach is never shorter than this; the searches go this far before
+  // the vertex's edge lengths are needed.
+  const double near = options.min_reach_cells * cell;
+  compute_face_normals(mesh, in, face_normals);
 
-  for_vertices(mesh.vertex_count, [&](std::size_t v) {
+  const auto attract_vertex = [&](std::size_t v, AttractionPartial& partial) {
     const Vec3& p = in[v];
     out[v] = p;
-    if (mesh.role[v] == WrapRole::Fixed) {
-      outcome[v] = kFixed;
-      return;
-    }
-    const Vec3 d = allowed_direction(mesh, v, normals[v]);
+    if (mesh.role[v] == WrapRole::Fixed) return;
+    ++partial.movable;
+    Vec3 d = vertex_normal(mesh, face_normals, v);
+    if (mesh.box_face[v] >= 0) d = allowed_direction(mesh, v, d);
     if (squared_norm(d) == 0) {
-      outcome[v] = kNoDirection;
+      ++partial.no_direction;
       return;
     }
-    double edge_sum = 0;
-    const std::uint32_t begin = mesh.neighbour_offsets[v], end = mesh.neighbour_offsets[v + 1];
-    for (std::uint32_t k = begin; k < end; ++k) edge_sum += norm(in[mesh.neighbours[k]] - p);
-    const double mean_edge = end > begin ? edge_sum / double(end - begin) : 0.0;
-    const double reach = std::max(options.reach_edges * mean_edge, options.min_reach_cells * cell);
+    double reach = -1;  // computed when a search goes past `near`
+    const auto full_reach = [&]() {
+      if (reach < 0) {
+        double edge_sum = 0;
+        const std::uint32_t begin = mesh.neighbour_offsets[v], end = mesh.neighbour_offsets[v + 1];
+        for (std::uint32_t k = begin; k < end; ++k) edge_sum += norm(in[mesh.neighbours[k]] - p);
+        const double mean_edge = end > begin ? edge_sum / double(end - begin) : 0.0;
+        reach = std::max(options.reach_edges * mean_edge, near);
+      }
+      return reach;
+    };
     double t_low, t_high;
     box.clip(p, d, t_low, t_high);
-    const auto g_of_t = [&](double t) { return trilinear_value(field, p + t * d); };
+    const Vec3 pg = grid.grid_point(p), dg = grid.grid_direction(d);
+    const auto g_of_t = [&](double t) { return grid.value_at(pg + t * dg); };
     const double g0 = g_of_t(0);
+    // Searches one side up to `box_limit` (and the reach): first to `near`,
+    // then, if nothing was found, on to the full reach.
+    const auto search_side = [&](CrossingSearch& search, double sign, double box_limit) {
+      double found = continue_crossing_search(g_of_t, search, sign, std::min(near, box_limit), min_step, tolerance);
+      if (found < 0 && box_limit > near && full_reach() > near)
+        found = continue_crossing_search(g_of_t, search, sign, std::min(reach, box_limit), min_step, tolerance);
+      return found;
+    };
     double best = -1, best_sign = 1;
     if (g0 == 0) {
       best = 0;
@@ -340,47 +399,67 @@ AttractionStatistics attract(const WrapLevelMesh& mesh, const SignedDistanceFiel
       // The likelier side first (inside: forward), then the other one only
       // as far as the crossing already found.
       const double first_sign = g0 < 0 ? 1.0 : -1.0;
-      const double first_limit = std::min(reach, first_sign > 0 ? t_high : -t_low);
-      best = first_agreeing_crossing(g_of_t, g0, first_sign, first_limit, min_step, tolerance);
+      const double first_box = first_sign > 0 ? t_high : -t_low, second_box = first_sign > 0 ? -t_low : t_high;
+      CrossingSearch first{0, g0, 0};
+      best = search_side(first, first_sign, first_box);
       best_sign = first_sign;
-      const double second_limit = std::min(best >= 0 ? best : reach, first_sign > 0 ? -t_low : t_high);
-      const double other = first_agreeing_crossing(g_of_t, g0, -first_sign, second_limit, min_step, tolerance);
+      CrossingSearch second{0, g0, 0};
+      double other = -1;
+      if (best < 0) {
+        other = search_side(second, -first_sign, second_box);
+      } else {
+        // A first sample on the other side can only bracket a crossing that
+        // disagrees (G starts on the wrong side there), so a search that
+        // would take just one sample is skipped.
+        const double limit = std::min(best, second_box);
+        if (limit > std::max(0.9 * std::abs(g0), min_step))
+          other = continue_crossing_search(g_of_t, second, -first_sign, limit, min_step, tolerance);
+      }
       if (other >= 0 && (best < 0 || other < best)) {
         best = other;
         best_sign = -first_sign;
       }
     }
     if (best < 0) {
-      outcome[v] = kOutOfReach;
+      ++partial.out_of_reach;
       return;
     }
     const Vec3 target = place(mesh, box, v, p + (best_sign * best) * d);
     if (!is_finite(target)) {
-      outcome[v] = kNoDirection;
+      ++partial.no_direction;
       return;
     }
     out[v] = target;
-    outcome[v] = kAttracted;
-    moved[v] = static_cast<float>(best / cell);
-  });
+    ++partial.attracted;
+    const double moved = best / cell;
+    partial.move_sum += moved;
+    partial.move_max = std::max(partial.move_max, moved);
+  };
+  const std::vector<AttractionPartial> partials =
+      for_blocks<AttractionPartial>(mesh.vertex_count, [&](std::size_t begin, std::size_t end, AttractionPartial& partial) {
+        for (std::size_t v = begin; v < end; ++v) attract_vertex(v, partial);
+      });
 
   AttractionStatistics stats;
   double move_sum = 0;
-  for (std::size_t v = 0; v < mesh.vertex_count; ++v) {
-    switch (outcome[v]) {
-      case kFixed: continue;
-      case kAttracted:
-        ++stats.attracted;
-        move_sum += moved[v];
-        stats.max_move_cells = std::max(stats.max_move_cells, double(moved[v]));
-        break;
-      case kOutOfReach: ++stats.out_of_reach; break;
-      default: ++stats.no_direction; break;
-    }
-    ++stats.movable;
+  for (const AttractionPartial& partial : partials) {
+    stats.movable += partial.movable;
+    stats.attracted += partial.attracted;
+    stats.out_of_reach += partial.out_of_reach;
+    stats.no_direction += partial.no_direction;
+    move_sum += partial.move_sum;
+    stats.max_move_cells = std::max(stats.max_move_cells, partial.move_max);
   }
   stats.mean_move_cells = stats.attracted ? move_sum / double(stats.attracted) : 0.0;
   return stats;
+}
+
+}  // namespace
+
+AttractionStatistics attract(const WrapLevelMesh& mesh, const SignedDistanceField& distance,
+                             const AttractionOptions& options, const std::vector<Vec3>& in, std::vector<Vec3>& out) {
+  HugePageVector<Vec3> face_normals;
+  return attract_with(mesh, distance, options, in, out, face_normals);
 }
 
 namespace {
@@ -575,15 +654,24 @@ ShrinkWrapResult shrink_wrap(const SubdivisionHierarchy& hierarchy, const std::v
 
   progress.begin_stage("shrink-wrap");
   ShrinkWrapResult result;
-  std::vector<Vec3>& data = result.positions;
-  data.assign(base_positions.begin(), base_positions.begin() + static_cast<std::ptrdiff_t>(base_count));
-  std::vector<Vec3> scratch;
   const int levels = hierarchy.levels();
+  // Both position buffers are sized for the finest level once, on huge pages.
+  std::vector<Vec3>& data = result.positions;
+  std::vector<Vec3> scratch;
+  const std::size_t fine_count = hierarchy.vertex_count(levels);
+  for (std::vector<Vec3>* buffer : {&data, &scratch}) {
+    buffer->reserve(fine_count);
+    detail::advise_huge_pages(buffer->data(), fine_count * sizeof(Vec3));
+  }
+  data.assign(base_positions.begin(), base_positions.begin() + static_cast<std::ptrdiff_t>(base_count));
+  HugePageVector<Vec3> face_normals;
   double work_done = 0, work_total = 0;
   for (int level = 0; level <= levels; ++level) work_total += double(hierarchy.vertex_count(level));
 
+  using Clock = std::chrono::steady_clock;
+  const auto seconds_since = [](Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); };
   for (int level = 0; level <= levels; ++level) {
-    const auto start = std::chrono::steady_clock::now();
+    const auto start = Clock::now();
     if (level > 0) subdivide_level(hierarchy, level, data);
     const WrapLevelMesh mesh = make_wrap_level_mesh(hierarchy, level, data, field);
     constrain_to_box(mesh, field, data);
@@ -594,20 +682,31 @@ ShrinkWrapResult shrink_wrap(const SubdivisionHierarchy& hierarchy, const std::v
       stats.boundary_vertices += mesh.box_face[v] >= 0 ? 1 : 0;
       stats.fixed_vertices += mesh.role[v] == WrapRole::Fixed ? 1 : 0;
     }
+    stats.seconds_setup = seconds_since(start);
     const int rounds = level < levels ? options.iterations : options.final_level_iterations;
     scratch.resize(mesh.vertex_count);
     for (int round = 0; round < rounds; ++round) {
+      auto phase = Clock::now();
       relax(mesh, field, options.relaxation_weight, data, scratch);
-      stats.last_attraction = attract(mesh, distance, options.attraction, scratch, data);
+      stats.seconds_relaxation += seconds_since(phase);
+      phase = Clock::now();
+      stats.last_attraction = attract_with(mesh, distance, options.attraction, scratch, data, face_normals);
+      stats.seconds_attraction += seconds_since(phase);
     }
-    if (level == levels && options.final_correction)
+    if (level == levels && options.final_correction) {
+      const auto phase = Clock::now();
       result.correction = correct_to_isosurface(mesh, field, distance.iso, options.correction_max_cells, data);
-    if (level == levels && options.untangle_rounds > 0)
+      stats.seconds_correction = seconds_since(phase);
+    }
+    if (level == levels && options.untangle_rounds > 0) {
+      const auto phase = Clock::now();
       result.untangle = untangle(mesh, field, distance.iso, distance.flip, options.untangle_rounds,
                                  options.correction_max_cells, data);
+      stats.seconds_untangle = seconds_since(phase);
+    }
     if (options.keep_levels && level < levels)
       result.level_positions.emplace_back(data.begin(), data.begin() + static_cast<std::ptrdiff_t>(mesh.vertex_count));
-    stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    stats.seconds = seconds_since(start);
     result.levels.push_back(stats);
     work_done += double(mesh.vertex_count);
     progress.update(work_done / work_total);

@@ -12,7 +12,9 @@
 #include <tbb/parallel_for.h>
 
 #include "isowave/core/error.h"
+#include "isowave/core/huge_page_vector.h"
 #include "isowave/fit/trilinear.h"
+#include "huge_pages.h"
 #include "root_search.h"
 
 namespace isowave {
@@ -95,7 +97,7 @@ Vec3 node_gradient(const Volume& v, std::size_t i, std::size_t j, std::size_t k)
 // limit. Enclosed regions are flipped. Sequential and in index order, so
 // deterministic; cost proportional to the regions explored.
 void flip_enclosed_regions(const Volume& field, const std::vector<std::uint32_t>& starts,
-                           std::vector<std::uint8_t>& flags, SignedDistanceStatistics& stats) {
+                           HugePageVector<std::uint8_t>& flags, SignedDistanceStatistics& stats) {
   const std::size_t nx = field.dims[0], ny = field.dims[1], nz = field.dims[2], slice = nx * ny;
   constexpr std::size_t kLimit = std::size_t{1} << 22;
   std::vector<std::uint32_t> region;
@@ -175,7 +177,7 @@ SignedDistanceField compute_signed_distance(const Volume& field, const SignedDis
       banded ? static_cast<float>(far_value * far_value) : std::numeric_limits<float>::infinity();
 
   // Inside/outside per node; later the cell, seed and sign-repair bits.
-  std::vector<std::uint8_t> flags(node_count);
+  HugePageVector<std::uint8_t> flags(node_count);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nz), [&](const tbb::blocked_range<std::size_t>& r) {
     for (std::size_t n = r.begin() * slice; n < r.end() * slice; ++n)
       flags[n] = is_inside(field.values[n], iso) ? kInside : 0;
@@ -402,8 +404,10 @@ SignedDistanceField compute_signed_distance(const Volume& field, const SignedDis
   stats.first_order_seeds = stats.seed_nodes - stats.projected_seeds;
   if (stats.seed_nodes >= kNoPoint) throw Error(ErrorKind::Unsupported, "too many seed nodes");
 
-  std::vector<float> squared(node_count, std::numeric_limits<float>::infinity());
-  std::vector<std::uint32_t> closest(node_count, kNoPoint);
+  // Random access at every update: huge pages (the result keeps `squared`).
+  std::vector<float> squared;
+  detail::assign_on_huge_pages(squared, node_count, std::numeric_limits<float>::infinity());
+  HugePageVector<std::uint32_t> closest(node_count, kNoPoint);
   std::vector<Point3f> points;
   points.reserve(stats.seed_nodes);
   NodeQueue queue(stats.seed_nodes + stats.seed_nodes / 2);

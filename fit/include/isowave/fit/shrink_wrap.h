@@ -159,7 +159,12 @@ struct WrapLevelStatistics {
   std::size_t boundary_vertices = 0;  // held on a box face
   std::size_t fixed_vertices = 0;
   AttractionStatistics last_attraction;
-  double seconds = 0;
+  double seconds = 0;  // the whole level, the phases below included
+  double seconds_setup = 0;       // refinement to this level and its connectivity
+  double seconds_relaxation = 0;  // all rounds
+  double seconds_attraction = 0;  // all rounds
+  double seconds_correction = 0;  // level L only
+  double seconds_untangle = 0;    // level L only
 };
 
 struct ShrinkWrapResult {

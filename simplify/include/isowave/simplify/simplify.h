@@ -112,6 +112,7 @@ struct SimplifyReport {
   // Seconds per phase.
   double seconds_check = 0, seconds_build = 0, seconds_queue = 0, seconds_collapse = 0, seconds_edge_removal = 0,
          seconds_output = 0, seconds_distance = 0;
+  double seconds_flip_rounds = 0;  // the part of seconds_collapse spent after the paper's rules stalled
   double seconds_total() const {
     return seconds_check + seconds_build + seconds_queue + seconds_collapse + seconds_edge_removal + seconds_output +
            seconds_distance;
