@@ -90,9 +90,10 @@ CollapseMesh::CollapseMesh(const PolygonMesh& mesh, CollapseRules rules) : rules
   }
   for (std::uint32_t v = 0; v < vertex_count; ++v) {
     if (is_boundary(v)) ++vertices_[v].valence;  // one more neighbour than corners
-    if (vertices_[v].halfedge != kNone) ++alive_vertices_;
+    if (vertices_[v].halfedge != kNone) ++initial_vertices_;
   }
-  alive_triangles_ = mesh.face_count();
+  initial_triangles_ = mesh.face_count();
+  for (int l = 0; l < kLanes; ++l) lanes_[l].stamp = static_cast<std::uint32_t>(l);
 
   for (std::uint32_t v = 0; v < vertex_count; ++v) {
     if (!is_boundary(v) || vertices_[v].boundary_loop != kNone) continue;
@@ -126,7 +127,8 @@ std::uint32_t CollapseMesh::find_edge(std::uint32_t a, std::uint32_t b) const {
   return found;
 }
 
-FanCache::FanCache() : slot_vertex_(kSlots), slot_fan_(kSlots), slot_stamp_(kSlots, 0) {
+FanCache::FanCache(int lane) : lane_(lane), slot_vertex_(kSlots), slot_fan_(kSlots), slot_stamp_(kSlots, 0) {
+  assert(lane >= 0 && lane < CollapseMesh::kLanes);
   fans_.reserve(kMaxFans);
   corners_.reserve(16 * kMaxFans);
   ring_.reserve(17 * kMaxFans);
@@ -217,8 +219,9 @@ Evaluation CollapseMesh::evaluate(std::uint32_t e, FanCache& cache, int max_vale
 
   // Fans of both endpoints (the valence test bounds their size). Indices
   // first: gathering the second fan may reallocate the cache.
-  if (cache.mesh_ != this || cache.version_ != version_ || cache.fans_.size() + 2 > FanCache::kMaxFans)
-    cache.clear(this, version_);
+  const std::uint64_t version = lanes_[cache.lane_].version;
+  if (cache.mesh_ != this || cache.version_ != version || cache.fans_.size() + 2 > FanCache::kMaxFans)
+    cache.clear(this, version);
   const std::uint32_t fan_i = fan(vi, cache), fan_j = fan(vj, cache);
   const FanCache::Fan& fi = cache.fans_[fan_i];
   const FanCache::Fan& fj = cache.fans_[fan_j];
@@ -311,8 +314,9 @@ void CollapseMesh::reset_vertex_halfedge(std::uint32_t v, std::uint32_t start) {
 }
 
 std::uint32_t CollapseMesh::collapse(std::uint32_t e, const Vec3& position, std::uint32_t removed_edges[3],
-                                     std::uint32_t opposite_vertices[2]) {
-  ++version_;
+                                     std::uint32_t opposite_vertices[2], int lane) {
+  Lane& counts = lanes_[lane];
+  ++counts.version;
   const std::uint32_t h = edges_[e].halfedge;
   assert(h != kNone);
   const std::uint32_t o = corners_[h].opposite;
@@ -368,7 +372,7 @@ std::uint32_t CollapseMesh::collapse(std::uint32_t e, const Vec3& position, std:
   for (std::uint32_t t : {t0, t1}) {
     if (t == kNone) continue;
     corners_[3 * t].vertex = corners_[3 * t + 1].vertex = corners_[3 * t + 2].vertex = kNone;
-    --alive_triangles_;
+    ++counts.removed_triangles;
   }
 
   // Vertex attributes.
@@ -381,7 +385,7 @@ std::uint32_t CollapseMesh::collapse(std::uint32_t e, const Vec3& position, std:
   vertices_[vi].position = position;
   vertices_[vj].halfedge = kNone;
   vertices_[vj].boundary_loop = kNone;
-  --alive_vertices_;
+  ++counts.removed_vertices;
   reset_vertex_halfedge(vi, outer_p0 != kNone ? outer_p0 : next(outer_n0));
   reset_vertex_halfedge(a, outer_n0 != kNone ? outer_n0 : next(outer_p0));
   if (b != kNone) reset_vertex_halfedge(b, outer_n1 != kNone ? outer_n1 : next(outer_p1));
@@ -407,6 +411,31 @@ std::uint32_t CollapseMesh::collapse(std::uint32_t e, const Vec3& position, std:
   opposite_vertices[0] = a;
   opposite_vertices[1] = b;
   return vi;
+}
+
+std::size_t CollapseMesh::alive_vertices() const {
+  std::size_t removed = 0;
+  for (const Lane& lane : lanes_) removed += lane.removed_vertices;
+  return initial_vertices_ - removed;
+}
+
+std::size_t CollapseMesh::alive_triangles() const {
+  std::size_t removed = 0;
+  for (const Lane& lane : lanes_) removed += lane.removed_triangles;
+  return initial_triangles_ - removed;
+}
+
+bool CollapseMesh::collapse_inside(std::uint32_t e, const std::uint8_t* region, std::uint8_t id) const {
+  const std::uint32_t h = edges_[e].halfedge;
+  if (h == kNone || corners_[h].opposite == kNone) return false;
+  bool inside = true;
+  for (const std::uint32_t v : {corners_[h].vertex, corners_[next(h)].vertex}) {
+    if (region[v] != id) return false;
+    for_each_corner(v, [&](std::uint32_t c) {
+      inside = inside && region[target(c)] == id && region[corners_[prev(c)].vertex] == id;
+    });
+  }
+  return inside;
 }
 
 std::array<std::uint32_t, 4> CollapseMesh::edge_vertices(std::uint32_t e) const {
@@ -444,7 +473,7 @@ bool CollapseMesh::can_flip(std::uint32_t e) const {
 }
 
 void CollapseMesh::flip(std::uint32_t e) {
-  ++version_;
+  ++lanes_[0].version;
   // Triangle slots: t0 = (h, n0, p0) holds (v_i, v_j, a) and becomes
   // (v_i, b, a); t1 = (o, n1, p1) holds (v_j, v_i, b) and becomes (v_j, a, b).
   // The half-edges a -> v_i (p0) and b -> v_j (p1) keep their corners.
@@ -499,14 +528,19 @@ int CollapseMesh::lower_valence(std::uint32_t v, int count, const std::uint32_t*
   return done;
 }
 
-void CollapseMesh::gather_stencil(const std::uint32_t* centres, int count, std::vector<std::uint32_t>& edges) {
-  if (++stamp_ == 0) {  // wrapped: clear old stamps
+void CollapseMesh::gather_stencil(const std::uint32_t* centres, int count, std::vector<std::uint32_t>& edges,
+                                  int lane) {
+  Lane& state = lanes_[lane];
+  if (state.stamp > std::numeric_limits<std::uint32_t>::max() - kLanes) {
+    // After about 2^31 gathers: start over (never reached with parallel lanes in practice).
     for (EdgeRecord& record : edges_) record.stamp = 0;
-    stamp_ = 1;
+    for (int l = 0; l < kLanes; ++l) lanes_[l].stamp = static_cast<std::uint32_t>(l);
   }
+  state.stamp += kLanes;  // lane l uses l + kLanes * k, k >= 1: never 0, never another lane's
+  const std::uint32_t stamp = state.stamp;
   const auto add = [&](std::uint32_t edge) {
-    if (edges_[edge].stamp == stamp_) return;
-    edges_[edge].stamp = stamp_;
+    if (edges_[edge].stamp == stamp) return;
+    edges_[edge].stamp = stamp;
     edges.push_back(edge);
   };
   for (int i = 0; i < count; ++i) {
@@ -553,7 +587,7 @@ std::string CollapseMesh::validate() const {
       if (corners_[o].edge != edge) return fail("corners of edge " + std::to_string(edge) + " disagree");
     }
   }
-  if (triangles != alive_triangles_) return fail("alive triangle count is wrong");
+  if (triangles != alive_triangles()) return fail("alive triangle count is wrong");
   std::sort(sorted_triangles.begin(), sorted_triangles.end());
   if (std::adjacent_find(sorted_triangles.begin(), sorted_triangles.end()) != sorted_triangles.end())
     return fail("two triangles share all three vertices");
@@ -595,7 +629,7 @@ std::string CollapseMesh::validate() const {
       if (vertices_[target(start)].boundary_loop != vertices_[v].boundary_loop) return fail("boundary loop ids disagree");
     }
   }
-  if (vertices != alive_vertices_) return fail("alive vertex count is wrong");
+  if (vertices != alive_vertices()) return fail("alive vertex count is wrong");
   for (std::size_t l = 0; l < loop_size_.size(); ++l) {
     if (loop_count[l] != loop_size_[l]) return fail("boundary loop " + std::to_string(l) + " has a wrong size");
     if (loop_count[l] < 3) return fail("boundary loop " + std::to_string(l) + " has fewer than 3 vertices");
@@ -606,15 +640,15 @@ std::string CollapseMesh::validate() const {
 PolygonMesh CollapseMesh::to_polygon_mesh(std::vector<std::uint32_t>* vertex_map) const {
   std::vector<std::uint32_t> map(vertices_.size(), kNone);
   PolygonMesh result;
-  result.positions.reserve(alive_vertices_);
+  result.positions.reserve(alive_vertices());
   for (std::uint32_t v = 0; v < vertices_.size(); ++v) {
     if (!vertex_alive(v)) continue;
     map[v] = static_cast<std::uint32_t>(result.positions.size());
     result.positions.push_back(vertices_[v].position);
     if (input_had_sharp_) result.sharp.push_back(is_sharp(v) ? 1 : 0);
   }
-  result.face_vertices.reserve(3 * alive_triangles_);
-  result.face_offsets.reserve(alive_triangles_ + 1);
+  result.face_vertices.reserve(3 * alive_triangles());
+  result.face_offsets.reserve(alive_triangles() + 1);
   for (std::uint32_t t = 0; t < corners_.size() / 3; ++t) {
     if (corners_[3 * t].vertex == kNone) continue;
     result.add_face({map[corners_[3 * t].vertex], map[corners_[3 * t + 1].vertex], map[corners_[3 * t + 2].vertex]});

@@ -8,6 +8,7 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
 #include <tbb/parallel_sort.h>
 
 #include "edge_removal.h"
@@ -126,6 +127,128 @@ PolygonMesh in_spatial_order(const PolygonMesh& mesh) {
   return sorted;
 }
 
+// After re-evaluating stencil edge s: a legal edge goes to the bucket of its
+// new priority (keeping its FIFO place if the bucket is the same), an
+// illegal one leaves the queue.
+void requeue(BucketQueue& queue, CollapseMesh& mesh, std::uint32_t s, const Evaluation& update,
+             std::uint32_t bucket_count) {
+  if (update.legality != Legality::Legal) {
+    if (queue.contains(s)) queue.remove(s);
+    return;
+  }
+  mesh.set_latest_delta_error(s, update.delta_error);
+  const std::uint32_t bucket = priority_bucket(mesh.error(s), bucket_count);
+  if (queue.contains(s)) {
+    if (queue.bucket_of(s) == bucket) return;
+    queue.remove(s);
+  }
+  queue.push(s, bucket);
+}
+
+// Parallel phase of the collapse (SimplifyOptions::parallel). The vertices
+// (in Morton order, so each half is a compact part of space) are split in
+// two halves; the vertices within two edges of an edge joining the halves
+// form a band that nobody collapses. Each half runs the paper's loop on its
+// own queue, in its own CollapseMesh lane, and collapses only edges whose
+// endpoints and all their neighbours lie in its half (collapse_inside), so
+// the two threads never write what the other reads: collapses never join
+// band vertices, so the band keeps the halves two edges apart throughout.
+// Boundary edges, and edges that reach the band, wait for the serial loop
+// that follows. Each half's sequence depends only on its own half and the
+// unchanging band, so the result does not depend on thread timing.
+void collapse_in_parallel(CollapseMesh& mesh, const std::vector<std::uint32_t>& initial_buckets, std::size_t target,
+                          const SimplifyOptions& options, SimplifyReport& report) {
+  constexpr std::uint8_t kBand = 255;
+  const std::uint32_t vertex_slots = mesh.vertex_slots(), half = vertex_slots / 2;
+  std::vector<std::uint8_t> distance(vertex_slots, kBand);  // edges to the nearest cut vertex, up to 2
+  const auto endpoints = [&](std::uint32_t e) {
+    const std::uint32_t h = mesh.edge_halfedge(e);
+    return std::pair<std::uint32_t, std::uint32_t>{mesh.origin(h), mesh.target(h)};
+  };
+  for (std::uint32_t e = 0; e < mesh.edge_slots(); ++e) {
+    const auto [u, w] = endpoints(e);
+    if ((u < half) != (w < half)) distance[u] = distance[w] = 0;
+  }
+  for (std::uint8_t ring = 1; ring <= 2; ++ring)
+    for (std::uint32_t e = 0; e < mesh.edge_slots(); ++e) {
+      const auto [u, w] = endpoints(e);
+      if (distance[u] == ring - 1 && distance[w] > ring) distance[w] = ring;
+      if (distance[w] == ring - 1 && distance[u] > ring) distance[u] = ring;
+    }
+  std::vector<std::uint8_t> region(vertex_slots);
+  std::size_t region_vertices[CollapseMesh::kLanes] = {0, 0};
+  for (std::uint32_t v = 0; v < vertex_slots; ++v) {
+    region[v] = distance[v] <= 2 ? kBand : (v < half ? 0 : 1);
+    if (region[v] != kBand && mesh.vertex_alive(v)) ++region_vertices[region[v]];
+  }
+  // Each half's initial edges, chosen before the threads start: once one
+  // collapses, the other must not look at its edges.
+  std::vector<std::uint8_t> edge_region(mesh.edge_slots(), kBand);
+  for (std::uint32_t e = 0; e < mesh.edge_slots(); ++e) {
+    const auto [u, w] = endpoints(e);
+    if (initial_buckets[e] != BucketQueue::kNotQueued && region[u] == region[w]) edge_region[e] = region[u];
+  }
+  const std::size_t alive = mesh.alive_vertices();
+  const std::size_t planned = alive > target ? alive - target : 0;
+
+  struct LaneResult {
+    std::size_t collapses = 0;
+    std::array<std::size_t, kLegalityCount> rejected{};
+  };
+  LaneResult results[CollapseMesh::kLanes];
+  const std::uint32_t bucket_count = options.bucket_count;
+  const auto run_lane = [&](int lane) {
+    const auto id = static_cast<std::uint8_t>(lane);
+    const auto inside = [&](std::uint32_t e) {
+      const auto [u, w] = endpoints(e);
+      return region[u] == id && region[w] == id;
+    };
+    // Its share of the planned collapses, so that where it stops does not
+    // depend on the other thread.
+    const std::size_t quota =
+        static_cast<std::size_t>(double(planned) * double(region_vertices[lane]) / double(std::max<std::size_t>(alive, 1)));
+    BucketQueue queue(mesh.edge_slots(), bucket_count);
+    for (std::uint32_t e = 0; e < mesh.edge_slots(); ++e)
+      if (edge_region[e] == id) queue.push(e, initial_buckets[e]);
+    LaneResult& result = results[lane];
+    FanCache cache(lane);
+    std::vector<std::uint32_t> stencil;
+    while (result.collapses < quota && !queue.empty()) {
+      const std::uint32_t e = queue.top();
+      const std::uint32_t queued_bucket = queue.bucket_of(e);
+      queue.remove(e);
+      const Evaluation evaluation = mesh.evaluate(e, cache);
+      if (evaluation.legality != Legality::Legal) {
+        ++result.rejected[static_cast<int>(evaluation.legality)];
+        continue;
+      }
+      if (!mesh.collapse_inside(e, region.data(), id)) continue;  // left to the serial loop
+      mesh.set_latest_delta_error(e, evaluation.delta_error);
+      const std::uint32_t bucket = priority_bucket(mesh.error(e), bucket_count);
+      if (bucket < queued_bucket) {
+        queue.push(e, bucket);
+        continue;
+      }
+      std::uint32_t removed[3], opposite_vertices[2];
+      const std::uint32_t v = mesh.collapse(e, evaluation.position, removed, opposite_vertices, lane);
+      ++result.collapses;
+      for (std::uint32_t dead : removed)
+        if (dead != CollapseMesh::kNone && queue.contains(dead)) queue.remove(dead);
+      const std::uint32_t centres[3] = {v, opposite_vertices[0], opposite_vertices[1]};
+      stencil.clear();
+      mesh.gather_stencil(centres, 3, stencil, lane);
+      for (std::uint32_t s : stencil)
+        requeue(queue, mesh, s, inside(s) ? mesh.evaluate(s, cache) : Evaluation{}, bucket_count);
+    }
+  };
+  tbb::parallel_invoke([&] { run_lane(0); }, [&] { run_lane(1); });
+  for (const LaneResult& result : results) {
+    report.collapses += result.collapses;
+    report.parallel_collapses += result.collapses;
+    for (int k = 0; k < kLegalityCount; ++k) report.rejected_at_pop[k] += result.rejected[k];
+  }
+}
+
 // Face-size and valence histograms of the output.
 void fill_histograms(const PolygonMesh& mesh, int max_valence, SimplifyReport& report) {
   report.face_size_histogram.clear();
@@ -219,28 +342,36 @@ SimplifyResult simplify(const PolygonMesh& input, const SimplifyOptions& options
   progress.end_stage();
   report.seconds_build = seconds_since(clock);
 
-  // Initial priorities: every edge evaluated in parallel (evaluate() only
-  // reads), then queued in edge order so that the FIFO order is deterministic.
-  progress.begin_stage("simplify: queue");
+  // Priorities of every edge, evaluated in parallel (evaluate() only reads);
+  // callers queue them in edge order so that the FIFO order is deterministic.
   const std::uint32_t bucket_count = options.bucket_count;
-  BucketQueue queue(mesh.edge_slots(), bucket_count);
-  report.target_vertices = std::min(options.target_vertices, input.vertex_count());
-  const bool collapse_wanted = options.target_vertices < input.vertex_count();
-  if (collapse_wanted) {
-    std::vector<std::uint32_t> initial(mesh.edge_slots(), BucketQueue::kNotQueued);
+  const auto evaluate_all_edges = [&](int max_valence) {
+    std::vector<std::uint32_t> buckets(mesh.edge_slots(), BucketQueue::kNotQueued);
     tbb::parallel_for(tbb::blocked_range<std::uint32_t>(0, mesh.edge_slots(), 8192),
                       [&](const tbb::blocked_range<std::uint32_t>& range) {
                         FanCache cache;
                         for (std::uint32_t e = range.begin(); e != range.end(); ++e) {
-                          const Evaluation evaluation = mesh.evaluate(e, cache);
+                          const Evaluation evaluation = mesh.evaluate(e, cache, max_valence);
                           if (evaluation.legality != Legality::Legal) continue;
                           mesh.set_latest_delta_error(e, evaluation.delta_error);
-                          initial[e] = priority_bucket(mesh.error(e), bucket_count);
+                          buckets[e] = priority_bucket(mesh.error(e), bucket_count);
                         }
                       });
+    return buckets;
+  };
+  BucketQueue queue(mesh.edge_slots(), bucket_count);
+  const auto queue_all_edges = [&](int max_valence) {
+    const std::vector<std::uint32_t> buckets = evaluate_all_edges(max_valence);
     for (std::uint32_t e = 0; e < mesh.edge_slots(); ++e)
-      if (initial[e] != BucketQueue::kNotQueued) queue.push(e, initial[e]);
-  }
+      if (buckets[e] != BucketQueue::kNotQueued) queue.push(e, buckets[e]);
+  };
+  report.target_vertices = std::min(options.target_vertices, input.vertex_count());
+  const bool collapse_wanted = options.target_vertices < input.vertex_count();
+  const bool in_parallel = collapse_wanted && options.parallel && input.vertex_count() >= options.parallel_min_vertices;
+  progress.begin_stage("simplify: queue");
+  std::vector<std::uint32_t> initial_buckets;
+  if (in_parallel) initial_buckets = evaluate_all_edges(options.max_valence);
+  else if (collapse_wanted) queue_all_edges(options.max_valence);
   progress.end_stage();
   report.seconds_queue = seconds_since(clock);
 
@@ -317,20 +448,7 @@ SimplifyResult simplify(const PolygonMesh& input, const SimplifyOptions& options
       centres.insert(centres.end(), {v, opposite_vertices[0], opposite_vertices[1]});
       stencil.clear();
       mesh.gather_stencil(centres.data(), static_cast<int>(centres.size()), stencil);
-      for (std::uint32_t s : stencil) {
-        const Evaluation update = evaluate_for_queue(s);
-        if (update.legality != Legality::Legal) {
-          if (queue.contains(s)) queue.remove(s);
-          continue;
-        }
-        mesh.set_latest_delta_error(s, update.delta_error);
-        const std::uint32_t new_bucket = priority_bucket(mesh.error(s), bucket_count);
-        if (queue.contains(s)) {
-          if (queue.bucket_of(s) == new_bucket) continue;  // keeps its place in the FIFO
-          queue.remove(s);
-        }
-        queue.push(s, new_bucket);
-      }
+      for (std::uint32_t s : stencil) requeue(queue, mesh, s, evaluate_for_queue(s), bucket_count);
       if (options.validate_every_collapse) {
         const std::string problem = mesh.validate();
         if (!problem.empty())
@@ -340,6 +458,14 @@ SimplifyResult simplify(const PolygonMesh& input, const SimplifyOptions& options
       if ((report.collapses & 0xFFFF) == 0) progress.update(double(report.collapses) / double(planned));
     }
   };
+  if (in_parallel) {
+    collapse_in_parallel(mesh, initial_buckets, report.target_vertices, options, report);
+    std::vector<std::uint32_t>().swap(initial_buckets);
+    if (options.validate_every_collapse && !mesh.validate().empty())
+      throw std::logic_error("simplify: invariant broken by the parallel collapses: " + mesh.validate());
+    queue_all_edges(options.max_valence);
+    report.seconds_parallel = seconds_since_start(clock);
+  }
   if (collapse_wanted) {
     run_queue();
     report.vertices_after_paper_collapse = mesh.alive_vertices();
@@ -352,12 +478,7 @@ SimplifyResult simplify(const PolygonMesh& input, const SimplifyOptions& options
     while (with_flips && gained && mesh.alive_vertices() > target) {
       const std::size_t before = mesh.alive_vertices();
       ++report.flip_rounds;
-      for (std::uint32_t e = 0; e < mesh.edge_slots(); ++e) {
-        const Evaluation evaluation = evaluate_for_queue(e);
-        if (evaluation.legality != Legality::Legal) continue;
-        mesh.set_latest_delta_error(e, evaluation.delta_error);
-        queue.push(e, priority_bucket(mesh.error(e), bucket_count));
-      }
+      queue_all_edges(relaxed_valence);
       run_queue();
       gained = before - mesh.alive_vertices() > before / 100;
     }
@@ -424,6 +545,9 @@ std::string format_report(const SimplifyReport& r) {
   if (r.input_valence_flips) add("input: %zu flips to bring valences down to the limit\n", r.input_valence_flips);
   add("collapse: %zu collapses -> %zu vertices, %zu triangles; %s\n", r.collapses, r.vertices_after_collapse,
       r.triangles_after_collapse, r.stop_reason.c_str());
+  if (r.parallel_collapses)
+    add("parallel: %zu collapses on two threads inside two halves of the mesh in %.3f s, the rest serial\n",
+        r.parallel_collapses, r.seconds_parallel);
   if (r.collapses_after_flips)
     add("valence flips: the paper's rules stalled at %zu vertices; %zu rounds, %zu more collapses after %zu flips "
         "(%zu flips undone in %zu failed attempts)\n",

@@ -75,7 +75,8 @@ class CollapseMesh;
 // fans at most, then it starts over), not thread-safe: one per thread.
 class FanCache {
  public:
-  FanCache();
+  // `lane`: see CollapseMesh::kLanes; the cache follows that lane's changes.
+  explicit FanCache(int lane = 0);
 
  private:
   friend class CollapseMesh;
@@ -97,6 +98,7 @@ class FanCache {
   void clear(const CollapseMesh* mesh, std::uint64_t version);
 
   const CollapseMesh* mesh_ = nullptr;
+  int lane_ = 0;
   std::uint64_t version_ = 0;
   std::uint32_t stamp_ = 0;
   // Open-addressing table vertex -> fan, valid where slot_stamp_ == stamp_.
@@ -116,14 +118,19 @@ struct Evaluation {
 class CollapseMesh {
  public:
   static constexpr std::uint32_t kNone = ~std::uint32_t{0};
+  // Lanes let threads collapse disjoint regions at once (see simplify.cpp):
+  // each has its own version, stamps and counts, so one lane never touches a
+  // cache line the other writes. Lane l's collapses must stay inside its
+  // region: collapse_inside() must hold for the edge.
+  static constexpr int kLanes = 2;
 
   // Precondition: `mesh` is a triangle mesh that passed require_manifold().
   explicit CollapseMesh(const PolygonMesh& mesh, CollapseRules rules = {});
 
   std::uint32_t vertex_slots() const { return static_cast<std::uint32_t>(vertices_.size()); }
   std::uint32_t edge_slots() const { return static_cast<std::uint32_t>(edges_.size()); }
-  std::size_t alive_vertices() const { return alive_vertices_; }
-  std::size_t alive_triangles() const { return alive_triangles_; }
+  std::size_t alive_vertices() const;
+  std::size_t alive_triangles() const;
 
   bool vertex_alive(std::uint32_t v) const { return vertices_[v].halfedge != kNone; }
   bool edge_alive(std::uint32_t e) const { return edges_[e].halfedge != kNone; }
@@ -148,8 +155,9 @@ class CollapseMesh {
   double error(std::uint32_t e) const {
     return double(edges_[e].accumulated_error) + double(edges_[e].latest_delta);
   }
-  // Counts collapses; a FanCache filled at another version is stale.
-  std::uint64_t version() const { return version_; }
+  // Counts a lane's collapses and flips; a FanCache of that lane filled at
+  // another version is stale.
+  std::uint64_t version(int lane = 0) const { return lanes_[lane].version; }
 
   // Legality and, if the topological rules pass, the new position and delta
   // E of collapsing edge e. Thread-safe (reads only; one cache per thread).
@@ -191,14 +199,19 @@ class CollapseMesh {
   // (kNone for a boundary edge's missing ones) and `opposite_vertices` a and b
   // (b = kNone on the boundary).
   std::uint32_t collapse(std::uint32_t e, const Vec3& position, std::uint32_t removed_edges[3],
-                         std::uint32_t opposite_vertices[2]);
+                         std::uint32_t opposite_vertices[2], int lane = 0);
+
+  // True when e is interior and e's endpoints and all their neighbours have
+  // region[v] == id: then collapsing e writes only records of that region's
+  // vertices, their triangles and edges. O(valence).
+  bool collapse_inside(std::uint32_t e, const std::uint8_t* region, std::uint8_t id) const;
 
   // Appends to `edges` (no duplicates) the update stencil of Fig. 8 around
   // the vertices `centres`: every edge of every triangle incident to one of
   // them, i.e. the edges adjacent to the new vertex and to a and b plus the
-  // ring of edges between their outer endpoints. Uses an internal stamp, so
-  // not thread-safe.
-  void gather_stencil(const std::uint32_t* centres, int count, std::vector<std::uint32_t>& edges);
+  // ring of edges between their outer endpoints. Uses the lane's stamps: one
+  // thread per lane.
+  void gather_stencil(const std::uint32_t* centres, int count, std::vector<std::uint32_t>& edges, int lane = 0);
 
   // Checks every invariant of the corner table (opposite symmetry, edge ids,
   // valences, boundary flags and loop sizes, manifold fans, vertex
@@ -260,9 +273,15 @@ class CollapseMesh {
     std::uint32_t stamp;  // gather_stencil()'s "already listed"
   };
   HugePageVector<EdgeRecord> edges_;
-  std::uint32_t stamp_ = 0;
-  std::uint64_t version_ = 0;
-  std::size_t alive_vertices_ = 0, alive_triangles_ = 0;
+  // Per lane, on its own cache line: stamps are lane + kLanes * count, so no
+  // two lanes ever use the same value.
+  struct alignas(64) Lane {
+    std::uint64_t version = 0;
+    std::uint32_t stamp = 0;
+    std::size_t removed_vertices = 0, removed_triangles = 0;
+  };
+  std::array<Lane, kLanes> lanes_{};
+  std::size_t initial_vertices_ = 0, initial_triangles_ = 0;
 };
 
 }  // namespace isowave::simplify
