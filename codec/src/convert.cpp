@@ -77,6 +77,7 @@ ConvertResult convert_volume(const Volume& volume, const std::string& source, co
                                          : std::max<std::size_t>(4, static_cast<std::size_t>(std::llround(
                                                                         options.base_ratio * result.extracted_vertices)));
   simplify_options.compute_distance = false;
+  simplify_options.valence_flips = options.valence_flips;
   simplify::SimplifyResult simplified = simplify::simplify(surface.mesh, simplify_options, progress);
   result.simplification = simplified.report;
   PolygonMesh base = std::move(simplified.base);

@@ -29,6 +29,9 @@ struct ConvertOptions {
   // extracted vertex count.
   std::size_t base_vertices = 0;
   double base_ratio = 0.02;
+  // Valence-lowering flips when the paper's collapse rules stall (see
+  // SimplifyOptions::valence_flips): a smaller base mesh on high-genus surfaces.
+  bool valence_flips = true;
   // Quantization step in cells (see IswEncodeOptions::step); the expected
   // RMSE it adds is about half of it.
   double step_cells = 0.01;
