@@ -73,6 +73,24 @@ TEST(IswFormat, FileWhoseEveryCoefficientIsNonZeroDecodesCompletely) {
   EXPECT_EQ(d.chunks_decoded, d.chunks_total);
 }
 
+TEST(IswFormat, DecodeReusesAMatchingHierarchyAndIgnoresAnotherOne) {
+  const Encoded e = encode_sample(test::genus_slab(2), 2);
+  const IswDecoded built = decode_isw(e.bytes, "test.isw");
+  IswDecodeOptions options;
+  options.hierarchy = std::make_shared<const SubdivisionHierarchy>(e.surface.base, 2);
+  const IswDecoded reused = decode_isw(e.bytes, "test.isw", options);
+  EXPECT_EQ(reused.hierarchy, options.hierarchy);
+  EXPECT_EQ(reused.coefficients, built.coefficients);
+  EXPECT_EQ(reused.ranked, built.ranked);
+  // Another level count, or another base mesh: the decoder builds its own.
+  options.hierarchy = std::make_shared<const SubdivisionHierarchy>(e.surface.base, 1);
+  EXPECT_NE(decode_isw(e.bytes, "test.isw", options).hierarchy, options.hierarchy);
+  options.hierarchy = std::make_shared<const SubdivisionHierarchy>(test::genus_slab(1), 2);
+  const IswDecoded other = decode_isw(e.bytes, "test.isw", options);
+  EXPECT_NE(other.hierarchy, options.hierarchy);
+  EXPECT_EQ(other.coefficients, built.coefficients);
+}
+
 TEST(IswFormat, BaseOnlyDecodeIsTheSubdividedBaseMesh) {
   const Encoded e = encode_sample(test::mixed_disk(), 3);
   IswDecodeOptions options;
