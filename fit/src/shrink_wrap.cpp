@@ -34,6 +34,8 @@ void for_vertices(std::size_t n, const Body& body) {
 // gives statistics that do not depend on the thread count, without a
 // per-item array.
 constexpr std::size_t kBlock = 4096;
+// How many items ahead the gathering loops prefetch.
+constexpr std::size_t kPrefetchDistance = 8;
 template <class Partial, class Body>
 std::vector<Partial> for_blocks(std::size_t n, const Body& body) {
   std::vector<Partial> partials((n + kBlock - 1) / kBlock);
@@ -97,6 +99,135 @@ inline Vec3 allowed_direction(const WrapLevelMesh& mesh, std::size_t v, Vec3 d) 
 
 }  // namespace
 
+namespace {
+
+// Connectivity of level l >= 1 straight from the refinement step: every list
+// comes out in the order the generic edge-list construction of level 0 would
+// give (a v vertex's neighbours by parent edge, an e vertex's ends then its
+// f vertices, faces per vertex ascending), but the e and f vertices' rows are
+// filled in parallel and only the v vertices' rows need a pass in order.
+// `boundary_edge_count` receives each vertex's number of boundary edges.
+void build_refined_connectivity(const RefinementStep& s, WrapLevelMesh& mesh,
+                                std::vector<std::uint8_t>& boundary_edge_count) {
+  const std::size_t n = mesh.vertex_count;
+  const std::uint32_t parents = s.parent_vertex_count, first_face = s.first_face_vertex(),
+                      first_edge = s.first_edge_vertex();
+  const std::uint32_t parent_faces = s.parent_face_count, parent_edges = s.parent_edge_count;
+  const std::size_t child_faces = s.face_offsets.back();
+  const auto is_boundary = [&](std::uint32_t e) { return s.edge_faces[2 * e] == s.edge_faces[2 * e + 1]; };
+  const auto face_size = [&](std::uint32_t f) { return s.face_offsets[f + 1] - s.face_offsets[f]; };
+
+  // Row lengths, then offsets.
+  mesh.neighbour_offsets.resize(n + 1);
+  mesh.vertex_face_offsets.resize(n + 1);
+  mesh.neighbour_offsets[0] = mesh.vertex_face_offsets[0] = 0;
+  for_vertices(n, [&](std::size_t v) {
+    std::uint32_t neighbours, faces;
+    if (v < parents) {
+      neighbours = s.vertex_edge_offsets[v + 1] - s.vertex_edge_offsets[v];
+      faces = s.vertex_face_offsets[v + 1] - s.vertex_face_offsets[v];
+    } else if (v < first_edge) {
+      neighbours = faces = face_size(static_cast<std::uint32_t>(v - first_face));
+    } else {
+      const std::uint32_t adjacent = is_boundary(static_cast<std::uint32_t>(v - first_edge)) ? 1 : 2;
+      neighbours = 2 + adjacent;
+      faces = 2 * adjacent;
+    }
+    mesh.neighbour_offsets[v + 1] = neighbours;
+    mesh.vertex_face_offsets[v + 1] = faces;
+  });
+  std::partial_sum(mesh.neighbour_offsets.begin(), mesh.neighbour_offsets.end(), mesh.neighbour_offsets.begin());
+  std::partial_sum(mesh.vertex_face_offsets.begin(), mesh.vertex_face_offsets.end(), mesh.vertex_face_offsets.begin());
+  detail::reserve_on_huge_pages(mesh.neighbours, mesh.neighbour_offsets[n]);
+  mesh.neighbours.resize(mesh.neighbour_offsets[n]);
+  detail::reserve_on_huge_pages(mesh.vertex_faces, mesh.vertex_face_offsets[n]);
+  mesh.vertex_faces.resize(mesh.vertex_face_offsets[n]);
+  mesh.boundary_neighbours.assign(2 * n, kNone);
+  boundary_edge_count.assign(n, 0);
+
+  // Faces: parent face corner k becomes child face k.
+  mesh.face_offsets.resize(child_faces + 1);
+  for_vertices(child_faces + 1, [&](std::size_t f) { mesh.face_offsets[f] = static_cast<std::uint32_t>(4 * f); });
+  detail::reserve_on_huge_pages(mesh.face_vertices, 4 * child_faces);
+  mesh.face_vertices.resize(4 * child_faces);
+  for_vertices(parent_faces, [&](std::size_t f) {
+    const std::uint32_t centre = first_face + static_cast<std::uint32_t>(f);
+    const std::uint32_t begin = s.face_offsets[f], end = s.face_offsets[f + 1];
+    for (std::uint32_t k = begin; k < end; ++k) {
+      const std::uint32_t previous = k == begin ? end - 1 : k - 1;
+      std::uint32_t* quad = mesh.face_vertices.data() + 4 * std::size_t{k};
+      quad[0] = s.face_vertices[k];
+      quad[1] = s.face_edges[k];
+      quad[2] = centre;
+      quad[3] = s.face_edges[previous];
+    }
+  });
+
+  // f vertices: their e vertices and child faces, in corner order.
+  for_vertices(parent_faces, [&](std::size_t f) {
+    const std::uint32_t v = first_face + static_cast<std::uint32_t>(f);
+    const std::uint32_t begin = s.face_offsets[f], size = face_size(static_cast<std::uint32_t>(f));
+    for (std::uint32_t k = 0; k < size; ++k) {
+      mesh.neighbours[mesh.neighbour_offsets[v] + k] = s.face_edges[begin + k];
+      mesh.vertex_faces[mesh.vertex_face_offsets[v] + k] = begin + k;
+    }
+  });
+  // e vertices: the edge's ends, then its f vertices ascending; the child
+  // faces at corner k (edge k) and at the next corner (whose edge k-1 it is).
+  for_vertices(parent_edges, [&](std::size_t e) {
+    const std::uint32_t v = first_edge + static_cast<std::uint32_t>(e);
+    const std::uint32_t a = s.edge_vertices[2 * e], b = s.edge_vertices[2 * e + 1];
+    const std::uint32_t f0 = s.edge_faces[2 * e], f1 = s.edge_faces[2 * e + 1];
+    std::uint32_t* row = mesh.neighbours.data() + mesh.neighbour_offsets[v];
+    row[0] = a;
+    row[1] = b;
+    row[2] = std::min(f0, f1);
+    if (f0 != f1) row[3] = std::max(f0, f1);
+    else {
+      mesh.boundary_neighbours[2 * std::size_t{v}] = a;
+      mesh.boundary_neighbours[2 * std::size_t{v} + 1] = b;
+      boundary_edge_count[v] = 2;
+    }
+    std::uint32_t faces[4];
+    std::uint32_t count = 0;
+    for (const std::uint32_t centre : {f0, f1}) {
+      if (count > 0 && f0 == f1) break;
+      const std::uint32_t f = centre - first_face, begin = s.face_offsets[f], end = s.face_offsets[f + 1];
+      for (std::uint32_t k = begin; k < end; ++k)
+        if (s.face_edges[k] == v) {
+          faces[count++] = k;
+          faces[count++] = k + 1 == end ? begin : k + 1;
+          break;
+        }
+    }
+    for (std::uint32_t i = 1; i < count; ++i)  // at most 4: insertion sort
+      for (std::uint32_t j = i; j > 0 && faces[j - 1] > faces[j]; --j) std::swap(faces[j - 1], faces[j]);
+    std::copy(faces, faces + count, mesh.vertex_faces.data() + mesh.vertex_face_offsets[v]);
+  });
+  // v vertices: their e vertices by parent edge, boundary ones also as
+  // boundary neighbours; their child faces ascending. In order.
+  {
+    std::vector<std::uint32_t> fill(mesh.neighbour_offsets.begin(), mesh.neighbour_offsets.begin() + parents);
+    for (std::uint32_t e = 0; e < parent_edges; ++e) {
+      const std::uint32_t middle = first_edge + e;
+      const bool boundary = is_boundary(e);
+      for (const std::uint32_t end : {s.edge_vertices[2 * e], s.edge_vertices[2 * e + 1]}) {
+        mesh.neighbours[fill[end]++] = middle;
+        if (!boundary) continue;
+        if (boundary_edge_count[end] < 2) mesh.boundary_neighbours[2 * std::size_t{end} + boundary_edge_count[end]] = middle;
+        boundary_edge_count[end] = static_cast<std::uint8_t>(std::min(255, boundary_edge_count[end] + 1));
+      }
+    }
+    fill.assign(mesh.vertex_face_offsets.begin(), mesh.vertex_face_offsets.begin() + parents);
+    for (std::uint32_t k = 0; k < child_faces; ++k) {
+      const std::uint32_t corner = s.face_vertices[k];
+      mesh.vertex_faces[fill[corner]++] = k;
+    }
+  }
+}
+
+}  // namespace
+
 WrapLevelMesh make_wrap_level_mesh(const SubdivisionHierarchy& hierarchy, int level,
                                    const std::vector<Vec3>& positions, const Volume& box_volume) {
   if (level < 0 || level > hierarchy.levels())
@@ -107,105 +238,87 @@ WrapLevelMesh make_wrap_level_mesh(const SubdivisionHierarchy& hierarchy, int le
   mesh.vertex_count = n;
   if (positions.size() < n) throw Error(ErrorKind::InvalidArgument, "too few positions for the level");
 
-  // Edges as (a, b, boundary) and faces, from the refinement step's arrays.
-  std::vector<std::uint32_t> edge_ends;
-  std::vector<std::uint8_t> edge_boundary;
+  std::vector<std::uint8_t> boundary_edge_count;
   if (level >= 1) {
-    const RefinementStep& s = hierarchy.step(level);
-    edge_ends.reserve(2 * (2 * std::size_t{s.parent_edge_count} + s.face_offsets.back()));
-    for (std::uint32_t e = 0; e < s.parent_edge_count; ++e) {
-      const std::uint8_t boundary = s.edge_faces[2 * e] == s.edge_faces[2 * e + 1];
-      const std::uint32_t middle = s.first_edge_vertex() + e;
-      edge_ends.insert(edge_ends.end(), {s.edge_vertices[2 * e], middle, middle, s.edge_vertices[2 * e + 1]});
-      edge_boundary.insert(edge_boundary.end(), {boundary, boundary});
-    }
-    mesh.face_offsets.reserve(std::size_t{s.face_offsets.back()} + 1);
-    mesh.face_offsets.push_back(0);
-    mesh.face_vertices.reserve(4 * std::size_t{s.face_offsets.back()});
-    for (std::uint32_t f = 0; f < s.parent_face_count; ++f) {
-      const std::uint32_t centre = s.first_face_vertex() + f;
-      const std::uint32_t begin = s.face_offsets[f], end = s.face_offsets[f + 1];
-      for (std::uint32_t k = begin; k < end; ++k) {
-        edge_ends.insert(edge_ends.end(), {centre, s.face_edges[k]});
-        edge_boundary.push_back(0);
-        const std::uint32_t previous = k == begin ? end - 1 : k - 1;
-        mesh.face_vertices.insert(mesh.face_vertices.end(),
-                                  {s.face_vertices[k], s.face_edges[k], centre, s.face_edges[previous]});
-        mesh.face_offsets.push_back(static_cast<std::uint32_t>(mesh.face_vertices.size()));
-      }
-    }
+    build_refined_connectivity(hierarchy.step(level), mesh, boundary_edge_count);
   } else {
-    const PolygonMesh& base = hierarchy.base();
-    mesh.face_offsets = base.face_offsets;
-    mesh.face_vertices = base.face_vertices;
-    if (hierarchy.levels() >= 1) {
-      const RefinementStep& s = hierarchy.step(1);
-      edge_ends = s.edge_vertices;
-      for (std::uint32_t e = 0; e < s.parent_edge_count; ++e)
-        edge_boundary.push_back(s.edge_faces[2 * e] == s.edge_faces[2 * e + 1]);
-    } else {
-      // No refinement step to read: pair up half-edges by sorting.
-      struct HalfEdge {
-        std::uint32_t low, high, from;
-      };
-      std::vector<HalfEdge> half_edges;
-      for (std::size_t f = 0; f < base.face_count(); ++f) {
-        const std::uint32_t* face = base.face_begin(f);
-        const std::uint32_t size = base.face_size(f);
-        for (std::uint32_t k = 0; k < size; ++k) {
-          const std::uint32_t a = face[k], b = face[k + 1 == size ? 0 : k + 1];
-          half_edges.push_back({std::min(a, b), std::max(a, b), a});
+    // Level 0: edges as (a, b, boundary) from the first refinement step, or by
+    // pairing half-edges; then the generic compressed rows.
+    std::vector<std::uint32_t> edge_ends;
+    std::vector<std::uint8_t> edge_boundary;
+    {
+      const PolygonMesh& base = hierarchy.base();
+      mesh.face_offsets = base.face_offsets;
+      mesh.face_vertices = base.face_vertices;
+      if (hierarchy.levels() >= 1) {
+        const RefinementStep& s = hierarchy.step(1);
+        edge_ends = s.edge_vertices;
+        for (std::uint32_t e = 0; e < s.parent_edge_count; ++e)
+          edge_boundary.push_back(s.edge_faces[2 * e] == s.edge_faces[2 * e + 1]);
+      } else {
+        // No refinement step to read: pair up half-edges by sorting.
+        struct HalfEdge {
+          std::uint32_t low, high, from;
+        };
+        std::vector<HalfEdge> half_edges;
+        for (std::size_t f = 0; f < base.face_count(); ++f) {
+          const std::uint32_t* face = base.face_begin(f);
+          const std::uint32_t size = base.face_size(f);
+          for (std::uint32_t k = 0; k < size; ++k) {
+            const std::uint32_t a = face[k], b = face[k + 1 == size ? 0 : k + 1];
+            half_edges.push_back({std::min(a, b), std::max(a, b), a});
+          }
+        }
+        std::sort(half_edges.begin(), half_edges.end(), [](const HalfEdge& x, const HalfEdge& y) {
+          return x.low != y.low ? x.low < y.low : x.high < y.high;
+        });
+        for (std::size_t k = 0; k < half_edges.size();) {
+          std::size_t m = k + 1;
+          while (m < half_edges.size() && half_edges[m].low == half_edges[k].low && half_edges[m].high == half_edges[k].high) ++m;
+          edge_ends.insert(edge_ends.end(), {half_edges[k].low, half_edges[k].high});
+          edge_boundary.push_back(m - k == 1);
+          k = m;
         }
       }
-      std::sort(half_edges.begin(), half_edges.end(), [](const HalfEdge& x, const HalfEdge& y) {
-        return x.low != y.low ? x.low < y.low : x.high < y.high;
-      });
-      for (std::size_t k = 0; k < half_edges.size();) {
-        std::size_t m = k + 1;
-        while (m < half_edges.size() && half_edges[m].low == half_edges[k].low && half_edges[m].high == half_edges[k].high) ++m;
-        edge_ends.insert(edge_ends.end(), {half_edges[k].low, half_edges[k].high});
-        edge_boundary.push_back(m - k == 1);
-        k = m;
-      }
     }
-  }
 
-  // Neighbours and boundary neighbours.
-  const std::size_t edge_count = edge_boundary.size();
-  mesh.neighbour_offsets.assign(n + 1, 0);
-  for (std::size_t e = 0; e < edge_count; ++e) {
-    ++mesh.neighbour_offsets[edge_ends[2 * e] + 1];
-    ++mesh.neighbour_offsets[edge_ends[2 * e + 1] + 1];
-  }
-  std::partial_sum(mesh.neighbour_offsets.begin(), mesh.neighbour_offsets.end(), mesh.neighbour_offsets.begin());
-  mesh.neighbours.resize(mesh.neighbour_offsets[n]);
-  mesh.boundary_neighbours.assign(2 * n, kNone);
-  std::vector<std::uint8_t> boundary_edge_count(n, 0);
-  {
-    std::vector<std::uint32_t> fill(mesh.neighbour_offsets.begin(), mesh.neighbour_offsets.end() - 1);
+    // Neighbours and boundary neighbours.
+    const std::size_t edge_count = edge_boundary.size();
+    mesh.neighbour_offsets.assign(n + 1, 0);
     for (std::size_t e = 0; e < edge_count; ++e) {
-      const std::uint32_t a = edge_ends[2 * e], b = edge_ends[2 * e + 1];
-      mesh.neighbours[fill[a]++] = b;
-      mesh.neighbours[fill[b]++] = a;
-      if (!edge_boundary[e]) continue;
-      for (const auto& [from, to] : {std::pair{a, b}, std::pair{b, a}}) {
-        if (boundary_edge_count[from] < 2) mesh.boundary_neighbours[2 * from + boundary_edge_count[from]] = to;
-        boundary_edge_count[from] = static_cast<std::uint8_t>(std::min(255, boundary_edge_count[from] + 1));
+      ++mesh.neighbour_offsets[edge_ends[2 * e] + 1];
+      ++mesh.neighbour_offsets[edge_ends[2 * e + 1] + 1];
+    }
+    std::partial_sum(mesh.neighbour_offsets.begin(), mesh.neighbour_offsets.end(), mesh.neighbour_offsets.begin());
+    mesh.neighbours.resize(mesh.neighbour_offsets[n]);
+    mesh.boundary_neighbours.assign(2 * n, kNone);
+    boundary_edge_count.assign(n, 0);
+    {
+      std::vector<std::uint32_t> fill(mesh.neighbour_offsets.begin(), mesh.neighbour_offsets.end() - 1);
+      for (std::size_t e = 0; e < edge_count; ++e) {
+        const std::uint32_t a = edge_ends[2 * e], b = edge_ends[2 * e + 1];
+        mesh.neighbours[fill[a]++] = b;
+        mesh.neighbours[fill[b]++] = a;
+        if (!edge_boundary[e]) continue;
+        for (const auto& [from, to] : {std::pair{a, b}, std::pair{b, a}}) {
+          if (boundary_edge_count[from] < 2) mesh.boundary_neighbours[2 * from + boundary_edge_count[from]] = to;
+          boundary_edge_count[from] = static_cast<std::uint8_t>(std::min(255, boundary_edge_count[from] + 1));
+        }
       }
     }
-  }
-  std::vector<std::uint32_t>().swap(edge_ends);
+    std::vector<std::uint32_t>().swap(edge_ends);
 
-  // Faces per vertex.
-  mesh.vertex_face_offsets.assign(n + 1, 0);
-  for (std::uint32_t v : mesh.face_vertices) ++mesh.vertex_face_offsets[v + 1];
-  std::partial_sum(mesh.vertex_face_offsets.begin(), mesh.vertex_face_offsets.end(), mesh.vertex_face_offsets.begin());
-  mesh.vertex_faces.resize(mesh.vertex_face_offsets[n]);
-  {
-    std::vector<std::uint32_t> fill(mesh.vertex_face_offsets.begin(), mesh.vertex_face_offsets.end() - 1);
-    for (std::size_t f = 0; f + 1 < mesh.face_offsets.size(); ++f)
-      for (std::uint32_t k = mesh.face_offsets[f]; k < mesh.face_offsets[f + 1]; ++k)
-        mesh.vertex_faces[fill[mesh.face_vertices[k]]++] = static_cast<std::uint32_t>(f);
+    // Faces per vertex.
+    mesh.vertex_face_offsets.assign(n + 1, 0);
+    for (std::uint32_t v : mesh.face_vertices) ++mesh.vertex_face_offsets[v + 1];
+    std::partial_sum(mesh.vertex_face_offsets.begin(), mesh.vertex_face_offsets.end(), mesh.vertex_face_offsets.begin());
+    mesh.vertex_faces.resize(mesh.vertex_face_offsets[n]);
+    {
+      std::vector<std::uint32_t> fill(mesh.vertex_face_offsets.begin(), mesh.vertex_face_offsets.end() - 1);
+      for (std::size_t f = 0; f + 1 < mesh.face_offsets.size(); ++f)
+        for (std::uint32_t k = mesh.face_offsets[f]; k < mesh.face_offsets[f + 1]; ++k)
+          mesh.vertex_faces[fill[mesh.face_vertices[k]]++] = static_cast<std::uint32_t>(f);
+    }
   }
 
   // Roles and box faces.
@@ -214,7 +327,7 @@ WrapLevelMesh make_wrap_level_mesh(const SubdivisionHierarchy& hierarchy, int le
   const double cell = box_volume.cell_size();
   mesh.role.assign(n, WrapRole::Free);
   mesh.box_face.assign(n, -1);
-  for (std::size_t v = 0; v < n; ++v) {
+  for_vertices(n, [&](std::size_t v) {
     if (sharp[v] || boundary_edge_count[v] >= 3) {
       mesh.role[v] = WrapRole::Fixed;
     } else if (boundary_edge_count[v] == 2) {
@@ -230,7 +343,7 @@ WrapLevelMesh make_wrap_level_mesh(const SubdivisionHierarchy& hierarchy, int le
       }
       mesh.box_face[v] = static_cast<std::int8_t>(nearest);
     }
-  }
+  });
   return mesh;
 }
 
@@ -267,29 +380,40 @@ void relax(const WrapLevelMesh& mesh, const Volume& box_volume, double weight, c
 
 namespace {
 
-// Unit normal of every face.
-template <class Normals>
-void compute_face_normals(const WrapLevelMesh& mesh, const std::vector<Vec3>& positions, Normals& face_normals) {
+// Unit face normals in single precision: the vertex loops gather them at
+// scattered places, and half the bytes per normal is worth more there than
+// digits beyond the 7th in a search direction.
+struct FaceNormal {
+  float x, y, z;
+};
+using FaceNormals = HugePageVector<FaceNormal>;
+
+void compute_face_normals(const WrapLevelMesh& mesh, const std::vector<Vec3>& positions, FaceNormals& face_normals) {
   const std::size_t faces = mesh.face_count();
   face_normals.resize(faces);
   for_vertices(faces, [&](std::size_t f) {
-    face_normals[f] = face_normal(mesh.face_vertices.data() + mesh.face_offsets[f],
-                                  mesh.face_offsets[f + 1] - mesh.face_offsets[f], positions);
+    const Vec3 n = face_normal(mesh.face_vertices.data() + mesh.face_offsets[f],
+                               mesh.face_offsets[f + 1] - mesh.face_offsets[f], positions);
+    face_normals[f] = {static_cast<float>(n.x), static_cast<float>(n.y), static_cast<float>(n.z)};
   });
 }
 
-template <class Normals>
-Vec3 vertex_normal(const WrapLevelMesh& mesh, const Normals& face_normals, std::size_t v) {
-  Vec3 sum;
-  for (std::uint32_t k = mesh.vertex_face_offsets[v]; k < mesh.vertex_face_offsets[v + 1]; ++k)
-    sum += face_normals[mesh.vertex_faces[k]];
-  return normalized(sum);
+// Unit average of the normals of the faces around v (zero if undefined).
+Vec3 vertex_normal(const WrapLevelMesh& mesh, const FaceNormals& face_normals, std::size_t v) {
+  double x = 0, y = 0, z = 0;
+  for (std::uint32_t k = mesh.vertex_face_offsets[v]; k < mesh.vertex_face_offsets[v + 1]; ++k) {
+    const FaceNormal& n = face_normals[mesh.vertex_faces[k]];
+    x += n.x;
+    y += n.y;
+    z += n.z;
+  }
+  return normalized(Vec3{x, y, z});
 }
 
 }  // namespace
 
 std::vector<Vec3> vertex_normals(const WrapLevelMesh& mesh, const std::vector<Vec3>& positions) {
-  HugePageVector<Vec3> face_normals;
+  FaceNormals face_normals;
   compute_face_normals(mesh, positions, face_normals);
   std::vector<Vec3> normals(mesh.vertex_count);
   for_vertices(mesh.vertex_count, [&](std::size_t v) { normals[v] = vertex_normal(mesh, face_normals, v); });
@@ -344,7 +468,7 @@ struct AttractionPartial {
 // it across rounds (hundreds of megabytes at the finest level).
 AttractionStatistics attract_with(const WrapLevelMesh& mesh, const SignedDistanceField& distance,
                                   const AttractionOptions& options, const std::vector<Vec3>& in,
-                                  std::vector<Vec3>& out, HugePageVector<Vec3>& face_normals) {
+                                  std::vector<Vec3>& out, FaceNormals& face_normals) {
   assert(in.size() >= mesh.vertex_count && &in != &out);
   out.resize(std::max(out.size(), mesh.vertex_count));
   const Volume& field = distance.distance;
@@ -383,7 +507,8 @@ AttractionStatistics attract_with(const WrapLevelMesh& mesh, const SignedDistanc
     box.clip(p, d, t_low, t_high);
     const Vec3 pg = grid.grid_point(p), dg = grid.grid_direction(d);
     const auto g_of_t = [&](double t) { return grid.value_at(pg + t * dg); };
-    const double g0 = g_of_t(0);
+    const TrilinearSample at_p = grid.sample_at(pg);
+    const double g0 = at_p.value;
     // Searches one side up to `box_limit` (and the reach): first to `near`,
     // then, if nothing was found, on to the full reach.
     const auto search_side = [&](CrossingSearch& search, double sign, double box_limit) {
@@ -400,9 +525,29 @@ AttractionStatistics attract_with(const WrapLevelMesh& mesh, const SignedDistanc
       // as far as the crossing already found.
       const double first_sign = g0 < 0 ? 1.0 : -1.0;
       const double first_box = first_sign > 0 ? t_high : -t_low, second_box = first_sign > 0 ? -t_low : t_high;
-      CrossingSearch first{0, g0, 0};
-      best = search_side(first, first_sign, first_box);
+      const double first_step = std::max(0.9 * std::abs(g0), min_step);
+      // Near the surface (the common case after the first rounds) one Newton
+      // step along the line usually lands on the crossing: accepted when the
+      // gradient agrees with d, the step stays within the search's first
+      // step (where the search would only have compared the signs at its
+      // ends) and the value there is within the tolerance, or it brackets
+      // the crossing for the refinement.
+      const double slope = dot(at_p.gradient, d);
+      if (slope > 0) {
+        const double newton = -g0 / slope;  // signed like first_sign
+        if (std::abs(newton) <= std::min(near, first_box)) {
+          const double g1 = g_of_t(newton);
+          if (std::abs(g1) <= tolerance)
+            best = std::abs(newton);
+          else if (detail::root_side(g1) != detail::root_side(g0))
+            best = std::abs(detail::refine_bracket(g_of_t, 0.0, g0, newton, g1, tolerance, tolerance));
+        }
+      }
       best_sign = first_sign;
+      if (best < 0) {
+        CrossingSearch first{0, g0, 0};
+        best = search_side(first, first_sign, first_box);
+      }
       CrossingSearch second{0, g0, 0};
       double other = -1;
       if (best < 0) {
@@ -412,7 +557,7 @@ AttractionStatistics attract_with(const WrapLevelMesh& mesh, const SignedDistanc
         // disagrees (G starts on the wrong side there), so a search that
         // would take just one sample is skipped.
         const double limit = std::min(best, second_box);
-        if (limit > std::max(0.9 * std::abs(g0), min_step))
+        if (limit > first_step)
           other = continue_crossing_search(g_of_t, second, -first_sign, limit, min_step, tolerance);
       }
       if (other >= 0 && (best < 0 || other < best)) {
@@ -437,7 +582,17 @@ AttractionStatistics attract_with(const WrapLevelMesh& mesh, const SignedDistanc
   };
   const std::vector<AttractionPartial> partials =
       for_blocks<AttractionPartial>(mesh.vertex_count, [&](std::size_t begin, std::size_t end, AttractionPartial& partial) {
-        for (std::size_t v = begin; v < end; ++v) attract_vertex(v, partial);
+        for (std::size_t v = begin; v < end; ++v) {
+          // The samples and face normals of a vertex a few ahead: both are
+          // gathered from arrays far larger than the cache.
+          if (v + kPrefetchDistance < end) {
+            const std::size_t ahead = v + kPrefetchDistance;
+            grid.prefetch_at(grid.grid_point(in[ahead]));
+            for (std::uint32_t k = mesh.vertex_face_offsets[ahead]; k < mesh.vertex_face_offsets[ahead + 1]; ++k)
+              __builtin_prefetch(&face_normals[mesh.vertex_faces[k]]);
+          }
+          attract_vertex(v, partial);
+        }
       });
 
   AttractionStatistics stats;
@@ -458,7 +613,7 @@ AttractionStatistics attract_with(const WrapLevelMesh& mesh, const SignedDistanc
 
 AttractionStatistics attract(const WrapLevelMesh& mesh, const SignedDistanceField& distance,
                              const AttractionOptions& options, const std::vector<Vec3>& in, std::vector<Vec3>& out) {
-  HugePageVector<Vec3> face_normals;
+  FaceNormals face_normals;
   return attract_with(mesh, distance, options, in, out, face_normals);
 }
 
@@ -467,9 +622,10 @@ namespace {
 // Moves p along the field gradient (within the vertex's box face, if held)
 // to where the trilinear field equals iso, at most `range` away. False if
 // there is no gradient or no root within range.
-bool project_onto_isosurface(const WrapLevelMesh& mesh, const Box& box, const Volume& field, double iso, double range,
-                             std::size_t v, const Vec3& p, Vec3& target) {
-  const TrilinearSample s = trilinear_sample(field, p);
+bool project_onto_isosurface(const WrapLevelMesh& mesh, const Box& box, const TrilinearGrid& field, double cell,
+                             double iso, double range, std::size_t v, const Vec3& p, Vec3& target) {
+  const Vec3 pg = field.grid_point(p);
+  const TrilinearSample s = field.sample_at(pg);
   const double h0 = s.value - iso;
   if (!std::isfinite(h0)) return false;
   if (h0 == 0) {
@@ -481,15 +637,16 @@ bool project_onto_isosurface(const WrapLevelMesh& mesh, const Box& box, const Vo
   if (!(slope > 0)) return false;
   double t_low, t_high;
   box.clip(p, u, t_low, t_high);
-  const auto h = [&](double t) { return trilinear_value(field, p + std::clamp(t, t_low, t_high) * u) - iso; };
+  const Vec3 ug = field.grid_direction(u);
+  const auto h = [&](double t) { return field.value_at(pg + std::clamp(t, t_low, t_high) * ug) - iso; };
   double t = 0;
-  const double cell = field.cell_size(), tolerance = 1e-4 * cell;
+  const double tolerance = 1e-4 * cell;
   // Newton steps along the line (one or two samples near the surface), then
   // the bracketed search if they do not settle.
   bool found = false;
   double newton = -h0 / slope;
   for (int step = 0; step < 3 && std::abs(newton) <= range; ++step) {
-    const TrilinearSample sample = trilinear_sample(field, p + std::clamp(newton, t_low, t_high) * u);
+    const TrilinearSample sample = field.sample_at(pg + std::clamp(newton, t_low, t_high) * ug);
     const double along = dot(sample.gradient, u);
     if (!(along > 0) || !std::isfinite(sample.value)) break;
     const double correction = (sample.value - iso) / along;
@@ -505,97 +662,123 @@ bool project_onto_isosurface(const WrapLevelMesh& mesh, const Box& box, const Vo
   return is_finite(target);
 }
 
-// Per face: 1 if its normal disagrees with the field gradient at its centroid.
-// With `moved` and `previous`, faces without a moved corner keep their
-// previous flag.
-std::vector<std::uint8_t> tangled_faces(const WrapLevelMesh& mesh, const Volume& field, bool flip,
-                                        const std::vector<Vec3>& positions,
-                                        const std::vector<std::uint8_t>* moved = nullptr,
-                                        const std::vector<std::uint8_t>* previous = nullptr) {
+// Sets tangled[f] to 1 if face f's normal disagrees with the field gradient
+// at its centroid, and returns their number. With `moved`, faces without a
+// moved corner keep their flag from `previous`.
+std::size_t find_tangled_faces(const WrapLevelMesh& mesh, const TrilinearGrid& field, bool flip,
+                               const std::vector<Vec3>& positions, HugePageVector<std::uint8_t>& tangled,
+                               const HugePageVector<std::uint8_t>* moved = nullptr,
+                               const HugePageVector<std::uint8_t>* previous = nullptr) {
   const double expected_sign = flip ? 1.0 : -1.0;  // normals toward lower values unless flipped
-  std::vector<std::uint8_t> tangled(mesh.face_count());
-  for_vertices(mesh.face_count(), [&](std::size_t f) {
-    const std::uint32_t begin = mesh.face_offsets[f], size = mesh.face_offsets[f + 1] - begin;
-    if (moved && previous) {
-      bool any = false;
-      for (std::uint32_t k = 0; k < size; ++k) any |= (*moved)[mesh.face_vertices[begin + k]] != 0;
-      if (!any) {
-        tangled[f] = (*previous)[f];
-        return;
-      }
-    }
-    Vec3 newell, centroid;
-    for (std::uint32_t k = 0; k < size; ++k) {
-      const Vec3& a = positions[mesh.face_vertices[begin + k]];
-      newell += cross(a, positions[mesh.face_vertices[begin + (k + 1 == size ? 0 : k + 1)]]);
-      centroid += a;
-    }
-    centroid *= 1.0 / double(size);
-    tangled[f] = !(expected_sign * dot(newell, trilinear_sample(field, centroid).gradient) > 0);
-  });
-  return tangled;
+  tangled.resize(mesh.face_count());
+  const std::vector<std::size_t> counts =
+      for_blocks<std::size_t>(mesh.face_count(), [&](std::size_t first, std::size_t last, std::size_t& count) {
+        for (std::size_t f = first; f < last; ++f) {
+          // The centroid's samples are near those of the first corner.
+          if (f + kPrefetchDistance < last)
+            field.prefetch_at(field.grid_point(positions[mesh.face_vertices[mesh.face_offsets[f + kPrefetchDistance]]]));
+          const std::uint32_t begin = mesh.face_offsets[f], size = mesh.face_offsets[f + 1] - begin;
+          const std::uint32_t* corners = mesh.face_vertices.data() + begin;
+          if (moved) {
+            bool any = false;
+            for (std::uint32_t k = 0; k < size; ++k) any |= (*moved)[corners[k]] != 0;
+            if (!any) {
+              tangled[f] = (*previous)[f];
+              count += tangled[f];
+              continue;
+            }
+          }
+          Vec3 newell, centroid;
+          for (std::uint32_t k = 0; k < size; ++k) {
+            const Vec3& a = positions[corners[k]];
+            newell += cross(a, positions[corners[k + 1 == size ? 0 : k + 1]]);
+            centroid += a;
+          }
+          centroid *= 1.0 / double(size);
+          tangled[f] = !(expected_sign * dot(newell, field.sample(centroid).gradient) > 0);
+          count += tangled[f];
+        }
+      });
+  std::size_t total = 0;
+  for (std::size_t count : counts) total += count;
+  return total;
 }
 
-}  // namespace
+struct CorrectionPartial {
+  std::size_t movable = 0, corrected = 0, failed = 0;
+  double move_sum = 0, move_max = 0;
+};
 
-CorrectionStatistics correct_to_isosurface(const WrapLevelMesh& mesh, const Volume& field, double iso,
-                                           double max_move_cells, std::vector<Vec3>& positions) {
+CorrectionStatistics correct_with(const WrapLevelMesh& mesh, const TrilinearGrid& field, const Box& box, double cell,
+                                  double iso, double max_move_cells, std::vector<Vec3>& positions) {
   assert(positions.size() >= mesh.vertex_count);
-  const Box box(field);
-  const double cell = field.cell_size();
   const double range = max_move_cells * cell;
-  std::vector<float> moved(mesh.vertex_count, -1.0f);  // -1: fixed, -2: failed
-  for_vertices(mesh.vertex_count, [&](std::size_t v) {
-    if (mesh.role[v] == WrapRole::Fixed) return;
-    const Vec3 p = positions[v];
-    moved[v] = -2.0f;
-    Vec3 target;
-    if (!project_onto_isosurface(mesh, box, field, iso, range, v, p, target)) return;
-    positions[v] = target;
-    moved[v] = static_cast<float>(norm(target - p) / cell);
-  });
+  const std::vector<CorrectionPartial> partials = for_blocks<CorrectionPartial>(
+      mesh.vertex_count, [&](std::size_t begin, std::size_t end, CorrectionPartial& partial) {
+        for (std::size_t v = begin; v < end; ++v) {
+          if (v + kPrefetchDistance < end) field.prefetch_at(field.grid_point(positions[v + kPrefetchDistance]));
+          if (mesh.role[v] == WrapRole::Fixed) continue;
+          ++partial.movable;
+          const Vec3 p = positions[v];
+          Vec3 target;
+          if (!project_onto_isosurface(mesh, box, field, cell, iso, range, v, p, target)) {
+            ++partial.failed;
+            continue;
+          }
+          positions[v] = target;
+          ++partial.corrected;
+          const double moved = norm(target - p) / cell;
+          partial.move_sum += moved;
+          partial.move_max = std::max(partial.move_max, moved);
+        }
+      });
   CorrectionStatistics stats;
   double sum = 0;
-  for (float m : moved) {
-    if (m == -1.0f) continue;
-    ++stats.movable;
-    if (m == -2.0f) {
-      ++stats.failed;
-      continue;
-    }
-    ++stats.corrected;
-    sum += m;
-    stats.max_move_cells = std::max(stats.max_move_cells, double(m));
+  for (const CorrectionPartial& partial : partials) {
+    stats.movable += partial.movable;
+    stats.corrected += partial.corrected;
+    stats.failed += partial.failed;
+    sum += partial.move_sum;
+    stats.max_move_cells = std::max(stats.max_move_cells, partial.move_max);
   }
   stats.mean_move_cells = stats.corrected ? sum / double(stats.corrected) : 0.0;
   return stats;
 }
 
-UntangleStatistics untangle(const WrapLevelMesh& mesh, const Volume& field, double iso, bool flip, int rounds,
-                            double max_move_cells, std::vector<Vec3>& positions) {
+UntangleStatistics untangle_with(const WrapLevelMesh& mesh, const TrilinearGrid& field, const Box& box, double cell,
+                                 double iso, bool flip, int rounds, double max_move_cells,
+                                 std::vector<Vec3>& positions) {
   assert(positions.size() >= mesh.vertex_count);
-  const Box box(field);
-  const double range = max_move_cells * field.cell_size();
+  const double range = max_move_cells * cell;
   UntangleStatistics stats;
-  std::vector<std::uint8_t> tangled = tangled_faces(mesh, field, flip, positions);
-  for (std::uint8_t t : tangled) stats.tangled_before += t;
+  HugePageVector<std::uint8_t> tangled, next_tangled;
+  stats.tangled_before = find_tangled_faces(mesh, field, flip, positions, tangled);
   stats.tangled_after = stats.tangled_before;
-  std::vector<std::uint8_t> selected(mesh.vertex_count);
+  HugePageVector<std::uint8_t> corner, selected;
   std::vector<Vec3> next;
   for (int round = 0; round < rounds && stats.tangled_after > 0; ++round) {
     // The corners of tangled faces and their neighbours.
-    std::fill(selected.begin(), selected.end(), 0);
-    for (std::size_t f = 0; f < mesh.face_count(); ++f) {
-      if (!tangled[f]) continue;
-      for (std::uint32_t k = mesh.face_offsets[f]; k < mesh.face_offsets[f + 1]; ++k) {
-        const std::uint32_t v = mesh.face_vertices[k];
-        selected[v] = 1;
-        for (std::uint32_t n = mesh.neighbour_offsets[v]; n < mesh.neighbour_offsets[v + 1]; ++n)
-          selected[mesh.neighbours[n]] = 1;
-      }
-    }
-    next.assign(positions.begin(), positions.begin() + static_cast<std::ptrdiff_t>(mesh.vertex_count));
+    corner.resize(mesh.vertex_count);
+    selected.resize(mesh.vertex_count);
     for_vertices(mesh.vertex_count, [&](std::size_t v) {
+      std::uint8_t any = 0;
+      for (std::uint32_t k = mesh.vertex_face_offsets[v]; k < mesh.vertex_face_offsets[v + 1]; ++k)
+        any |= tangled[mesh.vertex_faces[k]];
+      corner[v] = any;
+    });
+    for_vertices(mesh.vertex_count, [&](std::size_t v) {
+      std::uint8_t any = corner[v];
+      for (std::uint32_t k = mesh.neighbour_offsets[v]; k < mesh.neighbour_offsets[v + 1] && !any; ++k)
+        any = corner[mesh.neighbours[k]];
+      selected[v] = any;
+    });
+    detail::reserve_on_huge_pages(next, mesh.vertex_count);
+    next.resize(mesh.vertex_count);
+    for_vertices(mesh.vertex_count, [&](std::size_t v) {
+      next[v] = positions[v];
+      // The smoothed point's samples are near the vertex's own.
+      if (v + kPrefetchDistance < mesh.vertex_count && selected[v + kPrefetchDistance])
+        field.prefetch_at(field.grid_point(positions[v + kPrefetchDistance]));
       if (!selected[v] || mesh.role[v] == WrapRole::Fixed) return;
       Vec3 centroid;
       const std::uint32_t b0 = mesh.boundary_neighbours[2 * v], b1 = mesh.boundary_neighbours[2 * v + 1];
@@ -609,19 +792,31 @@ UntangleStatistics untangle(const WrapLevelMesh& mesh, const Volume& field, doub
       }
       const Vec3 smoothed = place(mesh, box, v, centroid);
       Vec3 target;
-      if (project_onto_isosurface(mesh, box, field, iso, range, v, smoothed, target)) next[v] = target;
+      if (project_onto_isosurface(mesh, box, field, cell, iso, range, v, smoothed, target)) next[v] = target;
     });
     // Only faces with a moved corner can change.
-    std::vector<std::uint8_t> next_tangled = tangled_faces(mesh, field, flip, next, &selected, &tangled);
-    std::size_t count = 0;
-    for (std::uint8_t t : next_tangled) count += t;
+    const std::size_t count = find_tangled_faces(mesh, field, flip, next, next_tangled, &selected, &tangled);
     if (count >= stats.tangled_after) break;  // a round that does not help is dropped
-    std::copy(next.begin(), next.end(), positions.begin());
+    if (positions.size() == mesh.vertex_count) positions.swap(next);
+    else std::copy(next.begin(), next.end(), positions.begin());
     tangled.swap(next_tangled);
     stats.tangled_after = count;
     ++stats.rounds;
   }
   return stats;
+}
+
+}  // namespace
+
+CorrectionStatistics correct_to_isosurface(const WrapLevelMesh& mesh, const Volume& field, double iso,
+                                           double max_move_cells, std::vector<Vec3>& positions) {
+  return correct_with(mesh, TrilinearGrid(field), Box(field), field.cell_size(), iso, max_move_cells, positions);
+}
+
+UntangleStatistics untangle(const WrapLevelMesh& mesh, const Volume& field, double iso, bool flip, int rounds,
+                            double max_move_cells, std::vector<Vec3>& positions) {
+  return untangle_with(mesh, TrilinearGrid(field), Box(field), field.cell_size(), iso, flip, rounds, max_move_cells,
+                       positions);
 }
 
 ShrinkWrapResult shrink_wrap(const SubdivisionHierarchy& hierarchy, const std::vector<Vec3>& base_positions,
@@ -659,12 +854,11 @@ ShrinkWrapResult shrink_wrap(const SubdivisionHierarchy& hierarchy, const std::v
   std::vector<Vec3>& data = result.positions;
   std::vector<Vec3> scratch;
   const std::size_t fine_count = hierarchy.vertex_count(levels);
-  for (std::vector<Vec3>* buffer : {&data, &scratch}) {
-    buffer->reserve(fine_count);
-    detail::advise_huge_pages(buffer->data(), fine_count * sizeof(Vec3));
-  }
+  detail::reserve_on_huge_pages(data, fine_count);
+  detail::reserve_on_huge_pages(scratch, fine_count);
   data.assign(base_positions.begin(), base_positions.begin() + static_cast<std::ptrdiff_t>(base_count));
-  HugePageVector<Vec3> face_normals;
+  FaceNormals face_normals;
+  detail::reserve_on_huge_pages(face_normals, levels > 0 ? std::size_t{hierarchy.step(levels).face_offsets.back()} : 0);
   double work_done = 0, work_total = 0;
   for (int level = 0; level <= levels; ++level) work_total += double(hierarchy.vertex_count(level));
 
@@ -693,16 +887,25 @@ ShrinkWrapResult shrink_wrap(const SubdivisionHierarchy& hierarchy, const std::v
       stats.last_attraction = attract_with(mesh, distance, options.attraction, scratch, data, face_normals);
       stats.seconds_attraction += seconds_since(phase);
     }
-    if (level == levels && options.final_correction) {
-      const auto phase = Clock::now();
-      result.correction = correct_to_isosurface(mesh, field, distance.iso, options.correction_max_cells, data);
-      stats.seconds_correction = seconds_since(phase);
-    }
-    if (level == levels && options.untangle_rounds > 0) {
-      const auto phase = Clock::now();
-      result.untangle = untangle(mesh, field, distance.iso, distance.flip, options.untangle_rounds,
-                                 options.correction_max_cells, data);
-      stats.seconds_untangle = seconds_since(phase);
+    if (level == levels && (options.final_correction || options.untangle_rounds > 0)) {
+      auto phase = Clock::now();
+      // Both sample the scalar field at scattered places: a copy on huge
+      // pages takes a few milliseconds and saves most of the TLB misses.
+      const HugePageVector<float> field_values(field.values.begin(), field.values.end());
+      const TrilinearGrid field_grid(field, field_values.data());
+      const Box box(field);
+      const double cell = field.cell_size();
+      if (options.final_correction) {
+        result.correction =
+            correct_with(mesh, field_grid, box, cell, distance.iso, options.correction_max_cells, data);
+        stats.seconds_correction = seconds_since(phase);
+      }
+      phase = Clock::now();
+      if (options.untangle_rounds > 0) {
+        result.untangle = untangle_with(mesh, field_grid, box, cell, distance.iso, distance.flip,
+                                        options.untangle_rounds, options.correction_max_cells, data);
+        stats.seconds_untangle = seconds_since(phase);
+      }
     }
     if (options.keep_levels && level < levels)
       result.level_positions.emplace_back(data.begin(), data.begin() + static_cast<std::ptrdiff_t>(mesh.vertex_count));

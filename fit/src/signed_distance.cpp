@@ -177,7 +177,9 @@ SignedDistanceField compute_signed_distance(const Volume& field, const SignedDis
       banded ? static_cast<float>(far_value * far_value) : std::numeric_limits<float>::infinity();
 
   // Inside/outside per node; later the cell, seed and sign-repair bits.
-  HugePageVector<std::uint8_t> flags(node_count);
+  HugePageVector<std::uint8_t> flags;
+  detail::reserve_on_huge_pages(flags, node_count);
+  flags.resize(node_count);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nz), [&](const tbb::blocked_range<std::size_t>& r) {
     for (std::size_t n = r.begin() * slice; n < r.end() * slice; ++n)
       flags[n] = is_inside(field.values[n], iso) ? kInside : 0;
@@ -279,6 +281,7 @@ SignedDistanceField compute_signed_distance(const Volume& field, const SignedDis
           if (cell_kept(ii, jj, kk)) return true;
     return false;
   };
+  const TrilinearGrid grid(field);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nz, 1), [&](const tbb::blocked_range<std::size_t>& r) {
     for (std::size_t k = r.begin(); k < r.end(); ++k) {
       SliceSeeds& out = slices[k];
@@ -354,7 +357,8 @@ SignedDistanceField compute_signed_distance(const Volume& field, const SignedDis
                 if (toward > 0) reach = std::min(reach, (box_high[a] - x[a]) / toward);
                 else if (toward < 0) reach = std::min(reach, (box_low[a] - x[a]) / toward);
               }
-              const auto h = [&](double t) { return trilinear_value(field, x + t * u) - options.iso; };
+              const Vec3 xg = grid.grid_point(x), ug = grid.grid_direction(u);
+              const auto h = [&](double t) { return grid.value_at(xg + t * ug) - options.iso; };
               double t = 0;
               // Newton steps along the line from the first-order estimate
               // usually land within the tolerance in one or two samples; the
@@ -363,7 +367,7 @@ SignedDistanceField compute_signed_distance(const Volume& field, const SignedDis
               if (reach > 0 && std::abs(first_order) <= reach) {
                 t = first_order;
                 for (int step = 0; step < 6 && !found; ++step) {
-                  const TrilinearSample sample = trilinear_sample(field, x + t * u);
+                  const TrilinearSample sample = grid.sample_at(xg + t * ug);
                   const double slope = dot(sample.gradient, u);
                   if (!(slope > 0) || !std::isfinite(sample.value)) break;
                   const double correction = (sample.value - options.iso) / slope;
@@ -404,10 +408,13 @@ SignedDistanceField compute_signed_distance(const Volume& field, const SignedDis
   stats.first_order_seeds = stats.seed_nodes - stats.projected_seeds;
   if (stats.seed_nodes >= kNoPoint) throw Error(ErrorKind::Unsupported, "too many seed nodes");
 
-  // Random access at every update: huge pages (the result keeps `squared`).
+  // Random access at every update: huge pages, faulted in on all threads
+  // (the result keeps `squared`).
   std::vector<float> squared;
   detail::assign_on_huge_pages(squared, node_count, std::numeric_limits<float>::infinity());
-  HugePageVector<std::uint32_t> closest(node_count, kNoPoint);
+  HugePageVector<std::uint32_t> closest;
+  detail::reserve_on_huge_pages(closest, node_count);
+  closest.assign(node_count, kNoPoint);
   std::vector<Point3f> points;
   points.reserve(stats.seed_nodes);
   NodeQueue queue(stats.seed_nodes + stats.seed_nodes / 2);

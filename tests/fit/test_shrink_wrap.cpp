@@ -194,7 +194,15 @@ TEST(FitQuality, ReportsDistancesTanglesAndEvenness) {
   const FitQuality bad = measure_fit_quality(hierarchy, 2, moved, p.extracted, reference, p.field, 0.0, false);
   EXPECT_NEAR(bad.surface_max, 3.0, 0.3);
   EXPECT_GT(bad.isosurface_max, 2.5);
-  EXPECT_GT(bad.area_ratio_max, good.area_ratio_max);
+  // Sliding one corner of a fine face 95% of the way to the opposite corner
+  // shrinks that face to a sliver: the smallest area ratio drops.
+  const PolygonMesh fine = hierarchy.control_mesh(2, result.positions);
+  const std::uint32_t* face = fine.face_begin(0);
+  std::vector<Vec3> squeezed = result.positions;
+  squeezed[face[0]] = result.positions[face[0]] + 0.95 * (result.positions[face[2]] - result.positions[face[0]]);
+  const FitQuality uneven =
+      measure_fit_quality(hierarchy, 2, squeezed, p.extracted, reference, p.field, 0.0, false);
+  EXPECT_LT(uneven.area_ratio_min, 0.5 * good.area_ratio_min);
 }
 
 TEST(ShrinkWrap, RejectsBadInput) {

@@ -29,8 +29,12 @@
 // not finite keeps its old position.
 //
 // Cost per round: O(vertices of the level) plus the line searches (a few
-// trilinear samples each). Memory: the level's connectivity (about 60 bytes
-// per vertex) and two position buffers.
+// trilinear samples each; near the surface usually two, see attract()).
+// Memory: the level's connectivity (about 60 bytes per vertex), two position
+// buffers sized for level L from the start, single-precision face normals
+// (12 bytes per face) and, on level L, a copy of the scalar field and a third
+// position buffer for untangle(). Large buffers live on transparent huge
+// pages, faulted in on all threads.
 #include <cstddef>
 #include <cstdint>
 #include <vector>
@@ -103,7 +107,13 @@ struct AttractionStatistics {
 // Unit average normal of the faces around each vertex (zero where undefined).
 std::vector<Vec3> vertex_normals(const WrapLevelMesh& mesh, const std::vector<Vec3>& positions);
 
-// One attraction round (see above) toward the zero set of `distance`.
+// One attraction round (see above) toward the zero set of `distance`. Near
+// the surface the search starts with one Newton step along the normal (value
+// and gradient at the vertex): its end is taken when the field is within
+// 1e-3 cells of zero there, or brackets the crossing for the refinement;
+// otherwise (and for the other side) the line is stepped by the distance
+// value, at least 0.2 cells. A vertex's edge lengths (for the reach) are read
+// only when a search goes past min_reach_cells.
 AttractionStatistics attract(const WrapLevelMesh& mesh, const SignedDistanceField& distance,
                              const AttractionOptions& options, const std::vector<Vec3>& in, std::vector<Vec3>& out);
 
@@ -141,7 +151,7 @@ UntangleStatistics untangle(const WrapLevelMesh& mesh, const Volume& field, doub
                             double max_move_cells, std::vector<Vec3>& positions);
 
 struct ShrinkWrapOptions {
-  int iterations = 4;              // relaxation + attraction rounds on levels 0 .. L-1
+  int iterations = 3;              // relaxation + attraction rounds on levels 0 .. L-1
   int final_level_iterations = 2;  // rounds on level L
   double relaxation_weight = 0.5;  // paper: average of old position and neighbour centroid
   AttractionOptions attraction;

@@ -40,8 +40,9 @@
 // seed point and the queue (at most N indices, usually far fewer); flat arrays
 // because miranda's 256^3 grid has 16.7 M nodes and a node object with a
 // pointer or an embedded point would double the footprint. The result keeps
-// only one float per node. Time O(N + updates); seeding is parallel (TBB),
-// propagation sequential; both are deterministic.
+// only one float per node. The node arrays live on transparent huge pages
+// (random access in the propagation). Time O(N + updates); seeding is
+// parallel (TBB), propagation sequential; both are deterministic.
 #include <cstddef>
 
 #include "isowave/core/mesh.h"

@@ -101,8 +101,11 @@ ISOWAVE_TRILINEAR_INLINE TrilinearSample trilinear_sample(const Volume& volume, 
 // must outlive it and keep its size. O(1) per sample.
 class TrilinearGrid {
  public:
-  explicit TrilinearGrid(const Volume& volume)
-      : values_(volume.values.data()),
+  explicit TrilinearGrid(const Volume& volume) : TrilinearGrid(volume, volume.values.data()) {}
+  // The volume's grid with other samples in the same layout (a copy of its
+  // values elsewhere, e.g. on huge pages).
+  TrilinearGrid(const Volume& volume, const float* values)
+      : values_(values),
         stride_y_(volume.dims[0]),
         stride_z_(volume.dims[0] * volume.dims[1]),
         origin_(volume.origin),
@@ -157,6 +160,21 @@ class TrilinearGrid {
 
   double value(const Vec3& world) const { return value_at(grid_point(world)); }
   TrilinearSample sample(const Vec3& world) const { return sample_at(grid_point(world)); }
+
+  // Asks the cache for the samples around grid coordinates g (a hint; loops
+  // over scattered points issue it a few points ahead).
+  void prefetch_at(const Vec3& g) const {
+#if defined(__GNUC__) || defined(__clang__)
+    double u, v, w;
+    const float* c = corner(g, u, v, w);
+    __builtin_prefetch(c);
+    __builtin_prefetch(c + stride_y_);
+    __builtin_prefetch(c + stride_z_);
+    __builtin_prefetch(c + stride_z_ + stride_y_);
+#else
+    (void)g;
+#endif
+  }
 
  private:
   // Lowest corner of the cell holding g (clamped onto the box) and the
