@@ -59,9 +59,10 @@ FitQuality measure_fit_quality(const SubdivisionHierarchy& hierarchy, int level,
   if (q.nonfinite_vertices) return q;  // nothing else is meaningful
 
   // Vertices against the field and the extracted surface.
+  const TrilinearGrid grid(field);
   std::vector<double> first_order(q.vertices);
   for_each_index(q.vertices, [&](std::size_t v) {
-    const TrilinearSample s = trilinear_sample(field, mesh.positions[v]);
+    const TrilinearSample s = grid.sample(mesh.positions[v]);
     const double g = norm(s.gradient);
     first_order[v] = g > 0 && std::isfinite(s.value) ? std::abs(s.value - iso) / g : -1.0;
   });
@@ -104,7 +105,7 @@ FitQuality measure_fit_quality(const SubdivisionHierarchy& hierarchy, int level,
     }
     centroid *= 1.0 / double(size);
     area[f] = 0.5 * norm(newell);
-    const Vec3 gradient = trilinear_sample(field, centroid).gradient;
+    const Vec3 gradient = grid.sample(centroid).gradient;
     tangled[f] = !(expected_sign * dot(newell, gradient) > 0) ? 1 : 0;
   });
   for (std::uint8_t t : tangled) q.tangled_faces += t;
