@@ -10,7 +10,9 @@ int highest_bit(std::uint64_t word) { return 63 - __builtin_clzll(word); }
 }  // namespace
 
 BucketQueue::BucketQueue(std::size_t item_count, std::uint32_t bucket_count)
-    : links_(item_count, Links{kNil, kNil, kNotQueued}),
+    : own_links_(item_count, Links{kNil, kNil, kNotQueued}),
+      links_(reinterpret_cast<unsigned char*>(own_links_.data())),
+      stride_(sizeof(Links)),
       head_(bucket_count, kNil),
       tail_(bucket_count, kNil),
       occupied_((bucket_count + 63) / 64, 0),
@@ -18,17 +20,29 @@ BucketQueue::BucketQueue(std::size_t item_count, std::uint32_t bucket_count)
   assert(bucket_count >= 1);
 }
 
+BucketQueue::BucketQueue(Links* links, std::size_t stride, std::size_t item_count, std::uint32_t bucket_count)
+    : links_(reinterpret_cast<unsigned char*>(links)),
+      stride_(stride),
+      head_(bucket_count, kNil),
+      tail_(bucket_count, kNil),
+      occupied_((bucket_count + 63) / 64, 0),
+      occupied_words_((occupied_.size() + 63) / 64, 0) {
+  assert(bucket_count >= 1 && stride >= sizeof(Links) && (item_count == 0 || links != nullptr));
+  (void)item_count;
+}
+
 void BucketQueue::push(std::uint32_t item, std::uint32_t bucket) {
   assert(!contains(item) && bucket < bucket_count());
-  links_[item].bucket = bucket;
-  links_[item].next = kNil;
-  links_[item].prev = tail_[bucket];
+  Links& item_links = link(item);
+  item_links.bucket = bucket;
+  item_links.next = kNil;
+  item_links.prev = tail_[bucket];
   if (tail_[bucket] == kNil) {
     head_[bucket] = item;
     occupied_[bucket / 64] |= std::uint64_t{1} << (bucket % 64);
     occupied_words_[bucket / 4096] |= std::uint64_t{1} << ((bucket / 64) % 64);
   } else {
-    links_[tail_[bucket]].next = item;
+    link(tail_[bucket]).next = item;
   }
   tail_[bucket] = item;
   ++size_;
@@ -36,16 +50,17 @@ void BucketQueue::push(std::uint32_t item, std::uint32_t bucket) {
 
 void BucketQueue::remove(std::uint32_t item) {
   assert(contains(item));
-  const std::uint32_t bucket = links_[item].bucket;
-  const std::uint32_t before = links_[item].prev, after = links_[item].next;
-  if (before == kNil) head_[bucket] = after; else links_[before].next = after;
-  if (after == kNil) tail_[bucket] = before; else links_[after].prev = before;
+  Links& item_links = link(item);
+  const std::uint32_t bucket = item_links.bucket;
+  const std::uint32_t before = item_links.prev, after = item_links.next;
+  if (before == kNil) head_[bucket] = after; else link(before).next = after;
+  if (after == kNil) tail_[bucket] = before; else link(after).prev = before;
   if (head_[bucket] == kNil) {
     std::uint64_t& word = occupied_[bucket / 64];
     word &= ~(std::uint64_t{1} << (bucket % 64));
     if (word == 0) occupied_words_[bucket / 4096] &= ~(std::uint64_t{1} << ((bucket / 64) % 64));
   }
-  links_[item].bucket = kNotQueued;
+  item_links.bucket = kNotQueued;
   --size_;
 }
 

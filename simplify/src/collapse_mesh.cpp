@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cassert>
 #include <cmath>
 #include <limits>
@@ -9,6 +10,10 @@
 #include <numeric>
 #include <tuple>
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include "isowave/core/error.h"
 #include "isowave/simplify/collapse_error.h"
 
 namespace isowave::simplify {
@@ -38,61 +43,172 @@ const char* to_string(Legality legality) {
   return "?";
 }
 
-CollapseMesh::CollapseMesh(const PolygonMesh& mesh, CollapseRules rules) : rules_(rules) {
+CollapseMesh::CollapseMesh(const PolygonMesh& mesh, CollapseRules rules) : rules_(rules) { build(mesh, nullptr); }
+
+CollapseMesh::CollapseMesh(const PolygonMesh& mesh, const std::vector<std::uint32_t>& vertex_order, CollapseRules rules)
+    : rules_(rules) {
+  assert(vertex_order.size() == mesh.vertex_count());
+  build(mesh, vertex_order.data());
+}
+
+void CollapseMesh::build(const PolygonMesh& mesh, const std::uint32_t* order) {
   assert(rules_.max_valence >= 3 && rules_.max_valence + 8 <= kMaxRing);
   const std::uint32_t vertex_count = static_cast<std::uint32_t>(mesh.vertex_count());
-  const std::uint32_t corner_count = static_cast<std::uint32_t>(mesh.face_vertices.size());
-  assert(corner_count == 3 * mesh.face_count());
-  vertices_.resize(vertex_count);
-  for (std::uint32_t v = 0; v < vertex_count; ++v)
-    vertices_[v] = VertexRecord{mesh.positions[v], kNone, 0, kNone, mesh.is_sharp(v) ? kSharp : std::uint8_t{0}};
-  corners_.resize(corner_count);
-  for (std::uint32_t c = 0; c < corner_count; ++c) corners_[c] = CornerRecord{mesh.face_vertices[c], kNone, kNone};
+  const std::uint32_t triangle_count = static_cast<std::uint32_t>(mesh.face_count());
+  const std::uint32_t corner_count = 3 * triangle_count;
+  assert(mesh.face_vertices.size() == corner_count);
+  const auto not_manifold = [](const std::string& what) {
+    throw Error(ErrorKind::Topology, "not a consistently oriented 2-manifold: " + what);
+  };
+  if (triangle_count == 0) not_manifold("the mesh has no faces");
+  using Range = tbb::blocked_range<std::uint32_t>;
+  constexpr std::uint32_t kGrain = 1 << 14;
+
+  std::vector<std::uint32_t> new_index;
+  if (order) {
+    new_index.resize(vertex_count);
+    tbb::parallel_for(Range(0, vertex_count, kGrain), [&](const Range& range) {
+      for (std::uint32_t k = range.begin(); k != range.end(); ++k) new_index[order[k]] = k;
+    });
+  }
   input_had_sharp_ = !mesh.sharp.empty();
+  // The big arrays' pages are faulted in on all threads before the fill.
+  reserve_fresh_on_huge_pages(vertices_, vertex_count);
+  vertices_.resize(vertex_count);
+  tbb::parallel_for(Range(0, vertex_count, kGrain), [&](const Range& range) {
+    for (std::uint32_t k = range.begin(); k != range.end(); ++k) {
+      const std::uint32_t v = order ? order[k] : k;
+      vertices_[k] = VertexRecord{mesh.positions[v], kNone, 0, kNone, mesh.is_sharp(v) ? kSharp : std::uint8_t{0}, 0};
+    }
+  });
 
-  // Outgoing corners per vertex (compressed rows) to pair half-edges in O(n).
-  std::vector<std::uint32_t> offsets(vertex_count + 1, 0);
-  for (std::uint32_t v : mesh.face_vertices) ++offsets[v + 1];
-  std::partial_sum(offsets.begin(), offsets.end(), offsets.begin());
-  std::vector<std::uint32_t> outgoing(corner_count);
-  {
-    std::vector<std::uint32_t> fill(offsets.begin(), offsets.end() - 1);
-    for (std::uint32_t c = 0; c < corner_count; ++c) outgoing[fill[corners_[c].vertex]++] = c;
-  }
-  edges_.reserve(corner_count / 2 + corner_count / 8);
-  for (std::uint32_t c = 0; c < corner_count; ++c) {
-    if (corners_[c].edge != kNone) continue;
-    const std::uint32_t u = corners_[c].vertex, w = corners_[next(c)].vertex;
-    for (std::uint32_t i = offsets[w]; i < offsets[w + 1]; ++i) {
-      const std::uint32_t candidate = outgoing[i];
-      if (corners_[next(candidate)].vertex == u) {
-        corners_[c].opposite = candidate;
-        corners_[candidate].opposite = c;
-        break;
+  // Renumbered triangles ordered by their smallest vertex: a counting sort,
+  // stable, so that ties keep the input order.
+  std::vector<std::uint32_t> triangle_order;
+  if (order) {
+    std::vector<std::uint32_t> smallest(triangle_count);
+    tbb::parallel_for(Range(0, triangle_count, kGrain), [&](const Range& range) {
+      for (std::uint32_t t = range.begin(); t != range.end(); ++t) {
+        const std::uint32_t* face = mesh.face_vertices.data() + 3 * std::size_t{t};
+        smallest[t] = std::min({new_index[face[0]], new_index[face[1]], new_index[face[2]]});
       }
-    }
-    const std::uint32_t edge = static_cast<std::uint32_t>(edges_.size());
-    edges_.push_back(EdgeRecord{c, 0.0f, 0.0f, 0});
-    corners_[c].edge = edge;
-    if (corners_[c].opposite != kNone) corners_[corners_[c].opposite].edge = edge;
+    });
+    std::vector<std::uint32_t> slot(vertex_count + 1, 0);
+    for (std::uint32_t t = 0; t < triangle_count; ++t) ++slot[smallest[t] + 1];
+    std::partial_sum(slot.begin(), slot.end(), slot.begin());
+    triangle_order.resize(triangle_count);
+    for (std::uint32_t t = 0; t < triangle_count; ++t) triangle_order[slot[smallest[t]]++] = t;
   }
-  std::vector<std::uint32_t>().swap(outgoing);
+  reserve_fresh_on_huge_pages(corners_, corner_count);
+  corners_.resize(corner_count);
+  std::atomic<bool> repeated_vertex{false};
+  tbb::parallel_for(Range(0, triangle_count, kGrain), [&](const Range& range) {
+    for (std::uint32_t t = range.begin(); t != range.end(); ++t) {
+      const std::uint32_t* face = mesh.face_vertices.data() + 3 * std::size_t{order ? triangle_order[t] : t};
+      std::uint32_t v[3];
+      for (int i = 0; i < 3; ++i) {
+        v[i] = order ? new_index[face[i]] : face[i];
+        corners_[3 * t + i] = CornerRecord{v[i], kNone, kNone};
+      }
+      if (v[0] == v[1] || v[1] == v[2] || v[0] == v[2]) repeated_vertex = true;
+    }
+  });
+  if (repeated_vertex) not_manifold("a triangle uses a vertex twice");
+  std::vector<std::uint32_t>().swap(triangle_order);
+  std::vector<std::uint32_t>().swap(new_index);
 
-  for (std::uint32_t c = 0; c < corner_count; ++c) {
-    const std::uint32_t v = corners_[c].vertex;
-    ++vertices_[v].valence;
-    if (corners_[c].opposite == kNone) {
-      vertices_[v].halfedge = c;
-      vertices_[v].flags |= kBoundary;
-    } else if (vertices_[v].halfedge == kNone) {
-      vertices_[v].halfedge = c;
+  // Outgoing corners per vertex (compressed rows, ascending) to pair
+  // half-edges in O(n).
+  std::vector<std::uint32_t> first(vertex_count + 1, 0);
+  for (std::uint32_t c = 0; c < corner_count; ++c) ++first[corners_[c].vertex + 1];
+  std::partial_sum(first.begin(), first.end(), first.begin());
+  // Each entry with the corner's target, so that pairing reads the rows only.
+  struct Outgoing {
+    std::uint32_t corner, target;
+  };
+  std::vector<Outgoing> outgoing(corner_count);
+  {
+    std::vector<std::uint32_t> fill(first.begin(), first.end() - 1);
+    for (std::uint32_t c = 0; c < corner_count; ++c)
+      outgoing[fill[corners_[c].vertex]++] = Outgoing{c, corners_[next(c)].vertex};
+  }
+  // Opposites. A corner u -> w with two candidates w -> u lies on an edge of
+  // more than two triangles or traversed twice in one direction; the case
+  // without any w -> u shows up below as a vertex with two boundary corners.
+  std::atomic<bool> shared_edge{false};
+  tbb::parallel_for(Range(0, corner_count, kGrain), [&](const Range& range) {
+    for (std::uint32_t c = range.begin(); c != range.end(); ++c) {
+      const std::uint32_t u = corners_[c].vertex, w = corners_[next(c)].vertex;
+      std::uint32_t found = kNone, matches = 0;
+      for (std::uint32_t i = first[w]; i < first[w + 1]; ++i)
+        if (outgoing[i].target == u && matches++ == 0) found = outgoing[i].corner;
+      if (matches > 1) shared_edge = true;
+      corners_[c].opposite = found;
     }
-  }
-  for (std::uint32_t v = 0; v < vertex_count; ++v) {
-    if (is_boundary(v)) ++vertices_[v].valence;  // one more neighbour than corners
-    if (vertices_[v].halfedge != kNone) ++initial_vertices_;
-  }
-  initial_triangles_ = mesh.face_count();
+  });
+  if (shared_edge) not_manifold("an edge has more than two triangles or two of the same orientation");
+
+  // Edge ids in corner order: one per corner without an opposite or with a
+  // later one. Counted per chunk, then numbered.
+  constexpr std::uint32_t kChunk = 1 << 16;
+  const std::uint32_t chunk_count = (corner_count + kChunk - 1) / kChunk;
+  std::vector<std::uint32_t> chunk_first(chunk_count + 1, 0);
+  const auto owns_edge = [&](std::uint32_t c) {
+    const std::uint32_t o = corners_[c].opposite;
+    return o == kNone || o > c;
+  };
+  tbb::parallel_for(std::uint32_t{0}, chunk_count, [&](std::uint32_t chunk) {
+    std::uint32_t count = 0;
+    for (std::uint32_t c = chunk * kChunk; c < std::min(corner_count, (chunk + 1) * kChunk); ++c) count += owns_edge(c);
+    chunk_first[chunk + 1] = count;
+  });
+  std::partial_sum(chunk_first.begin(), chunk_first.end(), chunk_first.begin());
+  reserve_fresh_on_huge_pages(edges_, chunk_first[chunk_count]);
+  edges_.resize(chunk_first[chunk_count]);
+  tbb::parallel_for(std::uint32_t{0}, chunk_count, [&](std::uint32_t chunk) {
+    std::uint32_t edge = chunk_first[chunk];
+    for (std::uint32_t c = chunk * kChunk; c < std::min(corner_count, (chunk + 1) * kChunk); ++c) {
+      if (!owns_edge(c)) continue;
+      edges_[edge] = EdgeRecord{c, 0.0f, 0.0f, 0, {kNone, kNone, BucketQueue::kNotQueued}, 0};
+      corners_[c].edge = edge;
+      if (corners_[c].opposite != kNone) corners_[corners_[c].opposite].edge = edge;
+      ++edge;
+    }
+  });
+
+  // Vertices: half-edge (the boundary one, else the first), valence, and the
+  // manifold test of require_manifold(): walking the fan from there reaches
+  // every corner of the vertex.
+  std::atomic<bool> unreferenced{false}, several_fans{false};
+  tbb::parallel_for(Range(0, vertex_count, kGrain), [&](const Range& range) {
+    for (std::uint32_t v = range.begin(); v != range.end(); ++v) {
+      const std::uint32_t begin = first[v], end = first[v + 1];
+      if (begin == end) {
+        unreferenced = true;
+        continue;
+      }
+      std::uint32_t start = outgoing[begin].corner, boundary_corners = 0;
+      for (std::uint32_t i = begin; i < end; ++i)
+        if (corners_[outgoing[i].corner].opposite == kNone) {
+          start = outgoing[i].corner;
+          ++boundary_corners;
+        }
+      VertexRecord& record = vertices_[v];
+      record.halfedge = start;
+      record.valence = end - begin + (boundary_corners > 0 ? 1 : 0);  // a boundary vertex has one more neighbour
+      if (boundary_corners > 0) record.flags |= kBoundary;
+      std::uint32_t visited = 0, c = start;
+      do {
+        ++visited;
+        c = corners_[prev(c)].opposite;
+      } while (c != kNone && c != start && visited <= end - begin);
+      if (boundary_corners > 1 || visited != end - begin) several_fans = true;
+    }
+  });
+  if (unreferenced) not_manifold("a vertex is used by no triangle");
+  if (several_fans) not_manifold("a vertex's triangles form more than one fan");
+  initial_vertices_ = vertex_count;
+  initial_triangles_ = triangle_count;
   for (int l = 0; l < kLanes; ++l) lanes_[l].stamp = static_cast<std::uint32_t>(l);
 
   for (std::uint32_t v = 0; v < vertex_count; ++v) {
@@ -105,7 +221,6 @@ CollapseMesh::CollapseMesh(const PolygonMesh& mesh, CollapseRules rules) : rules
     }
     loop_size_.push_back(size);
   }
-
 }
 
 template <typename Visit>
@@ -127,11 +242,10 @@ std::uint32_t CollapseMesh::find_edge(std::uint32_t a, std::uint32_t b) const {
   return found;
 }
 
-FanCache::FanCache(int lane) : lane_(lane), slot_vertex_(kSlots), slot_fan_(kSlots), slot_stamp_(kSlots, 0) {
+FanCache::FanCache(int lane)
+    : lane_(lane), slot_vertex_(kSlots), slot_fan_(kSlots), slot_stamp_(kSlots, 0), entries_(new Entry[kEntries]) {
   assert(lane >= 0 && lane < CollapseMesh::kLanes);
   fans_.reserve(kMaxFans);
-  corners_.reserve(16 * kMaxFans);
-  ring_.reserve(17 * kMaxFans);
 }
 
 void FanCache::clear(const CollapseMesh* mesh, std::uint64_t version) {
@@ -142,8 +256,7 @@ void FanCache::clear(const CollapseMesh* mesh, std::uint64_t version) {
     stamp_ = 1;
   }
   fans_.clear();
-  corners_.clear();
-  ring_.clear();
+  used_entries_ = 0;
 }
 
 std::uint32_t CollapseMesh::fan(std::uint32_t v, FanCache& cache) const {
@@ -155,29 +268,49 @@ std::uint32_t CollapseMesh::fan(std::uint32_t v, FanCache& cache) const {
   cache.slot_vertex_[slot] = v;
   cache.slot_fan_[slot] = index;
 
-  const std::uint32_t begin = static_cast<std::uint32_t>(cache.corners_.size());
-  std::uint32_t last = kNone;
-  for_each_corner(v, [&](std::uint32_t c) {
-    cache.corners_.push_back(FanCache::Corner{Vec3{}, 0.0, c / 3});
-    const std::uint32_t w = corners_[next(c)].vertex;
-    cache.ring_.push_back(FanCache::RingVertex{vertices_[w].position, w});
-    last = c;
-  });
-  const std::uint32_t closing = corners_[prev(last)].vertex;
-  cache.ring_.push_back(FanCache::RingVertex{vertices_[closing].position, closing});
-  const std::uint32_t count = static_cast<std::uint32_t>(cache.corners_.size()) - begin;
   // Corner t's triangle is (v, ring t, ring t+1): ring t+1 is the vertex
   // before v in that triangle, since the next corner is opposite prev(c).
-  const Vec3& centre = vertices_[v].position;
-  for (std::uint32_t t = 0; t < count; ++t) {
-    FanCache::Corner& corner = cache.corners_[begin + t];
-    corner.old_cross = cross(cache.ring_[begin + t].position - centre, cache.ring_[begin + t + 1].position - centre);
-    corner.old_squared = squared_norm(corner.old_cross);
-  }
-  // ring_ has one more entry per fan than corners_: keep them aligned.
-  cache.corners_.push_back(FanCache::Corner{Vec3{}, 0.0, kNone});
-  cache.fans_.push_back(FanCache::Fan{v, begin, count});
+  const std::uint32_t begin = cache.used_entries_;
+  FanCache::Entry* const entries = cache.entries_.get() + begin;
+  std::uint32_t count = 0;
+  const std::uint32_t start = vertices_[v].halfedge;
+  std::uint32_t c = start, last;
+  do {
+    const std::uint32_t w = corners_[next(c)].vertex;
+    const Vec3& q = vertices_[w].position;
+    FanCache::Entry& entry = entries[count++];
+    entry.x = q.x;
+    entry.y = q.y;
+    entry.z = q.z;
+    entry.vertex = w;
+    entry.triangle = c / 3;
+    last = c;
+    c = corners_[prev(c)].opposite;
+  } while (c != kNone && c != start);
+  const std::uint32_t closing = corners_[prev(last)].vertex;
+  entries[count].vertex = closing;
+  fill_fan_geometry(v, entries, count);
+  std::uint64_t neighbours = 0;
+  for (std::uint32_t t = 0; t < count + (is_boundary(v) ? 1 : 0); ++t) neighbours |= std::uint64_t{1} << (entries[t].vertex % 64);
+  cache.used_entries_ = begin + count + 1;
+  cache.fans_.push_back(FanCache::Fan{v, begin, count, neighbours});
   return index;
+}
+
+void CollapseMesh::fill_fan_geometry(std::uint32_t v, FanCache::Entry* entries, std::uint32_t count) const {
+  const Vec3& q = vertices_[entries[count].vertex].position;
+  entries[count] = FanCache::Entry{q.x, q.y, q.z, 0.0, 0.0, 0.0, 0.0, entries[count].vertex, kNone};
+  const Vec3& centre = vertices_[v].position;
+  Vec3 before = Vec3{entries[0].x, entries[0].y, entries[0].z} - centre;
+  for (std::uint32_t t = 0; t < count; ++t) {
+    const Vec3 after = Vec3{entries[t + 1].x, entries[t + 1].y, entries[t + 1].z} - centre;
+    const Vec3 old_cross = cross(before, after);
+    entries[t].cross_x = old_cross.x;
+    entries[t].cross_y = old_cross.y;
+    entries[t].cross_z = old_cross.z;
+    entries[t].cross_squared = squared_norm(old_cross);
+    before = after;
+  }
 }
 
 Evaluation CollapseMesh::evaluate(std::uint32_t e) const {
@@ -220,13 +353,13 @@ Evaluation CollapseMesh::evaluate(std::uint32_t e, FanCache& cache, int max_vale
   // Fans of both endpoints (the valence test bounds their size). Indices
   // first: gathering the second fan may reallocate the cache.
   const std::uint64_t version = lanes_[cache.lane_].version;
-  if (cache.mesh_ != this || cache.version_ != version || cache.fans_.size() + 2 > FanCache::kMaxFans)
+  if (cache.mesh_ != this || cache.version_ != version || cache.fans_.size() + 2 > FanCache::kMaxFans ||
+      cache.used_entries_ + 2 * (kMaxRing + 1) > FanCache::kEntries)
     cache.clear(this, version);
   const std::uint32_t fan_i = fan(vi, cache), fan_j = fan(vj, cache);
-  const FanCache::Fan& fi = cache.fans_[fan_i];
-  const FanCache::Fan& fj = cache.fans_[fan_j];
-  const FanCache::RingVertex* ring_i = cache.ring_.data() + fi.begin;
-  const FanCache::RingVertex* ring_j = cache.ring_.data() + fj.begin;
+  const FanCache::Fan fi = cache.fans_[fan_i], fj = cache.fans_[fan_j];
+  const FanCache::Entry* ring_i = cache.entries_.get() + fi.begin;
+  const FanCache::Entry* ring_j = cache.entries_.get() + fj.begin;
 
   // Link condition: the common neighbours of v_i and v_j are exactly a and b
   // (only a for a boundary edge); together with the rules above this keeps
@@ -238,6 +371,7 @@ Evaluation CollapseMesh::evaluate(std::uint32_t e, FanCache& cache, int max_vale
   int common = 0;
   for (std::uint32_t k = 0; k < neighbour_count_j; ++k) {
     const std::uint32_t w = ring_j[k].vertex;
+    if (((fi.neighbours >> (w % 64)) & 1) == 0) continue;
     for (std::uint32_t m = 0; m < neighbour_count_i; ++m)
       if (ring_i[m].vertex == w) {
         ++common;
@@ -259,7 +393,8 @@ Evaluation CollapseMesh::evaluate(std::uint32_t e, FanCache& cache, int max_vale
 
   // Ring triangles after the collapse: every triangle at v_i or v_j except
   // the one or two that disappear; check each for flips and degeneracy and
-  // collect its cross product c_t for (4.1)-(4.2).
+  // collect its cross product c_t for (4.1)-(4.2). Each ring vertex's offset
+  // from p serves the two triangles it belongs to.
   const std::uint32_t t0 = h / 3, t1 = boundary_edge ? kNone : o / 3;
   // Raw storage: Vec3's member initialisers would zero 2 * kMaxRing vectors
   // on every call, which costs more than the evaluation itself.
@@ -268,38 +403,43 @@ Evaluation CollapseMesh::evaluate(std::uint32_t e, FanCache& cache, int max_vale
   double squared_norms[2 * kMaxRing];
   std::size_t k = 0;
   const double min_dot = rules_.min_normal_dot;
-  // Returns false for a degenerate triangle; stops at (and records) a flip.
-  const auto add_triangles = [&](const FanCache::Fan& fan) {
-    const FanCache::Corner* corners = cache.corners_.data() + fan.begin;
-    const FanCache::RingVertex* ring = cache.ring_.data() + fan.begin;
-    for (std::uint32_t index = 0; index < fan.corners; ++index) {
-      const FanCache::Corner& corner = corners[index];
-      if (corner.triangle == t0 || corner.triangle == t1) continue;
-      const Vec3 e0 = ring[index].position - p, e1 = ring[index + 1].position - p;
-      const Vec3 new_cross = cross(e0, e1);
-      const double new_squared = squared_norm(new_cross);
-      if (!(new_squared > 1e-24 * squared_norm(e0) * squared_norm(e1))) return false;
-      const double old_squared = corner.old_squared;
-      if (old_squared > 0) {
-        const double turn = dot(corner.old_cross, new_cross);
-        // For the default threshold 0, skip the square root: 0 * sqrt(P) is
-        // +0 for finite P and NaN (never smaller) for P = inf.
-        const bool flipped = min_dot == 0.0 ? turn < 0 && old_squared * new_squared != kInfinity
-                                            : turn < min_dot * std::sqrt(old_squared * new_squared);
-        if (flipped) {
-          result.legality = Legality::NormalFlip;
-          return true;
+  // The first problem of one fan: a degenerate triangle, or a flip (which
+  // ends that fan's triangles).
+  const auto add_triangles = [&](const FanCache::Entry* ring, std::uint32_t corners) {
+    Vec3 before = Vec3{ring[0].x, ring[0].y, ring[0].z} - p;
+    double before_squared = squared_norm(before);
+    for (std::uint32_t index = 0; index < corners; ++index) {
+      const FanCache::Entry& corner = ring[index];
+      const Vec3 after = Vec3{ring[index + 1].x, ring[index + 1].y, ring[index + 1].z} - p;
+      const double after_squared = squared_norm(after);
+      if (corner.triangle != t0 && corner.triangle != t1) {
+        const Vec3 new_cross = cross(before, after);
+        const double new_squared = squared_norm(new_cross);
+        if (!(new_squared > 1e-24 * before_squared * after_squared)) return Legality::DegenerateTriangle;
+        const double old_squared = corner.cross_squared;
+        if (old_squared > 0) {
+          const double turn = corner.cross_x * new_cross.x + corner.cross_y * new_cross.y + corner.cross_z * new_cross.z;
+          // For the default threshold 0, skip the square root: 0 * sqrt(P) is
+          // +0 for finite P and NaN (never smaller) for P = inf.
+          const bool flipped = min_dot == 0.0 ? turn < 0 && old_squared * new_squared != kInfinity
+                                              : turn < min_dot * std::sqrt(old_squared * new_squared);
+          if (flipped) return Legality::NormalFlip;
         }
+        squared_norms[k] = new_squared;
+        new (&cross_products[k++]) Vec3(new_cross);
       }
-      squared_norms[k] = new_squared;
-      new (&cross_products[k++]) Vec3(new_cross);
+      before = after;
+      before_squared = after_squared;
     }
-    return true;
+    return Legality::Legal;
   };
-  result.legality = Legality::Legal;
-  if (!add_triangles(fi) || !add_triangles(fj)) return fail(Legality::DegenerateTriangle);
-  if (result.legality != Legality::Legal) return result;
+  const Legality problem_i = add_triangles(ring_i, fi.corners);
+  if (problem_i == Legality::DegenerateTriangle) return fail(problem_i);
+  const Legality problem_j = add_triangles(ring_j, fj.corners);
+  if (problem_j == Legality::DegenerateTriangle) return fail(problem_j);
+  if (problem_i != Legality::Legal || problem_j != Legality::Legal) return fail(Legality::NormalFlip);
   assert(k >= 1);
+  result.legality = Legality::Legal;
   result.geometry_computed = true;
   result.position = p;
   result.delta_error = collapse_error_terms(pj - pi, cross_products, squared_norms, k).delta_e;
@@ -425,17 +565,25 @@ std::size_t CollapseMesh::alive_triangles() const {
   return initial_triangles_ - removed;
 }
 
-bool CollapseMesh::collapse_inside(std::uint32_t e, const std::uint8_t* region, std::uint8_t id) const {
+bool CollapseMesh::collapse_inside(std::uint32_t e, std::uint8_t id) const {
   const std::uint32_t h = edges_[e].halfedge;
   if (h == kNone || corners_[h].opposite == kNone) return false;
   bool inside = true;
   for (const std::uint32_t v : {corners_[h].vertex, corners_[next(h)].vertex}) {
-    if (region[v] != id) return false;
+    if (region(v) != id) return false;
     for_each_corner(v, [&](std::uint32_t c) {
-      inside = inside && region[target(c)] == id && region[corners_[prev(c)].vertex] == id;
+      inside = inside && region(target(c)) == id && region(corners_[prev(c)].vertex) == id;
     });
   }
   return inside;
+}
+
+void CollapseMesh::reset_queue_links() {
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, edges_.size(), 1 << 16),
+                    [&](const tbb::blocked_range<std::size_t>& range) {
+                      for (std::size_t e = range.begin(); e != range.end(); ++e)
+                        edges_[e].queue = BucketQueue::Links{kNone, kNone, BucketQueue::kNotQueued};
+                    });
 }
 
 std::array<std::uint32_t, 4> CollapseMesh::edge_vertices(std::uint32_t e) const {

@@ -77,12 +77,13 @@ std::uint64_t morton_code(std::uint32_t x, std::uint32_t y, std::uint32_t z) {
   return spread(x) | spread(y) << 1 | spread(z) << 2;
 }
 
-// The mesh with vertices in Morton order of their positions and triangles in
-// order of their first vertex. The collapse loop jumps between random places
-// of a mesh of hundreds of megabytes; in scan order (marching cubes) a
-// vertex's fan lies in three far-apart stretches of memory, in Morton order
-// mostly in one, so each fan walk costs fewer cache misses.
-PolygonMesh in_spatial_order(const PolygonMesh& mesh) {
+// Vertex order for the corner table: Morton order of the positions (the
+// table then puts triangles in order of their first vertex). The collapse
+// loop jumps between random places of a mesh of hundreds of megabytes; in
+// scan order (marching cubes) a vertex's fan lies in three far-apart
+// stretches of memory, in Morton order mostly in one, so each fan walk costs
+// fewer cache misses.
+std::vector<std::uint32_t> spatial_order(const PolygonMesh& mesh) {
   const std::size_t n = mesh.vertex_count();
   double low[3] = {kHuge, kHuge, kHuge}, high[3] = {-kHuge, -kHuge, -kHuge};
   for (const Vec3& p : mesh.positions)
@@ -103,29 +104,20 @@ PolygonMesh in_spatial_order(const PolygonMesh& mesh) {
     }
   });
   tbb::parallel_sort(keyed.begin(), keyed.end());
-  std::vector<std::uint32_t> new_index(n);
-  PolygonMesh sorted;
-  sorted.positions.resize(n);
-  if (!mesh.sharp.empty()) sorted.sharp.resize(n);
-  for (std::size_t k = 0; k < n; ++k) {
-    const std::uint32_t v = keyed[k].second;
-    new_index[v] = static_cast<std::uint32_t>(k);
-    sorted.positions[k] = mesh.positions[v];
-    if (!mesh.sharp.empty()) sorted.sharp[k] = mesh.sharp[v];
+  std::vector<std::uint32_t> order(n);
+  for (std::size_t k = 0; k < n; ++k) order[k] = keyed[k].second;
+  return order;
+}
+
+// The corner table of the input in spatial order. Its manifold checks only
+// say that something is wrong; require_manifold() then names the problem.
+CollapseMesh build_table(const PolygonMesh& input, const CollapseRules& rules, const std::string& source) {
+  try {
+    return CollapseMesh(input, spatial_order(input), rules);
+  } catch (const Error& error) {
+    if (error.kind() == ErrorKind::Topology) require_manifold(input, source);
+    throw Error(error.kind(), source + ": " + error.what());
   }
-  std::vector<std::pair<std::uint32_t, std::uint32_t>> faces(mesh.face_count());
-  for (std::size_t f = 0; f < faces.size(); ++f) {
-    const std::uint32_t* t = mesh.face_begin(f);
-    faces[f] = {std::min({new_index[t[0]], new_index[t[1]], new_index[t[2]]}), static_cast<std::uint32_t>(f)};
-  }
-  tbb::parallel_sort(faces.begin(), faces.end());
-  sorted.face_vertices.reserve(mesh.face_vertices.size());
-  sorted.face_offsets.reserve(faces.size() + 1);
-  for (const auto& [key, f] : faces) {
-    const std::uint32_t* t = mesh.face_begin(f);
-    sorted.add_face({new_index[t[0]], new_index[t[1]], new_index[t[2]]});
-  }
-  return sorted;
 }
 
 // After re-evaluating stencil edge s: a legal edge goes to the bucket of its
@@ -176,18 +168,19 @@ void collapse_in_parallel(CollapseMesh& mesh, const std::vector<std::uint32_t>& 
       if (distance[u] == ring - 1 && distance[w] > ring) distance[w] = ring;
       if (distance[w] == ring - 1 && distance[u] > ring) distance[u] = ring;
     }
-  std::vector<std::uint8_t> region(vertex_slots);
   std::size_t region_vertices[CollapseMesh::kLanes] = {0, 0};
   for (std::uint32_t v = 0; v < vertex_slots; ++v) {
-    region[v] = distance[v] <= 2 ? kBand : (v < half ? 0 : 1);
-    if (region[v] != kBand && mesh.vertex_alive(v)) ++region_vertices[region[v]];
+    const std::uint8_t region = distance[v] <= 2 ? kBand : (v < half ? 0 : 1);
+    mesh.set_region(v, region);
+    if (region != kBand && mesh.vertex_alive(v)) ++region_vertices[region];
   }
   // Each half's initial edges, chosen before the threads start: once one
   // collapses, the other must not look at its edges.
   std::vector<std::uint8_t> edge_region(mesh.edge_slots(), kBand);
   for (std::uint32_t e = 0; e < mesh.edge_slots(); ++e) {
     const auto [u, w] = endpoints(e);
-    if (initial_buckets[e] != BucketQueue::kNotQueued && region[u] == region[w]) edge_region[e] = region[u];
+    if (initial_buckets[e] != BucketQueue::kNotQueued && mesh.region(u) == mesh.region(w))
+      edge_region[e] = mesh.region(u);
   }
   const std::size_t alive = mesh.alive_vertices();
   const std::size_t planned = alive > target ? alive - target : 0;
@@ -202,7 +195,7 @@ void collapse_in_parallel(CollapseMesh& mesh, const std::vector<std::uint32_t>& 
     const auto id = static_cast<std::uint8_t>(lane);
     const auto inside = [&](std::uint32_t e) {
       const auto [u, w] = endpoints(e);
-      return region[u] == id && region[w] == id;
+      return mesh.region(u) == id && mesh.region(w) == id;
     };
     // 90% of its share of the planned collapses, so that where it stops does
     // not depend on the other thread, and the last, costliest collapses go to
@@ -211,7 +204,8 @@ void collapse_in_parallel(CollapseMesh& mesh, const std::vector<std::uint32_t>& 
     // base-mesh RMSE 103% of a cell; 43% with 90%, as serially).
     const std::size_t quota = static_cast<std::size_t>(kParallelShare * double(planned) * double(region_vertices[lane]) /
                                                        double(std::max<std::size_t>(alive, 1)));
-    BucketQueue queue(mesh.edge_slots(), bucket_count);
+    // The two queues hold disjoint edges: they share the links in the edge records.
+    BucketQueue queue(mesh.queue_links(), CollapseMesh::queue_link_stride(), mesh.edge_slots(), bucket_count);
     for (std::uint32_t e = 0; e < mesh.edge_slots(); ++e)
       if (edge_region[e] == id) queue.push(e, initial_buckets[e]);
     LaneResult& result = results[lane];
@@ -226,7 +220,7 @@ void collapse_in_parallel(CollapseMesh& mesh, const std::vector<std::uint32_t>& 
         ++result.rejected[static_cast<int>(evaluation.legality)];
         continue;
       }
-      if (!mesh.collapse_inside(e, region.data(), id)) continue;  // left to the serial loop
+      if (!mesh.collapse_inside(e, id)) continue;  // left to the serial loop
       mesh.set_latest_delta_error(e, evaluation.delta_error);
       const std::uint32_t bucket = priority_bucket(mesh.error(e), bucket_count);
       if (bucket < queued_bucket) {
@@ -246,6 +240,7 @@ void collapse_in_parallel(CollapseMesh& mesh, const std::vector<std::uint32_t>& 
     }
   };
   tbb::parallel_invoke([&] { run_lane(0); }, [&] { run_lane(1); });
+  mesh.reset_queue_links();  // for the serial queue
   for (const LaneResult& result : results) {
     report.collapses += result.collapses;
     report.parallel_collapses += result.collapses;
@@ -313,7 +308,6 @@ SimplifyResult simplify(const PolygonMesh& input, const SimplifyOptions& options
                                               " sides; base-mesh construction needs a triangle mesh");
   if (input.vertex_count() >= (std::size_t{1} << 31) || input.face_vertices.size() >= (std::size_t{1} << 31))
     throw Error(ErrorKind::Unsupported, source + ": more than 2^31 vertices or corners");
-  require_manifold(input, source);
   report.input_vertices = input.vertex_count();
   report.input_faces = input.face_count();
   report.seconds_check = seconds_since(clock);
@@ -324,7 +318,7 @@ SimplifyResult simplify(const PolygonMesh& input, const SimplifyOptions& options
   rules.max_valence = options.max_valence;
   rules.min_normal_dot = options.collapse_min_normal_dot;
   rules.flip_min_normal_dot = options.flip_min_normal_dot;
-  CollapseMesh mesh(in_spatial_order(input), rules);
+  CollapseMesh mesh = build_table(input, rules, source);
   if (options.valence_flips) {
     // Input vertices above the valence limit (marching cubes makes a few of
     // valence 9..12) would stay so: no collapse may touch them.
@@ -363,7 +357,7 @@ SimplifyResult simplify(const PolygonMesh& input, const SimplifyOptions& options
                       });
     return buckets;
   };
-  BucketQueue queue(mesh.edge_slots(), bucket_count);
+  BucketQueue queue(mesh.queue_links(), CollapseMesh::queue_link_stride(), mesh.edge_slots(), bucket_count);
   const auto queue_all_edges = [&](int max_valence) {
     const std::vector<std::uint32_t> buckets = evaluate_all_edges(max_valence);
     for (std::uint32_t e = 0; e < mesh.edge_slots(); ++e)

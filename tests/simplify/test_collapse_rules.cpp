@@ -6,8 +6,11 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <numeric>
+#include <utility>
 #include <vector>
 
+#include "isowave/core/error.h"
 #include "isowave/core/mesh_topology.h"
 #include "isowave/simplify/bucket_queue.h"
 #include "isowave/simplify/collapse_error.h"
@@ -129,6 +132,117 @@ TEST(BucketQueue, RemoveFromTheMiddleKeepsTheOrder) {
   std::vector<std::uint32_t> order;
   while (!queue.empty()) order.push_back(queue.pop());
   EXPECT_EQ(order, (std::vector<std::uint32_t>{1, 3, 4, 7}));
+}
+
+TEST(BucketQueue, CallerKeptLinksGiveTheSameOrderAndTwoQueuesCanShareThem) {
+  // Links inside larger records, as the collapse keeps them in its edge records.
+  struct Record {
+    double payload;
+    BucketQueue::Links links;
+  };
+  std::vector<Record> records(10, Record{0.0, {0, 0, BucketQueue::kNotQueued}});
+  BucketQueue even(&records[0].links, sizeof(Record), records.size(), 100000);
+  BucketQueue odd(&records[0].links, sizeof(Record), records.size(), 100000);
+  BucketQueue own(records.size(), 100000);
+  for (const auto& [item, bucket] : std::vector<std::pair<std::uint32_t, std::uint32_t>>{
+           {4, 70000}, {2, 70000}, {8, 70000}, {6, 70001}, {0, 12}, {5, 70000}, {3, 70000}, {1, 9}}) {
+    (item % 2 == 0 ? even : odd).push(item, bucket);
+    if (item % 2 == 0) own.push(item, bucket);
+  }
+  even.remove(2);
+  own.remove(2);
+  EXPECT_TRUE(odd.contains(5));
+  EXPECT_FALSE(even.contains(2));
+  std::vector<std::uint32_t> shared_order, own_order, odd_order;
+  while (!even.empty()) shared_order.push_back(even.pop());
+  while (!own.empty()) own_order.push_back(own.pop());
+  while (!odd.empty()) odd_order.push_back(odd.pop());
+  EXPECT_EQ(shared_order, (std::vector<std::uint32_t>{6, 4, 8, 0}));
+  EXPECT_EQ(shared_order, own_order);
+  EXPECT_EQ(odd_order, (std::vector<std::uint32_t>{5, 3, 1}));
+  for (const Record& record : records) EXPECT_EQ(record.links.bucket, BucketQueue::kNotQueued);
+}
+
+// --- corner table ---
+
+TEST(CollapseMesh, RenumberedTableMatchesTheTableOfTheRenumberedMesh) {
+  // The parallel construction with a vertex order against the plain one on
+  // the mesh renumbered by hand, triangles ordered by their smallest vertex.
+  PolygonMesh sphere = test::icosphere(3);
+  test::jitter(sphere, 0.05, 5);
+  PolygonMesh holed;  // with boundaries
+  holed.positions = sphere.positions;
+  for (std::size_t f = 0; f < sphere.face_count(); ++f)
+    if (f % 29 != 3) holed.add_face({sphere.face_begin(f)[0], sphere.face_begin(f)[1], sphere.face_begin(f)[2]});
+  const std::uint32_t n = static_cast<std::uint32_t>(holed.vertex_count());
+  std::vector<std::uint32_t> order(n), new_index(n);
+  for (std::uint32_t k = 0; k < n; ++k) order[k] = (k * 37 + 11) % n;  // a permutation: gcd(37, n) = 1
+  ASSERT_EQ(std::gcd(37u, n), 1u);
+  for (std::uint32_t k = 0; k < n; ++k) new_index[order[k]] = k;
+  PolygonMesh renumbered;
+  for (std::uint32_t k = 0; k < n; ++k) renumbered.positions.push_back(holed.positions[order[k]]);
+  std::vector<std::pair<std::uint32_t, std::size_t>> triangles;
+  for (std::size_t f = 0; f < holed.face_count(); ++f) {
+    const std::uint32_t* t = holed.face_begin(f);
+    triangles.emplace_back(std::min({new_index[t[0]], new_index[t[1]], new_index[t[2]]}), f);
+  }
+  std::sort(triangles.begin(), triangles.end());
+  for (const auto& [smallest, f] : triangles) {
+    const std::uint32_t* t = holed.face_begin(f);
+    renumbered.add_face({new_index[t[0]], new_index[t[1]], new_index[t[2]]});
+  }
+  const CollapseMesh built(holed, order);
+  const CollapseMesh reference(renumbered);
+  EXPECT_EQ(built.validate(), "");
+  ASSERT_EQ(built.edge_slots(), reference.edge_slots());
+  const PolygonMesh a = built.to_polygon_mesh(), b = reference.to_polygon_mesh();
+  EXPECT_EQ(a.positions, b.positions);
+  EXPECT_EQ(a.face_vertices, b.face_vertices);
+  for (std::uint32_t e = 0; e < built.edge_slots(); ++e) {
+    EXPECT_EQ(built.edge_halfedge(e), reference.edge_halfedge(e)) << e;
+    const Evaluation x = built.evaluate(e), y = reference.evaluate(e);
+    EXPECT_EQ(x.legality, y.legality) << e;
+    EXPECT_EQ(x.delta_error, y.delta_error) << e;
+  }
+}
+
+TEST(CollapseMesh, ConstructionRejectsWhatRequireManifoldRejects) {
+  const auto rejected = [](const PolygonMesh& mesh) {
+    try {
+      CollapseMesh table(mesh);
+    } catch (const Error& error) {
+      return error.kind() == ErrorKind::Topology;
+    }
+    return false;
+  };
+  PolygonMesh pinched = test::tetrahedron();  // a second tetrahedron sharing vertex 0: two fans
+  const std::size_t base = pinched.vertex_count();
+  for (std::size_t v = 1; v < base; ++v) pinched.positions.push_back(pinched.positions[v] + Vec3{0, 0, 5});
+  const std::size_t faces = pinched.face_count();
+  for (std::size_t f = 0; f < faces; ++f) {
+    std::array<std::uint32_t, 3> face;
+    for (int i = 0; i < 3; ++i) {
+      const std::uint32_t v = pinched.face_begin(f)[i];
+      face[i] = v == 0 ? 0 : static_cast<std::uint32_t>(v + base - 1);
+    }
+    pinched.add_face({face[0], face[1], face[2]});
+  }
+  EXPECT_THROW(require_manifold(pinched, "pinched"), Error);
+  EXPECT_TRUE(rejected(pinched));
+  PolygonMesh flipped = test::tetrahedron();  // one face reversed: edges traversed twice one way
+  std::swap(flipped.face_vertices[1], flipped.face_vertices[2]);
+  EXPECT_TRUE(rejected(flipped));
+  PolygonMesh third = test::tetrahedron();  // a third triangle on an edge
+  third.positions.push_back({0, 0, 5});
+  third.add_face({third.face_begin(0)[0], third.face_begin(0)[1], 4});
+  EXPECT_TRUE(rejected(third));
+  PolygonMesh unused = test::tetrahedron();
+  unused.positions.push_back({9, 9, 9});
+  EXPECT_TRUE(rejected(unused));
+  PolygonMesh repeated = test::tetrahedron();
+  repeated.face_vertices[1] = repeated.face_vertices[0];
+  EXPECT_TRUE(rejected(repeated));
+  EXPECT_FALSE(rejected(test::tetrahedron()));
 }
 
 // --- legality rules ---

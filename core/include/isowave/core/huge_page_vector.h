@@ -50,4 +50,28 @@ struct HugePageAllocator {
 template <typename T>
 using HugePageVector = std::vector<T, HugePageAllocator<T>>;
 
+// For large std::vector buffers whose type an interface fixes (decoded
+// coefficients, refinement arrays): asks for huge pages on the whole 2 MiB
+// pages inside [data, data + bytes). A hint that helps only before the pages
+// are first touched.
+void advise_huge_pages_in(const void* data, std::size_t bytes);
+// Faults in the pages of [data, data + bytes) on all threads (the kernel
+// zeroes each page on its first touch, which for hundreds of megabytes filled
+// by one thread takes a large part of a second). A hint: kernels before 5.14
+// leave the pages to be touched later as usual.
+void fault_in_pages(const void* data, std::size_t bytes);
+
+// Leaves `values` empty with room for `count` elements on huge pages that are
+// already faulted in, unless it has that room already; then resize() or
+// assign() fills it without page faults.
+template <typename T, typename Allocator>
+void reserve_fresh_on_huge_pages(std::vector<T, Allocator>& values, std::size_t count) {
+  values.clear();
+  if (values.capacity() >= count) return;
+  std::vector<T, Allocator>().swap(values);
+  values.reserve(count);
+  advise_huge_pages_in(values.data(), count * sizeof(T));
+  fault_in_pages(values.data(), count * sizeof(T));
+}
+
 }  // namespace isowave

@@ -4,10 +4,13 @@
 // first-in-first-out order" (Sec. 4.1).
 //
 // Items are dense indices 0..item_count-1 (edge ids). Each bucket is a doubly
-// linked list threaded through a flat array of per-item links (next, prev,
-// bucket: 12 bytes per item, together so that touching an item costs one
-// cache miss, and no allocation after construction, which matters for ~8 M
-// edges). A two-level bitmap of non-empty
+// linked list threaded through per-item links (next, prev, bucket: 12 bytes
+// per item, together so that touching an item costs one cache miss, and no
+// allocation after construction, which matters for ~8 M edges). The links are
+// a flat array of the queue's own, or live in the caller's per-item records
+// (the collapse keeps them in its edge records, whose cache line a requeued
+// edge's evaluation has just loaded; queues with disjoint items can share
+// them). A two-level bitmap of non-empty
 // buckets finds the highest one in O(bucket_count / 4096) word reads.
 // push, remove, pop: O(1) plus that bitmap scan.
 #include <cstddef>
@@ -21,16 +24,25 @@ namespace isowave::simplify {
 class BucketQueue {
  public:
   static constexpr std::uint32_t kNotQueued = ~std::uint32_t{0};
+  struct Links {
+    std::uint32_t next, prev, bucket;  // bucket = kNotQueued: not in a queue
+  };
 
   // bucket_count >= 1; a higher bucket index means a higher priority.
   BucketQueue(std::size_t item_count, std::uint32_t bucket_count);
+  // With the caller's links: item i's at (char*)links + i * stride, with
+  // bucket == kNotQueued for every item not in this queue (precondition).
+  // They must outlive the queue.
+  BucketQueue(Links* links, std::size_t stride, std::size_t item_count, std::uint32_t bucket_count);
+  BucketQueue(const BucketQueue&) = delete;
+  BucketQueue& operator=(const BucketQueue&) = delete;
 
   std::uint32_t bucket_count() const { return static_cast<std::uint32_t>(head_.size()); }
   std::size_t size() const { return size_; }
   bool empty() const { return size_ == 0; }
-  bool contains(std::uint32_t item) const { return links_[item].bucket != kNotQueued; }
+  bool contains(std::uint32_t item) const { return link(item).bucket != kNotQueued; }
   // The item's bucket, or kNotQueued.
-  std::uint32_t bucket_of(std::uint32_t item) const { return links_[item].bucket; }
+  std::uint32_t bucket_of(std::uint32_t item) const { return link(item).bucket; }
 
   // Appends item at the tail of bucket (first in, first out). Precondition:
   // !contains(item), bucket < bucket_count().
@@ -43,11 +55,12 @@ class BucketQueue {
 
  private:
   std::uint32_t highest_bucket() const;
+  Links& link(std::uint32_t item) { return *reinterpret_cast<Links*>(links_ + item * stride_); }
+  const Links& link(std::uint32_t item) const { return *reinterpret_cast<const Links*>(links_ + item * stride_); }
 
-  struct Links {
-    std::uint32_t next, prev, bucket;
-  };
-  HugePageVector<Links> links_;                       // per item
+  HugePageVector<Links> own_links_;                  // per item, unless the caller keeps them
+  unsigned char* links_;
+  std::size_t stride_;
   std::vector<std::uint32_t> head_, tail_;           // per bucket
   std::vector<std::uint64_t> occupied_;              // bit per bucket
   std::vector<std::uint64_t> occupied_words_;        // bit per word of occupied_

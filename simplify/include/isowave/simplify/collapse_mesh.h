@@ -8,8 +8,9 @@
 // the next corner of its triangle. Per corner we keep the opposite half-edge
 // (or kNone on the boundary) and its edge id; per edge one half-edge, the
 // accumulated error E_acc and the latest delta E. Flat arrays of small
-// records (vertex: position, half-edge, valence, loop, flags = 40 bytes;
-// corner: 12 bytes, so a triangle is 36 contiguous bytes; edge: 16 bytes)
+// records (vertex: position, half-edge, valence, loop, flags, region = 40
+// bytes; corner: 12 bytes, so a triangle is 36 contiguous bytes; edge: error
+// terms, stamp and bucket-queue links = 32 bytes)
 // indexed by vertex, corner or edge id: no per-element allocation for
 // millions of elements, next/prev/face are arithmetic on the corner index,
 // and the fields one evaluation reads of an element share a cache line (the
@@ -26,12 +27,14 @@
 // O(valence of the two endpoints).
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "isowave/core/huge_page_vector.h"
 #include "isowave/core/mesh.h"
 #include "isowave/core/vec3.h"
+#include "isowave/simplify/bucket_queue.h"
 
 namespace isowave::simplify {
 
@@ -82,19 +85,21 @@ class FanCache {
   friend class CollapseMesh;
   struct Fan {
     std::uint32_t vertex;
-    std::uint32_t begin;    // first entry in corners_ and ring_
-    std::uint32_t corners;  // corner count; ring_ holds corners + 1 entries
+    std::uint32_t begin;    // first entry in entries_
+    std::uint32_t corners;  // corner count; the fan has corners + 1 entries
+    std::uint64_t neighbours;  // bit (w % 64) set for each neighbour w: most link tests need no search
   };
-  struct Corner {
-    Vec3 old_cross;
-    double old_squared;
-    std::uint32_t triangle;
-  };
-  struct RingVertex {
-    Vec3 position;
-    std::uint32_t vertex;
+  // Entry t of a fan around v: ring vertex t (the target of corner t; the
+  // last entry closes the fan and has no triangle) and corner t's triangle
+  // (v, ring t, ring t+1) with its cross product (ring t - v) x (ring t+1 - v).
+  // One cache line; plain doubles so that the buffer is not zeroed.
+  struct Entry {
+    double x, y, z;
+    double cross_x, cross_y, cross_z, cross_squared;
+    std::uint32_t vertex, triangle;
   };
   static constexpr std::uint32_t kSlots = 512, kMaxFans = 256;
+  static constexpr std::uint32_t kEntries = 1984;  // 124 KiB: below malloc's mmap threshold
   void clear(const CollapseMesh* mesh, std::uint64_t version);
 
   const CollapseMesh* mesh_ = nullptr;
@@ -103,9 +108,9 @@ class FanCache {
   std::uint32_t stamp_ = 0;
   // Open-addressing table vertex -> fan, valid where slot_stamp_ == stamp_.
   std::vector<std::uint32_t> slot_vertex_, slot_fan_, slot_stamp_;
+  std::unique_ptr<Entry[]> entries_;
+  std::uint32_t used_entries_ = 0;
   std::vector<Fan> fans_;
-  std::vector<Corner> corners_;   // corner t of a fan: triangle (v, ring t, ring t+1)
-  std::vector<RingVertex> ring_;  // ring t = target of corner t; the last one closes the fan
 };
 
 struct Evaluation {
@@ -124,8 +129,15 @@ class CollapseMesh {
   // region: collapse_inside() must hold for the edge.
   static constexpr int kLanes = 2;
 
-  // Precondition: `mesh` is a triangle mesh that passed require_manifold().
+  // Precondition: `mesh` is a triangle mesh with valid indices. Throws
+  // Error(Topology) if it is not a consistently oriented 2-manifold without
+  // unreferenced vertices (the checks of require_manifold(), done while the
+  // table is built; call that for a message naming the problem).
   explicit CollapseMesh(const PolygonMesh& mesh, CollapseRules rules = {});
+  // The same with the vertices renumbered: vertex k of the table is mesh
+  // vertex vertex_order[k] (a permutation), and the triangles are ordered by
+  // their smallest new vertex index, ties in input order. Built in parallel.
+  CollapseMesh(const PolygonMesh& mesh, const std::vector<std::uint32_t>& vertex_order, CollapseRules rules = {});
 
   std::uint32_t vertex_slots() const { return static_cast<std::uint32_t>(vertices_.size()); }
   std::uint32_t edge_slots() const { return static_cast<std::uint32_t>(edges_.size()); }
@@ -201,10 +213,22 @@ class CollapseMesh {
   std::uint32_t collapse(std::uint32_t e, const Vec3& position, std::uint32_t removed_edges[3],
                          std::uint32_t opposite_vertices[2], int lane = 0);
 
-  // True when e is interior and e's endpoints and all their neighbours have
-  // region[v] == id: then collapsing e writes only records of that region's
+  // A region id per vertex (0 after construction), kept in the vertex record
+  // that evaluations load anyway.
+  void set_region(std::uint32_t v, std::uint8_t id) { vertices_[v].region = id; }
+  std::uint8_t region(std::uint32_t v) const { return vertices_[v].region; }
+  // True when e is interior and e's endpoints and all their neighbours are in
+  // region `id`: then collapsing e writes only records of that region's
   // vertices, their triangles and edges. O(valence).
-  bool collapse_inside(std::uint32_t e, const std::uint8_t* region, std::uint8_t id) const;
+  bool collapse_inside(std::uint32_t e, std::uint8_t id) const;
+
+  // Per-edge links for BucketQueue's caller-kept constructor, in the edge
+  // records: requeueing a stencil edge then touches the cache line its
+  // evaluation loaded. All "not queued" after construction and
+  // reset_queue_links(); queues sharing them must hold disjoint edges.
+  BucketQueue::Links* queue_links() { return &edges_.data()->queue; }
+  static constexpr std::size_t queue_link_stride() { return sizeof(EdgeRecord); }
+  void reset_queue_links();
 
   // Appends to `edges` (no duplicates) the update stencil of Fig. 8 around
   // the vertices `centres`: every edge of every triangle incident to one of
@@ -242,6 +266,11 @@ class CollapseMesh {
   void for_each_corner(std::uint32_t v, Visit&& visit) const;
   // Index in cache.fans_ of v's fan, gathering it if needed.
   std::uint32_t fan(std::uint32_t v, FanCache& cache) const;
+  // Given a fan's ring vertex ids (entries 0..count), its positions and old
+  // cross products.
+  void fill_fan_geometry(std::uint32_t v, FanCache::Entry* entries, std::uint32_t count) const;
+  // Both constructors; vertex_order may be null (input order).
+  void build(const PolygonMesh& mesh, const std::uint32_t* vertex_order);
   // Makes vertices_[v].halfedge a live outgoing half-edge, the boundary one if v
   // is on the boundary, starting from the live outgoing half-edge `start`.
   void reset_vertex_halfedge(std::uint32_t v, std::uint32_t start);
@@ -257,6 +286,7 @@ class CollapseMesh {
     std::uint32_t valence;
     std::uint32_t boundary_loop;  // kNone if interior
     std::uint8_t flags;
+    std::uint8_t region;
   };
   HugePageVector<VertexRecord> vertices_;
   std::vector<std::uint32_t> loop_size_;  // vertices per boundary loop
@@ -271,6 +301,8 @@ class CollapseMesh {
     float accumulated_error;
     float latest_delta;
     std::uint32_t stamp;  // gather_stencil()'s "already listed"
+    BucketQueue::Links queue;
+    std::uint32_t unused;  // 32 bytes: two records per cache line
   };
   HugePageVector<EdgeRecord> edges_;
   // Per lane, on its own cache line: stamps are lane + kLanes * count, so no

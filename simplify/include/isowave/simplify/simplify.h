@@ -143,10 +143,10 @@ struct SimplifyResult {
 // vertices (see require_manifold; drop them with remove_unreferenced_vertices
 // first). Degenerate (zero-area) input triangles are accepted: they get no
 // normal in (4.1)-(4.2) and no flip test, and no collapse creates a new one.
-// Time O(n log n) for the checks and the Morton sort, O(n) for the rest; peak
-// memory about 390 bytes per input vertex including the input (miranda
-// isosurface, 2.3 M vertices: 899 MB; the parallel phase adds one bucket
-// queue per thread).
+// Time O(n log n) for the Morton sort, O(n) for the rest (the manifold checks
+// are part of the parallel corner-table build); peak memory about 370 bytes
+// per input vertex including the input (miranda isosurface, 2.3 M vertices:
+// 860 MB; every bucket queue keeps its links in the edge records).
 SimplifyResult simplify(const PolygonMesh& triangles, const SimplifyOptions& options = {},
                         ProgressSink& progress = no_progress());
 
