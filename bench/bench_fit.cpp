@@ -12,13 +12,15 @@
 //                  [--distance-only] [--iterations N] [--final-iterations N]
 //                  [--reach R] [--min-reach C] [--weight W] [--no-correction]
 //                  [--correction-cells C] [--untangle N] [--base FILE]
-//                  [--write-base FILE] [--no-peer] [--repeat N] [--final-quality]
+//                  [--write-base FILE] [--no-peer] [--repeat N] [--final-quality] [--rmse]
 //   INPUT is a volume file or builtin:NAME[:N]; --base-vertices 0 simplifies
 //   as far as the rules allow (default). --base reads the base mesh instead of
 //   simplifying (e.g. one saved with --write-base: repeatable runs while the
 //   simplifier changes); --no-peer skips OpenVDB and the whole-grid distance;
 //   --repeat times the distance field and the shrink-wrap N times (noisy
-//   shared machines); --final-quality measures level L only.
+//   shared machines); --final-quality measures level L only; --rmse runs the
+//   wavelet analysis of the fit and prints the paper's Table 1 RMSE rows
+//   (unquantized coefficients, importance-weighted truncation).
 #include <sys/resource.h>
 
 #include <algorithm>
@@ -33,6 +35,7 @@
 #include <tbb/global_control.h>
 
 #include "isowave/core/error.h"
+#include "isowave/codec/importance.h"
 #include "isowave/core/mesh_io.h"
 #include "isowave/extract/isosurface.h"
 #include "isowave/extract/volume_io.h"
@@ -43,6 +46,7 @@
 #include "isowave/fit/trilinear.h"
 #include "isowave/simplify/simplify.h"
 #include "isowave/transform/hierarchy.h"
+#include "isowave/transform/wavelet_transform.h"
 
 using namespace isowave;
 
@@ -84,7 +88,7 @@ int main(int argc, char** argv) {
   std::size_t min_component = 50, base_vertices = 0;
   int levels = 3, threads = 2;
   double band = 3;
-  bool quality = true, sdf_only = false, correction = true, peer = true, final_quality_only = false;
+  bool quality = true, sdf_only = false, correction = true, peer = true, final_quality_only = false, rmse = false;
   std::string base_input, base_output;
   int repeat = 1;
   int untangle_rounds = ShrinkWrapOptions().untangle_rounds;
@@ -121,6 +125,7 @@ int main(int argc, char** argv) {
     else if (arg == "--no-peer") peer = false;
     else if (arg == "--repeat") repeat = std::max(1, std::stoi(next()));
     else if (arg == "--final-quality") final_quality_only = true;
+    else if (arg == "--rmse") rmse = true;
     else positional.push_back(arg);
   }
   if (positional.size() == 2) {
@@ -270,6 +275,22 @@ int main(int argc, char** argv) {
                                           level < levels ? wrapped.level_positions[std::size_t(level)] : wrapped.positions,
                                           extracted, reference, volume, iso, false));
       std::printf("quality measured in %.1f s\n", seconds_since(start));
+    }
+    if (rmse) {
+      start = std::chrono::steady_clock::now();
+      std::vector<Vec3> coefficients = wrapped.positions;
+      analyze(hierarchy, coefficients);
+      const std::vector<double> weights = wavelet_norms(hierarchy);
+      const double cell = volume.cell_size();
+      std::printf("Table 1 (cell %g):", cell);
+      for (double percent : {20.0, 10.0, 5.0, 0.0}) {
+        std::vector<Vec3> kept = coefficients;
+        keep_most_important(hierarchy, kept, weights, coefficients_for_percent(hierarchy, percent));
+        synthesize(hierarchy, kept);
+        const PointErrors errors = point_errors(kept, wrapped.positions, hierarchy.fine_vertex_count());
+        std::printf("  %g%% %.2f", percent, 100 * errors.rms / cell);
+      }
+      std::printf("  (%% of a cell, %.1f s)\n", seconds_since(start));
     }
     std::printf("peak memory: %.0f MB\n", peak_megabytes());
   } catch (const Error& error) {
