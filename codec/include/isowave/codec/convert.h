@@ -44,6 +44,9 @@ struct ConvertOptions {
   bool keep_extracted_mesh = false;
 };
 
+// Wall-clock seconds per stage. The signed-distance field is computed
+// alongside the base mesh; `distance` is only the wait for it afterwards, so
+// that the stages add up to the whole conversion.
 struct ConvertTimings {
   double extract = 0, simplify = 0, distance = 0, fit = 0, analysis = 0, encode = 0, evaluate = 0;
   double total() const { return extract + simplify + distance + fit + analysis + encode + evaluate; }
