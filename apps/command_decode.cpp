@@ -51,12 +51,13 @@ int decode(const Args& raw) {
     options.max_coefficients = static_cast<std::uint64_t>(n);
   }
   const std::string& input = args.positional()[0];
-  const IswDecoded decoded = read_isw(input, options);
+  IswDecoded decoded = read_isw(input, options);
   if (decoded.truncated) std::fprintf(stderr, "isowave decode: warning: %s: %s\n", input.c_str(), decoded.truncation_note.c_str());
   const int level = args.get_int("level", decoded.levels, 0, decoded.levels);
 
-  const std::vector<Vec3> points = reconstruct(decoded, decoded.ranked.size(), level);
-  PolygonMesh mesh = decoded.hierarchy->control_mesh(level, points);
+  // Synthesis in the decoded array and the mesh around it: no copies of the
+  // fine-level arrays.
+  PolygonMesh mesh = decoded.hierarchy->control_mesh(level, take_reconstruction(decoded, decoded.ranked.size(), level));
   if (args.has("limit")) mesh.positions = limit_surface(mesh).positions;
   if (args.has("triangulate")) mesh = triangulate(mesh);
   MeshWriteOptions write_options;

@@ -74,11 +74,15 @@ void keep_most_important(const SubdivisionHierarchy& hierarchy, std::vector<Vec3
 }
 
 std::size_t coefficients_for_percent(const SubdivisionHierarchy& hierarchy, double percent) {
+  return coefficients_for_percent(hierarchy.fine_vertex_count(), hierarchy.vertex_count(0), percent);
+}
+
+std::size_t coefficients_for_percent(std::size_t fine_vertices, std::size_t base_vertices, double percent) {
   if (!(percent >= 0 && percent <= 100))
     throw Error(ErrorKind::InvalidArgument, "percent must be in 0..100, got " + std::to_string(percent));
-  const double total = static_cast<double>(hierarchy.fine_vertex_count());
-  const double wanted = std::round(total * percent / 100.0) - static_cast<double>(hierarchy.vertex_count(0));
-  return wanted <= 0 ? 0 : std::min(static_cast<std::size_t>(wanted), hierarchy.fine_vertex_count() - hierarchy.vertex_count(0));
+  const double total = static_cast<double>(fine_vertices);
+  const double wanted = std::round(total * percent / 100.0) - static_cast<double>(base_vertices);
+  return wanted <= 0 ? 0 : std::min(static_cast<std::size_t>(wanted), fine_vertices - base_vertices);
 }
 
 PointErrors point_errors(const std::vector<Vec3>& a, const std::vector<Vec3>& b, std::size_t count) {

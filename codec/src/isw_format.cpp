@@ -1,19 +1,26 @@
 #include "isowave/codec/isw_format.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
+#include <cassert>
 #include <cstring>
+#include <exception>
 #include <fstream>
 #include <limits>
 #include <memory>
 #include <numeric>
+#include <optional>
+#include <string_view>
 
 #include <tbb/parallel_sort.h>
+#include <tbb/task_group.h>
 #include <zlib.h>
 
 #include "isowave/codec/importance.h"
 #include "isowave/core/atomic_file.h"
 #include "isowave/core/error.h"
+#include "isowave/core/huge_page_vector.h"
 #include "isowave/core/mesh_topology.h"
 #include "isowave/transform/hierarchy.h"
 #include "range_coder.h"
@@ -46,7 +53,7 @@ void put_u32(std::string& out, std::uint32_t v) { out.append(reinterpret_cast<co
 void put_u64(std::string& out, std::uint64_t v) { out.append(reinterpret_cast<const char*>(&v), 8); }
 void put_f64(std::string& out, double v) { out.append(reinterpret_cast<const char*>(&v), 8); }
 
-std::uint32_t crc_of(const char* tag, const std::string& payload) {
+std::uint32_t crc_of(const char* tag, std::string_view payload) {
   uLong crc = crc32(0L, Z_NULL, 0);
   crc = crc32(crc, reinterpret_cast<const Bytef*>(tag), 4);
   // zlib's crc32 takes a uInt length: feed large payloads in pieces.
@@ -76,7 +83,7 @@ void put_section(std::string& out, const char* tag, const std::string& payload) 
 // Bounds-checked little-endian reader over one section's payload.
 class PayloadReader {
  public:
-  PayloadReader(const std::string& data, std::string context) : data_(data), context_(std::move(context)) {}
+  PayloadReader(std::string_view data, std::string context) : data_(data), context_(std::move(context)) {}
   template <class T>
   T read() {
     if (data_.size() - position_ < sizeof(T)) fail("is truncated");
@@ -85,9 +92,9 @@ class PayloadReader {
     position_ += sizeof(T);
     return v;
   }
-  std::string bytes(std::uint64_t n) {
+  std::string_view bytes(std::uint64_t n) {
     if (data_.size() - position_ < n) fail("is truncated");
-    std::string s = data_.substr(position_, static_cast<std::size_t>(n));
+    const std::string_view s = data_.substr(position_, static_cast<std::size_t>(n));
     position_ += static_cast<std::size_t>(n);
     return s;
   }
@@ -95,7 +102,7 @@ class PayloadReader {
   [[noreturn]] void fail(const std::string& what) const { throw Error(ErrorKind::Format, context_ + " " + what); }
 
  private:
-  const std::string& data_;
+  std::string_view data_;
   std::size_t position_ = 0;
   std::string context_;
 };
@@ -162,23 +169,41 @@ double class_step(double step, const std::vector<double>& weights, int cls) {
   return step / weights[static_cast<std::size_t>(cls)];
 }
 
-// Importance order of non-zero quantized coefficients: class weight times the
-// dequantized magnitude, ties by index. Encoder and decoder compute it from
-// the same integers and weights, so they agree exactly.
+// Importance of a non-zero quantized coefficient: class weight times the
+// dequantized magnitude. Encoder and decoder compute it from the same integers
+// and weights, so they agree exactly.
+double importance_key(int cls, const QuantizedVector& q, double step, const std::vector<double>& weights) {
+  const auto c = static_cast<std::size_t>(cls);
+  const double s = step / weights[c];
+  return weights[c] * norm(Vec3{q[0] * s, q[1] * s, q[2] * s});
+}
+
+struct RankedEntry {
+  double key;
+  std::uint32_t index;
+  std::uint32_t position;  // in the caller's list before sorting
+};
+
+// Sorts by importance, ties by index: a strict total order, so the parallel
+// sort is deterministic.
+void sort_by_importance(std::vector<RankedEntry>& entries) {
+  tbb::parallel_sort(entries.begin(), entries.end(), [](const RankedEntry& a, const RankedEntry& b) {
+    return a.key > b.key || (a.key == b.key && a.index < b.index);
+  });
+}
+
+// Importance order of non-zero quantized coefficients (q holds every entry).
 void rank_by_importance(const SubdivisionHierarchy& hierarchy, const std::vector<QuantizedVector>& q, double step,
                         const std::vector<double>& weights, std::vector<std::uint32_t>& indices) {
-  std::vector<std::pair<double, std::uint32_t>> keyed(indices.size());
-  for (std::size_t k = 0; k < indices.size(); ++k) {
-    const std::uint32_t i = indices[k];
-    const auto c = static_cast<std::size_t>(coefficient_class(hierarchy, i));
-    const double s = step / weights[c];
-    keyed[k] = {weights[c] * norm(Vec3{q[i][0] * s, q[i][1] * s, q[i][2] * s}), i};
-  }
-  // A strict total order (ties by index): the parallel sort is deterministic.
-  tbb::parallel_sort(keyed.begin(), keyed.end(), [](const auto& a, const auto& b) {
-    return a.first > b.first || (a.first == b.first && a.second < b.second);
-  });
-  for (std::size_t k = 0; k < indices.size(); ++k) indices[k] = keyed[k].second;
+  std::vector<RankedEntry> keyed(indices.size());
+  for (std::size_t k = 0; k < indices.size(); ++k)
+    keyed[k] = {importance_key(coefficient_class(hierarchy, indices[k]), q[indices[k]], step, weights), indices[k], 0};
+  sort_by_importance(keyed);
+  for (std::size_t k = 0; k < indices.size(); ++k) indices[k] = keyed[k].index;
+}
+
+double seconds_since(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
 std::string sanitize(const std::string& text) {
@@ -402,7 +427,115 @@ std::string encode_isw(const SubdivisionHierarchy& hierarchy, const std::vector<
 
 // ================================================================ decoder
 
+namespace {
+
+// The coefficient classes of a hierarchy from its counts alone (as
+// coefficient_class() and coefficient_class_range() give them), so that the
+// chunks can be decoded while the hierarchy is still being built.
+struct CoefficientLayout {
+  std::vector<std::size_t> vertex_counts;  // per level
+  std::vector<std::size_t> face_counts;    // per level below the finest
+
+  // Catmull-Clark counts: V' = V + F + E, F' = corners, E' = 2 E + corners.
+  CoefficientLayout(const PolygonMesh& base, std::size_t base_edges, int levels) {
+    double v = static_cast<double>(base.vertex_count()), f = static_cast<double>(base.face_count());
+    double e = static_cast<double>(base_edges), corners = static_cast<double>(base.face_vertices.size());
+    vertex_counts.push_back(base.vertex_count());
+    for (int l = 0; l < levels; ++l) {
+      face_counts.push_back(static_cast<std::size_t>(f));
+      const double next_v = v + f + e, next_e = 2 * e + corners;
+      v = next_v;
+      f = corners;
+      e = next_e;
+      corners = 4 * f;
+      // Above 2^53 the doubles are inexact; the caller rejects such sizes.
+      vertex_counts.push_back(v < 9e15 ? static_cast<std::size_t>(v) : std::size_t{1} << 53);
+    }
+  }
+  std::size_t fine() const { return vertex_counts.back(); }
+  int class_count() const { return 1 + 2 * static_cast<int>(face_counts.size()); }
+  std::pair<std::size_t, std::size_t> class_range(int c) const {
+    if (c == 0) return {0, vertex_counts[0]};
+    const auto level = static_cast<std::size_t>(1 + (c - 1) / 2);
+    const std::size_t first_face = vertex_counts[level - 1], first_edge = first_face + face_counts[level - 1];
+    return (c - 1) % 2 == 0 ? std::make_pair(first_face, first_edge) : std::make_pair(first_edge, vertex_counts[level]);
+  }
+  int class_of(std::size_t index) const {
+    const auto level = static_cast<std::size_t>(std::upper_bound(vertex_counts.begin(), vertex_counts.end(), index) -
+                                                vertex_counts.begin());
+    if (level == 0) return 0;
+    const bool is_edge = index >= vertex_counts[level - 1] + face_counts[level - 1];
+    return 1 + 2 * static_cast<int>(level - 1) + (is_edge ? 1 : 0);
+  }
+  bool matches(const SubdivisionHierarchy& hierarchy) const {
+    if (hierarchy.levels() + 1 != static_cast<int>(vertex_counts.size())) return false;
+    for (int l = 0; l <= hierarchy.levels(); ++l)
+      if (hierarchy.vertex_count(l) != vertex_counts[static_cast<std::size_t>(l)]) return false;
+    for (int l = 1; l <= hierarchy.levels(); ++l)
+      if (hierarchy.step(l).parent_face_count != face_counts[static_cast<std::size_t>(l - 1)]) return false;
+    return true;
+  }
+};
+
+// Builds the subdivision hierarchy on a TBB thread while the caller decodes
+// the coefficient chunks; get() waits for it and rethrows its error.
+class HierarchyBuild {
+ public:
+  HierarchyBuild() = default;
+  HierarchyBuild(const HierarchyBuild&) = delete;
+  HierarchyBuild& operator=(const HierarchyBuild&) = delete;
+  ~HierarchyBuild() { wait(); }
+
+  void start(const PolygonMesh& base, int levels) {
+    // Its own copy of the topology: the caller goes on writing base positions.
+    PolygonMesh topology;
+    topology.face_offsets = base.face_offsets;
+    topology.face_vertices = base.face_vertices;
+    topology.sharp = base.sharp;
+    topology.positions.resize(base.vertex_count());
+    started_ = true;
+    group_.run([this, topology = std::move(topology), levels] {
+      const auto start = std::chrono::steady_clock::now();
+      try {
+        hierarchy_ = std::make_shared<const SubdivisionHierarchy>(topology, levels);
+      } catch (...) {
+        error_ = std::current_exception();
+      }
+      seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    });
+  }
+  bool started() const { return started_; }
+  double seconds() const { return seconds_; }  // the build's own duration, once waited for
+  std::shared_ptr<const SubdivisionHierarchy> get() {
+    wait();
+    if (error_) std::rethrow_exception(error_);
+    return hierarchy_;
+  }
+  // Rethrows the build's error, if any: it takes precedence over errors found
+  // meanwhile in later sections, as when the build came first.
+  void rethrow_error() {
+    wait();
+    if (error_) std::rethrow_exception(error_);
+  }
+
+ private:
+  void wait() {
+    if (!started_ || waited_) return;
+    waited_ = true;
+    group_.wait();  // the task catches everything, so this does not throw
+  }
+
+  tbb::task_group group_;
+  bool started_ = false, waited_ = false;
+  std::shared_ptr<const SubdivisionHierarchy> hierarchy_;
+  std::exception_ptr error_;
+  double seconds_ = 0;
+};
+
+}  // namespace
+
 IswDecoded decode_isw(const std::string& bytes, const std::string& name, const IswDecodeOptions& options) {
+  const auto decode_start = std::chrono::steady_clock::now();
   IswDecoded result;
   if (bytes.size() < kHeaderBytes || std::memcmp(bytes.data(), kMagic, 8) != 0)
     throw Error(ErrorKind::Format, name + ": not an isowave .isw file (bad magic)");
@@ -419,8 +552,16 @@ IswDecoded decode_isw(const std::string& bytes, const std::string& name, const I
 
   std::size_t position = kHeaderBytes;
   std::shared_ptr<const SubdivisionHierarchy> hierarchy;
+  // The hierarchy is built during the chunk decoding, which needs only its
+  // counts (the layout).
+  HierarchyBuild build;
+  std::optional<CoefficientLayout> layout;
   std::uint64_t limit = options.max_coefficients;
-  std::vector<QuantizedVector> q;
+  // Quantized base control points (the prediction reads them), then the
+  // decoded wavelet coefficients' values in rank order, parallel to
+  // result.ranked: at a few percent only a few of the fine entries.
+  std::vector<QuantizedVector> base_q;
+  std::vector<QuantizedVector> ranked_q;
   std::vector<std::uint8_t> significant;
   std::vector<std::uint64_t> chunk_ends;
   std::uint64_t nonzero_total = 0;
@@ -428,253 +569,284 @@ IswDecoded decode_isw(const std::string& bytes, const std::string& name, const I
   std::size_t section_index = 0;
   bool saw_end = false;
 
-  while (position < bytes.size()) {
-    if (bytes.size() - position < kSectionHeader) {
-      if (section_index >= 4) {
-        result.truncated = true;
-        break;
+  try {
+    while (position < bytes.size()) {
+      if (bytes.size() - position < kSectionHeader) {
+        if (section_index >= 4) {
+          result.truncated = true;
+          break;
+        }
+        throw Error(ErrorKind::Format, name + ": truncated section header at byte " + std::to_string(position));
       }
-      throw Error(ErrorKind::Format, name + ": truncated section header at byte " + std::to_string(position));
-    }
-    const std::string tag = bytes.substr(position, 4);
-    std::uint64_t size = 0;
-    std::uint32_t stored_header_crc = 0;
-    std::memcpy(&size, bytes.data() + position + 4, 8);
-    std::memcpy(&stored_header_crc, bytes.data() + position + 12, 4);
-    const std::string where = name + ": section " + tag + " (at byte " + std::to_string(position) + ")";
-    if (header_crc(tag.c_str(), size) != stored_header_crc)
-      throw Error(ErrorKind::Format, where + ": corrupt section header (CRC mismatch)");
-    if (section_index < 4 && tag != expected_order[section_index])
-      throw Error(ErrorKind::Format, where + ": expected section " + expected_order[section_index]);
-    if (section_index >= 4 && tag != "CHNK" && tag != "END ")
-      throw Error(ErrorKind::Format, where + ": unknown section");
-    if (size > bytes.size() - position - kSectionHeader || bytes.size() - position - kSectionHeader - size < 4) {
-      if (tag == "CHNK") {
-        result.truncated = true;
-        break;
+      const std::string tag = bytes.substr(position, 4);
+      std::uint64_t size = 0;
+      std::uint32_t stored_header_crc = 0;
+      std::memcpy(&size, bytes.data() + position + 4, 8);
+      std::memcpy(&stored_header_crc, bytes.data() + position + 12, 4);
+      const std::string where = name + ": section " + tag + " (at byte " + std::to_string(position) + ")";
+      if (header_crc(tag.c_str(), size) != stored_header_crc)
+        throw Error(ErrorKind::Format, where + ": corrupt section header (CRC mismatch)");
+      if (section_index < 4 && tag != expected_order[section_index])
+        throw Error(ErrorKind::Format, where + ": expected section " + expected_order[section_index]);
+      if (section_index >= 4 && tag != "CHNK" && tag != "END ")
+        throw Error(ErrorKind::Format, where + ": unknown section");
+      if (size > bytes.size() - position - kSectionHeader || bytes.size() - position - kSectionHeader - size < 4) {
+        if (tag == "CHNK") {
+          result.truncated = true;
+          break;
+        }
+        throw Error(ErrorKind::Format, where + " is truncated");
       }
-      throw Error(ErrorKind::Format, where + " is truncated");
-    }
-    const std::string payload = bytes.substr(position + kSectionHeader, static_cast<std::size_t>(size));
-    std::uint32_t stored_crc = 0;
-    std::memcpy(&stored_crc, bytes.data() + position + kSectionHeader + size, 4);
-    if (crc_of(tag.c_str(), payload) != stored_crc) throw Error(ErrorKind::Format, where + " is corrupt (CRC mismatch)");
-    IswSectionInfo info{tag, position, size + kSectionOverhead, 0};
-    position += static_cast<std::size_t>(size) + kSectionOverhead;
-    PayloadReader reader(payload, where);
-    ++section_index;
+      const std::string_view payload = std::string_view(bytes).substr(position + kSectionHeader, static_cast<std::size_t>(size));
+      std::uint32_t stored_crc = 0;
+      std::memcpy(&stored_crc, bytes.data() + position + kSectionHeader + size, 4);
+      if (crc_of(tag.c_str(), payload) != stored_crc) throw Error(ErrorKind::Format, where + " is corrupt (CRC mismatch)");
+      IswSectionInfo info{tag, position, size + kSectionOverhead, 0};
+      position += static_cast<std::size_t>(size) + kSectionOverhead;
+      PayloadReader reader(payload, where);
+      ++section_index;
 
-    if (tag == "META") {
-      std::size_t start = 0;
-      while (start < payload.size()) {
-        std::size_t end = payload.find('\n', start);
-        if (end == std::string::npos) end = payload.size();
-        const std::string line = payload.substr(start, end - start);
-        const std::size_t eq = line.find('=');
-        if (eq != std::string::npos) result.metadata.values[line.substr(0, eq)] = line.substr(eq + 1);
-        start = end + 1;
-      }
-    } else if (tag == "BASE") {
-      const auto vertices = reader.read<std::uint32_t>();
-      const auto faces = reader.read<std::uint32_t>();
-      const auto corners = reader.read<std::uint32_t>();
-      const auto sharp_count = reader.read<std::uint32_t>();
-      const auto coded_size = reader.read<std::uint64_t>();
-      if (coded_size != reader.remaining()) reader.fail("has an inconsistent size");
-      const std::uint64_t integer_budget = kMaxIntegersPerCodedByte * (coded_size + 16);
-      if (faces == 0 || corners < 3ull * faces || vertices > corners || sharp_count > vertices ||
-          std::uint64_t{corners} + faces + sharp_count > integer_budget)
-        reader.fail("has impossible counts");
-      const std::string coded = reader.bytes(coded_size);
-      RangeDecoder rc(reinterpret_cast<const std::uint8_t*>(coded.data()), coded.size());
-      BaseModels m;
-      PolygonMesh& base = result.base;
-      base.positions.assign(vertices, Vec3{});
-      base.face_offsets.reserve(std::size_t{faces} + 1);
-      base.face_vertices.reserve(corners);
-      std::int64_t previous_first = 0;
-      std::vector<std::uint32_t> face;
-      for (std::uint32_t f = 0; f < faces; ++f) {
-        const std::int64_t size_code = detail::decode_integer(rc, m.face_size);
-        if (size_code < 0 || base.face_vertices.size() + 3 + static_cast<std::uint64_t>(size_code) > corners)
-          reader.fail("has an invalid face size");
-        face.assign(static_cast<std::size_t>(size_code + 3), 0);
-        const std::int64_t first = previous_first + detail::decode_integer(rc, m.first_index);
-        for (std::size_t k = 0; k < face.size(); ++k) {
-          const std::int64_t index = k == 0 ? first : first + detail::decode_integer(rc, m.other_index);
-          if (index < 0 || index >= vertices) reader.fail("has a vertex index out of range");
-          face[k] = static_cast<std::uint32_t>(index);
+      if (tag == "META") {
+        std::size_t start = 0;
+        while (start < payload.size()) {
+          std::size_t end = payload.find('\n', start);
+          if (end == std::string::npos) end = payload.size();
+          const std::string line(payload.substr(start, end - start));
+          const std::size_t eq = line.find('=');
+          if (eq != std::string::npos) result.metadata.values[line.substr(0, eq)] = line.substr(eq + 1);
+          start = end + 1;
         }
-        previous_first = first;
-        base.add_face(face.data(), face.size());
-      }
-      if (base.face_vertices.size() != corners) reader.fail("has an inconsistent corner count");
-      if (sharp_count > 0) base.sharp.assign(vertices, 0);
-      std::int64_t previous_sharp = -1;
-      for (std::uint32_t s = 0; s < sharp_count; ++s) {
-        const std::int64_t v = previous_sharp + detail::decode_integer(rc, m.sharp_gap);
-        if (v <= previous_sharp || v >= vertices) reader.fail("has an invalid sharp vertex");
-        base.sharp[static_cast<std::size_t>(v)] = 1;
-        previous_sharp = v;
-      }
-      if (rc.overran()) reader.fail("is corrupt (coded data ends early)");
-      try {
-        require_manifold(base, "base mesh");
-      } catch (const Error& error) {
-        reader.fail(std::string("holds an invalid base mesh: ") + error.what());
-      }
-    } else if (tag == "QUAN") {
-      result.step = reader.read<double>();
-      const auto levels = reader.read<std::uint32_t>();
-      const auto classes = reader.read<std::uint32_t>();
-      if (!(result.step > 0) || !std::isfinite(result.step)) reader.fail("has an invalid quantization step");
-      if (levels > kMaxLevels || classes != 1 + 2 * levels) reader.fail("has an invalid level count");
-      result.levels = static_cast<int>(levels);
-      for (std::uint32_t c = 0; c < classes; ++c) {
-        const double w = reader.read<double>();
-        if (!(w > 0) || !std::isfinite(w)) reader.fail("has an invalid class weight");
-        result.class_weights.push_back(w);
-      }
-      nonzero_total = reader.read<std::uint64_t>();
-      const auto chunks = reader.read<std::uint32_t>();
-      if (chunks > reader.remaining() / 8) reader.fail("has an impossible chunk count");
-      std::uint64_t previous = 0;
-      for (std::uint32_t c = 0; c < chunks; ++c) {
-        const auto end = reader.read<std::uint64_t>();
-        if (end <= previous || end > nonzero_total) reader.fail("has invalid chunk boundaries");
-        chunk_ends.push_back(end);
-        previous = end;
-      }
-      if (!chunk_ends.empty() && chunk_ends.back() != nonzero_total) reader.fail("has invalid chunk boundaries");
-      result.chunks_total = chunks;
-      result.coefficients_total = nonzero_total;
-      // The hierarchy (and so the fine vertex count) follows from the base
-      // mesh and the levels; bound it by the file size before building it.
-      double estimate = static_cast<double>(result.base.vertex_count());
-      {
-        double f = static_cast<double>(result.base.face_count());
-        double corners = static_cast<double>(result.base.face_vertices.size());
-        double e = static_cast<double>(summarize_topology(result.base).edges);
-        for (std::uint32_t l = 0; l < levels; ++l) {
-          estimate += f + e;
-          e = 2 * e + corners;
-          f = corners;
-          corners = 4 * f;
-        }
-      }
-      if (estimate > static_cast<double>(kMaxFineVertices) ||
-          estimate > static_cast<double>(kFineVerticesPerFileByte * bytes.size() + (1u << 20)))
-        reader.fail("describes a hierarchy larger than the file can justify");
-      const SubdivisionHierarchy* known = options.hierarchy.get();
-      const bool reuse = known && known->levels() == result.levels &&
-                         known->base().face_offsets == result.base.face_offsets &&
-                         known->base().face_vertices == result.base.face_vertices &&
-                         known->base().sharp_count() == result.base.sharp_count() &&
-                         (result.base.sharp_count() == 0 || known->base().sharp == result.base.sharp);
-      hierarchy = reuse ? options.hierarchy : std::make_shared<SubdivisionHierarchy>(result.base, result.levels);
-      result.hierarchy = hierarchy;
-      limit = std::min<std::uint64_t>(limit, coefficients_for_percent(*hierarchy, options.max_percent));
-      if (nonzero_total > hierarchy->fine_vertex_count() - hierarchy->vertex_count(0))
-        reader.fail("claims more coefficients than the hierarchy has");
-    } else if (tag == "BPTS") {
-      const auto coded_size = reader.read<std::uint64_t>();
-      if (coded_size != reader.remaining()) reader.fail("has an inconsistent size");
-      if (3ull * result.base.vertex_count() > kMaxIntegersPerCodedByte * (coded_size + 16)) reader.fail("is too short");
-      const std::string coded = reader.bytes(coded_size);
-      RangeDecoder rc(reinterpret_cast<const std::uint8_t*>(coded.data()), coded.size());
-      q.assign(hierarchy->fine_vertex_count(), QuantizedVector{0, 0, 0});
-      std::array<IntegerModel, 3> models;
-      const auto neighbours = earlier_neighbours(result.base);
-      const double s = class_step(result.step, result.class_weights, 0);
-      for (std::size_t v = 0; v < result.base.vertex_count(); ++v) {
-        const QuantizedVector prediction = predict_base(q, neighbours[v], v);
-        for (int axis = 0; axis < 3; ++axis) {
-          q[v][axis] = prediction[axis] + detail::decode_integer(rc, models[static_cast<std::size_t>(axis)]);
-          if (std::abs(q[v][axis]) > (1ll << 40)) reader.fail("holds an impossible value");
-        }
-        result.base.positions[v] = {q[v][0] * s, q[v][1] * s, q[v][2] * s};
-      }
-      if (rc.overran()) reader.fail("is corrupt (coded data ends early)");
-      significant.assign(hierarchy->fine_vertex_count(), 0);
-      if (options.headers_only) {
-        result.sections.push_back(info);
-        // List the remaining sections without decoding them.
-        while (position + kSectionHeader <= bytes.size()) {
-          std::uint64_t next_size = 0;
-          std::memcpy(&next_size, bytes.data() + position + 4, 8);
-          IswSectionInfo next{bytes.substr(position, 4), position, 0, 0};
-          if (next_size > bytes.size() - position - kSectionHeader ||
-              bytes.size() - position - kSectionHeader - next_size < 4) {
-            result.truncated = true;
-            break;
+      } else if (tag == "BASE") {
+        const auto vertices = reader.read<std::uint32_t>();
+        const auto faces = reader.read<std::uint32_t>();
+        const auto corners = reader.read<std::uint32_t>();
+        const auto sharp_count = reader.read<std::uint32_t>();
+        const auto coded_size = reader.read<std::uint64_t>();
+        if (coded_size != reader.remaining()) reader.fail("has an inconsistent size");
+        const std::uint64_t integer_budget = kMaxIntegersPerCodedByte * (coded_size + 16);
+        if (faces == 0 || corners < 3ull * faces || vertices > corners || sharp_count > vertices ||
+            std::uint64_t{corners} + faces + sharp_count > integer_budget)
+          reader.fail("has impossible counts");
+        const std::string_view coded = reader.bytes(coded_size);
+        RangeDecoder rc(reinterpret_cast<const std::uint8_t*>(coded.data()), coded.size());
+        BaseModels m;
+        PolygonMesh& base = result.base;
+        base.positions.assign(vertices, Vec3{});
+        base.face_offsets.reserve(std::size_t{faces} + 1);
+        base.face_vertices.reserve(corners);
+        std::int64_t previous_first = 0;
+        std::vector<std::uint32_t> face;
+        for (std::uint32_t f = 0; f < faces; ++f) {
+          const std::int64_t size_code = detail::decode_integer(rc, m.face_size);
+          if (size_code < 0 || base.face_vertices.size() + 3 + static_cast<std::uint64_t>(size_code) > corners)
+            reader.fail("has an invalid face size");
+          face.assign(static_cast<std::size_t>(size_code + 3), 0);
+          const std::int64_t first = previous_first + detail::decode_integer(rc, m.first_index);
+          for (std::size_t k = 0; k < face.size(); ++k) {
+            const std::int64_t index = k == 0 ? first : first + detail::decode_integer(rc, m.other_index);
+            if (index < 0 || index >= vertices) reader.fail("has a vertex index out of range");
+            face[k] = static_cast<std::uint32_t>(index);
           }
-          next.bytes = next_size + kSectionOverhead;
-          if (next.tag == "CHNK" && next_size >= 20) {
-            std::uint64_t b = 0, e = 0;
-            std::memcpy(&b, bytes.data() + position + kSectionHeader + 4, 8);
-            std::memcpy(&e, bytes.data() + position + kSectionHeader + 12, 8);
-            next.coefficients = e >= b ? e - b : 0;
-          }
-          result.sections.push_back(next);
-          position += static_cast<std::size_t>(next.bytes);
+          previous_first = first;
+          base.add_face(face.data(), face.size());
         }
-        return result;
-      }
-    } else if (tag == "CHNK") {
-      const auto chunk = reader.read<std::uint32_t>();
-      const auto begin = reader.read<std::uint64_t>();
-      const auto end = reader.read<std::uint64_t>();
-      const auto coded_size = reader.read<std::uint64_t>();
-      if (chunk != result.chunks_decoded || chunk >= chunk_ends.size() || end != chunk_ends[chunk] ||
-          begin != (chunk == 0 ? 0 : chunk_ends[chunk - 1]))
-        reader.fail("is out of order or inconsistent with QUAN");
-      if (coded_size != reader.remaining()) reader.fail("has an inconsistent size");
-      const std::string coded = reader.bytes(coded_size);
-      RangeDecoder rc(reinterpret_cast<const std::uint8_t*>(coded.data()), coded.size());
-      const int classes = coefficient_class_count(*hierarchy);
-      ChunkModels models(classes);
-      std::uint64_t found = 0;
-      const std::size_t first_new = result.ranked.size();
-      for (int c = 1; c < classes; ++c) {
-        const auto [first, last] = coefficient_class_range(*hierarchy, c);
-        int previous_flag = 0;
-        std::array<int, 3> previous_bucket{0, 0, 0};
-        for (std::size_t i = first; i < last; ++i) {
-          if (significant[i]) continue;
-          const int flag = rc.decode_bit(models.flags[static_cast<std::size_t>(c)][static_cast<std::size_t>(previous_flag)]);
-          previous_flag = flag;
-          if (!flag) continue;
-          if (++found > end - begin) reader.fail("holds more coefficients than it declares");
-          significant[i] = 1;
+        if (base.face_vertices.size() != corners) reader.fail("has an inconsistent corner count");
+        if (sharp_count > 0) base.sharp.assign(vertices, 0);
+        std::int64_t previous_sharp = -1;
+        for (std::uint32_t s = 0; s < sharp_count; ++s) {
+          const std::int64_t v = previous_sharp + detail::decode_integer(rc, m.sharp_gap);
+          if (v <= previous_sharp || v >= vertices) reader.fail("has an invalid sharp vertex");
+          base.sharp[static_cast<std::size_t>(v)] = 1;
+          previous_sharp = v;
+        }
+        if (rc.overran()) reader.fail("is corrupt (coded data ends early)");
+        try {
+          require_manifold(base, "base mesh");
+        } catch (const Error& error) {
+          reader.fail(std::string("holds an invalid base mesh: ") + error.what());
+        }
+      } else if (tag == "QUAN") {
+        result.step = reader.read<double>();
+        const auto levels = reader.read<std::uint32_t>();
+        const auto classes = reader.read<std::uint32_t>();
+        if (!(result.step > 0) || !std::isfinite(result.step)) reader.fail("has an invalid quantization step");
+        if (levels > kMaxLevels || classes != 1 + 2 * levels) reader.fail("has an invalid level count");
+        result.levels = static_cast<int>(levels);
+        for (std::uint32_t c = 0; c < classes; ++c) {
+          const double w = reader.read<double>();
+          if (!(w > 0) || !std::isfinite(w)) reader.fail("has an invalid class weight");
+          result.class_weights.push_back(w);
+        }
+        nonzero_total = reader.read<std::uint64_t>();
+        const auto chunks = reader.read<std::uint32_t>();
+        if (chunks > reader.remaining() / 8) reader.fail("has an impossible chunk count");
+        std::uint64_t previous = 0;
+        for (std::uint32_t c = 0; c < chunks; ++c) {
+          const auto end = reader.read<std::uint64_t>();
+          if (end <= previous || end > nonzero_total) reader.fail("has invalid chunk boundaries");
+          chunk_ends.push_back(end);
+          previous = end;
+        }
+        if (!chunk_ends.empty() && chunk_ends.back() != nonzero_total) reader.fail("has invalid chunk boundaries");
+        result.chunks_total = chunks;
+        result.coefficients_total = nonzero_total;
+        // The hierarchy (and so the fine vertex count) follows from the base
+        // mesh and the levels; bound it by the file size before building it.
+        const auto justified = [&](const CoefficientLayout& counts) {
+          const double estimate = static_cast<double>(counts.fine());
+          return estimate <= static_cast<double>(kMaxFineVertices) &&
+                 estimate <= static_cast<double>(kFineVerticesPerFileByte * bytes.size() + (1u << 20));
+        };
+        const SubdivisionHierarchy* known = options.hierarchy.get();
+        const bool reuse = known && known->levels() == result.levels &&
+                           known->base().face_offsets == result.base.face_offsets &&
+                           known->base().face_vertices == result.base.face_vertices &&
+                           known->base().sharp_count() == result.base.sharp_count() &&
+                           (result.base.sharp_count() == 0 || known->base().sharp == result.base.sharp);
+        result.seconds.headers = seconds_since(decode_start);
+        // With every corner counted as an edge the estimate can only grow: if
+        // even that is justified, the build starts before the exact edge count.
+        const bool early = !reuse && justified(CoefficientLayout(result.base, result.base.face_vertices.size(), result.levels));
+        if (early) build.start(result.base, result.levels);
+        layout.emplace(result.base, summarize_topology(result.base).edges, result.levels);
+        if (!justified(*layout)) reader.fail("describes a hierarchy larger than the file can justify");
+        if (reuse) hierarchy = options.hierarchy;
+        else if (!early) build.start(result.base, result.levels);
+        const std::size_t base_count = layout->vertex_counts[0];
+        limit = std::min<std::uint64_t>(limit, coefficients_for_percent(layout->fine(), base_count, options.max_percent));
+        if (nonzero_total > layout->fine() - base_count) reader.fail("claims more coefficients than the hierarchy has");
+      } else if (tag == "BPTS") {
+        const auto coded_size = reader.read<std::uint64_t>();
+        if (coded_size != reader.remaining()) reader.fail("has an inconsistent size");
+        if (3ull * result.base.vertex_count() > kMaxIntegersPerCodedByte * (coded_size + 16)) reader.fail("is too short");
+        const std::string_view coded = reader.bytes(coded_size);
+        RangeDecoder rc(reinterpret_cast<const std::uint8_t*>(coded.data()), coded.size());
+        base_q.assign(result.base.vertex_count(), QuantizedVector{0, 0, 0});
+        std::array<IntegerModel, 3> models;
+        const auto neighbours = earlier_neighbours(result.base);
+        const double s = class_step(result.step, result.class_weights, 0);
+        for (std::size_t v = 0; v < result.base.vertex_count(); ++v) {
+          const QuantizedVector prediction = predict_base(base_q, neighbours[v], v);
           for (int axis = 0; axis < 3; ++axis) {
-            q[i][axis] = detail::decode_integer(rc, models.component(c, axis, previous_bucket[static_cast<std::size_t>(axis)]));
-            previous_bucket[static_cast<std::size_t>(axis)] = magnitude_bucket(q[i][axis]);
+            base_q[v][axis] = prediction[axis] + detail::decode_integer(rc, models[static_cast<std::size_t>(axis)]);
+            if (std::abs(base_q[v][axis]) > (1ll << 40)) reader.fail("holds an impossible value");
           }
-          if (q[i][0] == 0 && q[i][1] == 0 && q[i][2] == 0) reader.fail("holds a zero coefficient");
-          result.ranked.push_back(static_cast<std::uint32_t>(i));
+          result.base.positions[v] = {base_q[v][0] * s, base_q[v][1] * s, base_q[v][2] * s};
         }
+        if (rc.overran()) reader.fail("is corrupt (coded data ends early)");
+        reserve_fresh_on_huge_pages(significant, layout->fine());
+        significant.assign(layout->fine(), 0);
+        if (options.headers_only) {
+          if (build.started()) hierarchy = build.get();
+          result.hierarchy = hierarchy;
+          result.sections.push_back(info);
+          // List the remaining sections without decoding them.
+          while (position + kSectionHeader <= bytes.size()) {
+            std::uint64_t next_size = 0;
+            std::memcpy(&next_size, bytes.data() + position + 4, 8);
+            IswSectionInfo next{bytes.substr(position, 4), position, 0, 0};
+            if (next_size > bytes.size() - position - kSectionHeader ||
+                bytes.size() - position - kSectionHeader - next_size < 4) {
+              result.truncated = true;
+              break;
+            }
+            next.bytes = next_size + kSectionOverhead;
+            if (next.tag == "CHNK" && next_size >= 20) {
+              std::uint64_t b = 0, e = 0;
+              std::memcpy(&b, bytes.data() + position + kSectionHeader + 4, 8);
+              std::memcpy(&e, bytes.data() + position + kSectionHeader + 12, 8);
+              next.coefficients = e >= b ? e - b : 0;
+            }
+            result.sections.push_back(next);
+            position += static_cast<std::size_t>(next.bytes);
+          }
+          return result;
+        }
+      } else if (tag == "CHNK") {
+        const auto chunk_start = std::chrono::steady_clock::now();
+        const auto chunk = reader.read<std::uint32_t>();
+        const auto begin = reader.read<std::uint64_t>();
+        const auto end = reader.read<std::uint64_t>();
+        const auto coded_size = reader.read<std::uint64_t>();
+        if (chunk != result.chunks_decoded || chunk >= chunk_ends.size() || end != chunk_ends[chunk] ||
+            begin != (chunk == 0 ? 0 : chunk_ends[chunk - 1]))
+          reader.fail("is out of order or inconsistent with QUAN");
+        if (coded_size != reader.remaining()) reader.fail("has an inconsistent size");
+        const std::string_view coded = reader.bytes(coded_size);
+        RangeDecoder rc(reinterpret_cast<const std::uint8_t*>(coded.data()), coded.size());
+        const int classes = layout->class_count();
+        ChunkModels models(classes);
+        std::uint64_t found = 0;
+        std::vector<std::uint32_t> fresh;
+        std::vector<QuantizedVector> fresh_q;
+        for (int c = 1; c < classes; ++c) {
+          const auto [first, last] = layout->class_range(c);
+          int previous_flag = 0;
+          std::array<int, 3> previous_bucket{0, 0, 0};
+          // The two flag contexts as locals, so that they stay in registers
+          // through the millions of flags (the same arithmetic as in memory).
+          Probability flag_after_zero = models.flags[static_cast<std::size_t>(c)][0];
+          Probability flag_after_one = models.flags[static_cast<std::size_t>(c)][1];
+          for (std::size_t i = first; i < last; ++i) {
+            if (significant[i]) continue;
+            const int flag = previous_flag ? rc.decode_bit(flag_after_one) : rc.decode_bit(flag_after_zero);
+            previous_flag = flag;
+            if (!flag) continue;
+            if (++found > end - begin) reader.fail("holds more coefficients than it declares");
+            significant[i] = 1;
+            QuantizedVector value;
+            for (int axis = 0; axis < 3; ++axis) {
+              value[axis] = detail::decode_integer(rc, models.component(c, axis, previous_bucket[static_cast<std::size_t>(axis)]));
+              previous_bucket[static_cast<std::size_t>(axis)] = magnitude_bucket(value[axis]);
+            }
+            if (value[0] == 0 && value[1] == 0 && value[2] == 0) reader.fail("holds a zero coefficient");
+            fresh.push_back(static_cast<std::uint32_t>(i));
+            fresh_q.push_back(value);
+          }
+          models.flags[static_cast<std::size_t>(c)] = {flag_after_zero, flag_after_one};
+        }
+        if (found != end - begin) reader.fail("holds fewer coefficients than it declares");
+        if (rc.overran()) reader.fail("is corrupt (coded data ends early)");
+        result.seconds.chunks += seconds_since(chunk_start);
+        const auto rank_start = std::chrono::steady_clock::now();
+        // Rank the new coefficients as the encoder did.
+        std::vector<RankedEntry> keyed(fresh.size());
+        for (std::size_t k = 0; k < fresh.size(); ++k)
+          keyed[k] = {importance_key(layout->class_of(fresh[k]), fresh_q[k], result.step, result.class_weights), fresh[k],
+                      static_cast<std::uint32_t>(k)};
+        sort_by_importance(keyed);
+        for (const RankedEntry& entry : keyed) {
+          result.ranked.push_back(entry.index);
+          ranked_q.push_back(fresh_q[entry.position]);
+        }
+        result.seconds.rank += seconds_since(rank_start);
+        info.coefficients = end - begin;
+        ++result.chunks_decoded;
+        result.sections.push_back(info);
+        // Stop at the limit, but read END after the last chunk.
+        if (result.ranked.size() >= limit && result.chunks_decoded < result.chunks_total) break;
+        continue;
+      } else if (tag == "END ") {
+        if (result.chunks_decoded != result.chunks_total) throw Error(ErrorKind::Format, where + ": chunks are missing");
+        saw_end = true;
+        result.sections.push_back(info);
+        break;
       }
-      if (found != end - begin) reader.fail("holds fewer coefficients than it declares");
-      if (rc.overran()) reader.fail("is corrupt (coded data ends early)");
-      // Rank the new coefficients as the encoder did.
-      std::vector<std::uint32_t> fresh(result.ranked.begin() + static_cast<std::ptrdiff_t>(first_new), result.ranked.end());
-      rank_by_importance(*hierarchy, q, result.step, result.class_weights, fresh);
-      std::copy(fresh.begin(), fresh.end(), result.ranked.begin() + static_cast<std::ptrdiff_t>(first_new));
-      info.coefficients = end - begin;
-      ++result.chunks_decoded;
       result.sections.push_back(info);
-      // Stop at the limit, but read END after the last chunk.
-      if (result.ranked.size() >= limit && result.chunks_decoded < result.chunks_total) break;
-      continue;
-    } else if (tag == "END ") {
-      if (result.chunks_decoded != result.chunks_total) throw Error(ErrorKind::Format, where + ": chunks are missing");
-      saw_end = true;
-      result.sections.push_back(info);
-      break;
     }
-    result.sections.push_back(info);
+    if (section_index < 4) throw Error(ErrorKind::Format, name + ": the file ends before the coefficient sections");
+  } catch (...) {
+    build.rethrow_error();
+    throw;
   }
-  if (section_index < 4) throw Error(ErrorKind::Format, name + ": the file ends before the coefficient sections");
+  if (build.started()) {
+    const auto wait_start = std::chrono::steady_clock::now();
+    hierarchy = build.get();
+    result.seconds.hierarchy_wait = seconds_since(wait_start);
+    result.seconds.hierarchy = build.seconds();
+  }
+  assert(layout->matches(*hierarchy));
+  result.hierarchy = hierarchy;
   const bool stopped_early = result.ranked.size() >= limit && result.chunks_decoded < result.chunks_total;
   if (!saw_end && !stopped_early) result.truncated = true;
   if (result.truncated)
@@ -686,21 +858,37 @@ IswDecoded decode_isw(const std::string& bytes, const std::string& name, const I
                                        std::to_string(result.coefficients_total) + " coefficients)"
                                  : "file ends before its END section (all coefficient chunks were decoded)";
 
-  result.coefficients = dequantize(*hierarchy, q, result.step, result.class_weights);
-  if (result.ranked.size() > limit) {
-    for (std::size_t r = static_cast<std::size_t>(limit); r < result.ranked.size(); ++r)
-      result.coefficients[result.ranked[r]] = Vec3{};
-    result.ranked.resize(static_cast<std::size_t>(limit));
+  const auto dequantize_start = std::chrono::steady_clock::now();
+  // The coarse-to-fine array: zero except the base control points and the
+  // coefficients kept.
+  if (result.ranked.size() > limit) result.ranked.resize(static_cast<std::size_t>(limit));
+  const std::size_t fine = layout->fine();
+  reserve_fresh_on_huge_pages(result.coefficients, fine);
+  result.coefficients.resize(fine);
+  std::copy(result.base.positions.begin(), result.base.positions.end(), result.coefficients.begin());
+  for (std::size_t r = 0; r < result.ranked.size(); ++r) {
+    const std::uint32_t i = result.ranked[r];
+    const double s = class_step(result.step, result.class_weights, layout->class_of(i));
+    result.coefficients[i] = {ranked_q[r][0] * s, ranked_q[r][1] * s, ranked_q[r][2] * s};
   }
+  result.seconds.dequantize = seconds_since(dequantize_start);
   return result;
 }
 
 IswDecoded read_isw(const std::string& path, const IswDecodeOptions& options) {
-  std::ifstream in(path, std::ios::binary);
+  const auto start = std::chrono::steady_clock::now();
+  std::ifstream in(path, std::ios::binary | std::ios::ate);
   if (!in) throw Error(ErrorKind::Io, path + ": cannot open");
-  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  if (in.bad()) throw Error(ErrorKind::Io, path + ": read failed");
-  return decode_isw(bytes, path, options);
+  // One read of the whole file (a stream iterator goes byte by byte).
+  const std::streamoff size = in.tellg();
+  if (size < 0) throw Error(ErrorKind::Io, path + ": cannot determine the file size");
+  std::string bytes(static_cast<std::size_t>(size), '\0');
+  in.seekg(0);
+  if (!in.read(bytes.data(), size) || in.gcount() != size) throw Error(ErrorKind::Io, path + ": read failed");
+  const double read_seconds = seconds_since(start);
+  IswDecoded result = decode_isw(bytes, path, options);
+  result.seconds.read = read_seconds;
+  return result;
 }
 
 void write_isw(const std::string& path, const std::string& bytes, bool overwrite) {

@@ -1,9 +1,11 @@
 #include "isowave/codec/statistics.h"
 
 #include <algorithm>
+#include <utility>
 
 #include "isowave/codec/importance.h"
 #include "isowave/core/error.h"
+#include "isowave/core/huge_page_vector.h"
 #include "isowave/transform/wavelet_transform.h"
 
 namespace isowave {
@@ -14,6 +16,7 @@ namespace {
 // instead of faulting in a fresh fine-mesh-sized array each time.
 void reconstruct_into(const IswDecoded& decoded, std::size_t keep, int level, std::vector<Vec3>& data) {
   if (!decoded.hierarchy) throw Error(ErrorKind::InvalidArgument, "reconstruct needs a decoded file");
+  if (data.capacity() < decoded.coefficients.size()) reserve_fresh_on_huge_pages(data, decoded.coefficients.size());
   data.assign(decoded.coefficients.begin(), decoded.coefficients.end());
   for (std::size_t r = std::min(keep, decoded.ranked.size()); r < decoded.ranked.size(); ++r) data[decoded.ranked[r]] = Vec3{};
   synthesize(*decoded.hierarchy, data, level);
@@ -25,6 +28,16 @@ void reconstruct_into(const IswDecoded& decoded, std::size_t keep, int level, st
 std::vector<Vec3> reconstruct(const IswDecoded& decoded, std::size_t keep, int level) {
   std::vector<Vec3> data;
   reconstruct_into(decoded, keep, level, data);
+  return data;
+}
+
+std::vector<Vec3> take_reconstruction(IswDecoded& decoded, std::size_t keep, int level) {
+  if (!decoded.hierarchy) throw Error(ErrorKind::InvalidArgument, "reconstruct needs a decoded file");
+  std::vector<Vec3> data = std::move(decoded.coefficients);
+  decoded.coefficients.clear();
+  for (std::size_t r = std::min(keep, decoded.ranked.size()); r < decoded.ranked.size(); ++r) data[decoded.ranked[r]] = Vec3{};
+  synthesize(*decoded.hierarchy, data, level);
+  data.resize(decoded.hierarchy->vertex_count(level < 0 ? decoded.levels : level));
   return data;
 }
 

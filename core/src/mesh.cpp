@@ -2,6 +2,9 @@
 
 #include <algorithm>
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_reduce.h>
+
 #include "isowave/core/error.h"
 
 namespace isowave {
@@ -22,6 +25,24 @@ void PolygonMesh::clear() {
   sharp.clear();
 }
 
+namespace {
+
+// The smallest i in [0, n) with bad(i), or n: in parallel, yet the same
+// answer as a serial scan, so errors always name the first offender.
+template <class Predicate>
+std::size_t first_where(std::size_t n, const Predicate& bad) {
+  return tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(0, n, 1 << 16), n,
+      [&](const tbb::blocked_range<std::size_t>& r, std::size_t found) {
+        for (std::size_t i = r.begin(); i < r.end() && i < found; ++i)
+          if (bad(i)) return i;
+        return found;
+      },
+      [](std::size_t a, std::size_t b) { return std::min(a, b); });
+}
+
+}  // namespace
+
 void validate_indices(const PolygonMesh& mesh, const std::string& source) {
   const auto fail = [&](const std::string& what) { throw Error(ErrorKind::Format, source + ": " + what); };
   if (mesh.face_offsets.empty() || mesh.face_offsets.front() != 0 ||
@@ -29,17 +50,21 @@ void validate_indices(const PolygonMesh& mesh, const std::string& source) {
     fail("inconsistent face offsets");
   if (!mesh.sharp.empty() && mesh.sharp.size() != mesh.vertex_count())
     fail("sharp flags do not match the vertex count");
-  for (std::size_t v = 0; v < mesh.vertex_count(); ++v)
-    if (!is_finite(mesh.positions[v])) fail("vertex " + std::to_string(v) + " has a non-finite coordinate");
-  for (std::size_t f = 0; f < mesh.face_count(); ++f) {
+  const std::size_t v = first_where(mesh.vertex_count(), [&](std::size_t i) { return !is_finite(mesh.positions[i]); });
+  if (v < mesh.vertex_count()) fail("vertex " + std::to_string(v) + " has a non-finite coordinate");
+  const std::size_t f = first_where(mesh.face_count(), [&](std::size_t i) {
+    return mesh.face_offsets[i + 1] < mesh.face_offsets[i] || mesh.face_size(i) < 3;
+  });
+  if (f < mesh.face_count()) {
     if (mesh.face_offsets[f + 1] < mesh.face_offsets[f]) fail("inconsistent face offsets");
-    if (mesh.face_size(f) < 3)
-      fail("face " + std::to_string(f) + " has " + std::to_string(mesh.face_size(f)) + " vertices (at least 3 needed)");
+    fail("face " + std::to_string(f) + " has " + std::to_string(mesh.face_size(f)) + " vertices (at least 3 needed)");
   }
-  for (std::size_t i = 0; i < mesh.face_vertices.size(); ++i)
-    if (mesh.face_vertices[i] >= mesh.vertex_count())
-      fail("face vertex index " + std::to_string(mesh.face_vertices[i]) + " is out of range (" +
-           std::to_string(mesh.vertex_count()) + " vertices)");
+  const std::size_t i = first_where(mesh.face_vertices.size(), [&](std::size_t k) {
+    return mesh.face_vertices[k] >= mesh.vertex_count();
+  });
+  if (i < mesh.face_vertices.size())
+    fail("face vertex index " + std::to_string(mesh.face_vertices[i]) + " is out of range (" +
+         std::to_string(mesh.vertex_count()) + " vertices)");
 }
 
 std::size_t remove_unreferenced_vertices(PolygonMesh& mesh) {

@@ -8,6 +8,8 @@
 #include <fstream>
 #include <limits>
 
+#include <tbb/parallel_pipeline.h>
+
 #include "isowave/core/atomic_file.h"
 #include "isowave/core/error.h"
 
@@ -431,6 +433,83 @@ void append_number(std::string& out, double value, bool double_precision) {
   out.append(buffer, static_cast<std::size_t>(n));
 }
 
+// The binary body in blocks of a few megabytes, vertices then faces: each
+// value one memcpy into a reusable buffer (not a string append), blocks
+// serialized on all threads and written in order by one, so the conversion
+// overlaps the copying into the file.
+void write_binary_ply_body(AtomicFileWriter& file, const PolygonMesh& mesh, const MeshWriteOptions& options,
+                           bool with_sharp) {
+  for (std::size_t f = 0; f < mesh.face_count(); ++f)
+    if (mesh.face_size(f) > 255)
+      throw Error(ErrorKind::Unsupported, file.path() + ": PLY faces are limited to 255 vertices");
+  constexpr std::size_t kVerticesPerBlock = 1 << 18, kFacesPerBlock = 1 << 17;
+  const std::size_t scalar_bytes = options.double_precision ? 8 : 4;
+  const std::size_t vertex_bytes = 3 * scalar_bytes + (with_sharp ? 1 : 0);
+  const std::size_t vertex_blocks = (mesh.vertex_count() + kVerticesPerBlock - 1) / kVerticesPerBlock;
+  const std::size_t face_blocks = (mesh.face_count() + kFacesPerBlock - 1) / kFacesPerBlock;
+
+  struct Block {
+    std::size_t index = 0;
+    std::vector<char> bytes;
+  };
+  const auto serialize = [&](Block& block) {
+    if (block.index < vertex_blocks) {
+      const std::size_t first = block.index * kVerticesPerBlock;
+      const std::size_t last = std::min(mesh.vertex_count(), first + kVerticesPerBlock);
+      block.bytes.resize((last - first) * vertex_bytes);
+      char* p = block.bytes.data();
+      for (std::size_t v = first; v < last; ++v, p += vertex_bytes) {
+        const Vec3& position = mesh.positions[v];
+        if (options.double_precision) {
+          const double values[3] = {position.x, position.y, position.z};
+          std::memcpy(p, values, sizeof values);
+        } else {
+          const float values[3] = {static_cast<float>(position.x), static_cast<float>(position.y),
+                                   static_cast<float>(position.z)};
+          std::memcpy(p, values, sizeof values);
+        }
+        if (with_sharp) p[3 * scalar_bytes] = static_cast<char>(mesh.is_sharp(v) ? 1 : 0);
+      }
+    } else {
+      const std::size_t first = (block.index - vertex_blocks) * kFacesPerBlock;
+      const std::size_t last = std::min(mesh.face_count(), first + kFacesPerBlock);
+      block.bytes.resize((last - first) + 4 * std::size_t{mesh.face_offsets[last] - mesh.face_offsets[first]});
+      char* p = block.bytes.data();
+      for (std::size_t f = first; f < last; ++f) {
+        const std::uint32_t n = mesh.face_size(f);
+        *p++ = static_cast<char>(n);
+        std::memcpy(p, mesh.face_begin(f), 4 * std::size_t{n});  // indices < 2^31: the bytes of int32
+        p += 4 * std::size_t{n};
+      }
+    }
+  };
+
+  // At most pool.size() blocks are in flight and they leave in order, so
+  // block i may reuse the buffer of block i - pool.size().
+  std::vector<Block> pool(4);
+  std::size_t next = 0;
+  tbb::parallel_pipeline(
+      pool.size(),
+      tbb::make_filter<void, Block*>(tbb::filter_mode::serial_in_order,
+                                     [&](tbb::flow_control& control) -> Block* {
+                                       if (next == vertex_blocks + face_blocks) {
+                                         control.stop();
+                                         return nullptr;
+                                       }
+                                       Block* block = &pool[next % pool.size()];
+                                       block->index = next++;
+                                       return block;
+                                     }) &
+          tbb::make_filter<Block*, Block*>(tbb::filter_mode::parallel,
+                                           [&](Block* block) {
+                                             serialize(*block);
+                                             return block;
+                                           }) &
+          tbb::make_filter<Block*, void>(tbb::filter_mode::serial_in_order, [&](Block* block) {
+            file.write(block->bytes.data(), block->bytes.size());
+          }));
+}
+
 void write_ply(AtomicFileWriter& file, const PolygonMesh& mesh, const MeshWriteOptions& options) {
   const bool with_sharp = mesh.sharp_count() > 0;
   const char* scalar = options.double_precision ? "double" : "float";
@@ -443,6 +522,10 @@ void write_ply(AtomicFileWriter& file, const PolygonMesh& mesh, const MeshWriteO
   header += "element face " + std::to_string(mesh.face_count()) + "\n";
   header += "property list uchar int vertex_indices\nend_header\n";
   file.write(header);
+  if (!options.ascii) {
+    write_binary_ply_body(file, mesh, options, with_sharp);
+    return;
+  }
 
   std::string out;
   out.reserve(1 << 20);
@@ -452,43 +535,21 @@ void write_ply(AtomicFileWriter& file, const PolygonMesh& mesh, const MeshWriteO
       out.clear();
     }
   };
-  const auto put = [&](const void* p, std::size_t n) { out.append(static_cast<const char*>(p), n); };
   for (std::size_t v = 0; v < mesh.vertex_count(); ++v) {
     const Vec3& p = mesh.positions[v];
-    if (options.ascii) {
-      for (int k = 0; k < 3; ++k) {
-        append_number(out, p[k], options.double_precision);
-        out += k < 2 ? ' ' : (with_sharp ? ' ' : '\n');
-      }
-      if (with_sharp) out += mesh.is_sharp(v) ? "1\n" : "0\n";
-    } else {
-      for (int k = 0; k < 3; ++k) {
-        if (options.double_precision) {
-          const double value = p[k];
-          put(&value, 8);
-        } else {
-          const float value = static_cast<float>(p[k]);
-          put(&value, 4);
-        }
-      }
-      if (with_sharp) out += static_cast<char>(mesh.is_sharp(v) ? 1 : 0);
+    for (int k = 0; k < 3; ++k) {
+      append_number(out, p[k], options.double_precision);
+      out += k < 2 ? ' ' : (with_sharp ? ' ' : '\n');
     }
+    if (with_sharp) out += mesh.is_sharp(v) ? "1\n" : "0\n";
     flush_if_large();
   }
   for (std::size_t f = 0; f < mesh.face_count(); ++f) {
     const std::uint32_t n = mesh.face_size(f);
     if (n > 255) throw Error(ErrorKind::Unsupported, file.path() + ": PLY faces are limited to 255 vertices");
-    if (options.ascii) {
-      out += std::to_string(n);
-      for (std::uint32_t k = 0; k < n; ++k) out += ' ' + std::to_string(mesh.face_begin(f)[k]);
-      out += '\n';
-    } else {
-      out += static_cast<char>(n);
-      for (std::uint32_t k = 0; k < n; ++k) {
-        const std::int32_t index = static_cast<std::int32_t>(mesh.face_begin(f)[k]);
-        put(&index, 4);
-      }
-    }
+    out += std::to_string(n);
+    for (std::uint32_t k = 0; k < n; ++k) out += ' ' + std::to_string(mesh.face_begin(f)[k]);
+    out += '\n';
     flush_if_large();
   }
   file.write(out);

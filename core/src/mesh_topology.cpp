@@ -3,7 +3,8 @@
 #include <algorithm>
 #include <numeric>
 
-#include <tbb/parallel_sort.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 
 #include "isowave/core/error.h"
 
@@ -55,13 +56,26 @@ HalfEdges build_half_edges(const PolygonMesh& mesh, const std::string& source) {
     std::uint64_t edge;  // (smaller vertex, larger vertex)
     std::uint32_t corner;
   };
+  // Sorted by (edge, corner): a counting sort by the smaller vertex (stable,
+  // so corners stay in order), then each vertex's few entries by the larger.
+  const auto vertices = static_cast<std::uint32_t>(mesh.vertex_count());
+  std::vector<std::uint32_t> bucket_start(std::size_t{vertices} + 1, 0);
+  for (std::uint32_t c = 0; c < corners; ++c) ++bucket_start[std::min(he.origin(c), he.target(c)) + 1];
+  for (std::uint32_t v = 0; v < vertices; ++v) bucket_start[v + 1] += bucket_start[v];
   std::vector<Entry> entries(corners);
-  for (std::uint32_t c = 0; c < corners; ++c) {
-    const std::uint32_t a = he.origin(c), b = he.target(c);
-    entries[c] = {edge_key(std::min(a, b), std::max(a, b)), c};
+  {
+    std::vector<std::uint32_t> fill(bucket_start.begin(), bucket_start.end() - 1);
+    for (std::uint32_t c = 0; c < corners; ++c) {
+      const std::uint32_t a = he.origin(c), b = he.target(c);
+      entries[fill[std::min(a, b)]++] = {edge_key(std::min(a, b), std::max(a, b)), c};
+    }
   }
-  tbb::parallel_sort(entries.begin(), entries.end(), [](const Entry& x, const Entry& y) {
+  const auto before = [](const Entry& x, const Entry& y) {
     return x.edge < y.edge || (x.edge == y.edge && x.corner < y.corner);
+  };
+  tbb::parallel_for(tbb::blocked_range<std::uint32_t>(0, vertices, 4096), [&](const tbb::blocked_range<std::uint32_t>& r) {
+    for (std::uint32_t v = r.begin(); v < r.end(); ++v)
+      std::sort(entries.begin() + bucket_start[v], entries.begin() + bucket_start[v + 1], before);
   });
   he.opposite.assign(corners, kNone);
   for (std::size_t i = 0; i < entries.size();) {

@@ -105,6 +105,26 @@ TEST(IswFormat, BaseOnlyDecodeIsTheSubdividedBaseMesh) {
   EXPECT_LE(point_errors(ours, expected, expected.size()).max, std::sqrt(3.0) * 0.5 * base_step * (1 + 1e-9));
 }
 
+TEST(IswFormat, ReconstructionInTheDecodedArrayEqualsTheCopyingOne) {
+  PolygonMesh base = test::genus_slab(2);
+  base.sharp.assign(base.vertex_count(), 0);
+  base.sharp[3] = 1;
+  const Encoded e = encode_sample(base, 3);
+  const IswDecoded d = decode_isw(e.bytes, "test.isw");
+  ASSERT_GT(d.ranked.size(), 100u);
+  for (int level : {-1, 1, 2, 3})
+    for (std::size_t keep : {std::size_t{0}, std::size_t{7}, d.ranked.size() / 2, d.ranked.size()}) {
+      SCOPED_TRACE("level " + std::to_string(level) + ", keep " + std::to_string(keep));
+      const std::vector<Vec3> expected = reconstruct(d, keep, level);
+      IswDecoded taken = d;
+      const std::vector<Vec3> got = take_reconstruction(taken, keep, level);
+      EXPECT_TRUE(got == expected);
+      EXPECT_TRUE(taken.coefficients.empty());
+      EXPECT_EQ(taken.hierarchy, d.hierarchy);
+      EXPECT_EQ(taken.ranked, d.ranked);
+    }
+}
+
 TEST(IswFormat, ReencodingADecodedFileIsStable) {
   const Encoded e = encode_sample(test::genus_slab(1), 3);
   const IswDecoded d = decode_isw(e.bytes, "test.isw");

@@ -5,6 +5,8 @@
 #include <OpenMesh/Core/Mesh/PolyMesh_ArrayKernelT.hh>
 
 #include <algorithm>
+#include <cmath>
+#include <limits>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -14,6 +16,8 @@
 
 #include "isowave/core/error.h"
 #include "isowave/core/atomic_file.h"
+#include "isowave/core/huge_page_vector.h"
+#include "isowave/core/mesh.h"
 #include "isowave/core/mesh_io.h"
 #include "support/test_meshes.h"
 
@@ -233,6 +237,95 @@ TEST_F(MeshIoTest, InterruptedWritersLeaveNothingBehind) {
   refused.write("other");
   EXPECT_THROW(refused.commit(), Error);
   EXPECT_EQ(read_bytes("done.isw"), "complete");
+}
+
+// The binary PLY layout byte by byte: header, little-endian float32 x y z
+// and the uchar sharp flag per vertex, then per face a uchar count and int32
+// indices.
+TEST_F(MeshIoTest, BinaryPlyBytesFollowTheFormatExactly) {
+  PolygonMesh mesh;
+  mesh.positions = {{0, 1, 2}, {0.5, -1.25, 3}, {1e10, -0.0, 7}, {4, 5, 6}};
+  mesh.sharp = {0, 1, 0, 0};
+  mesh.add_face({0, 1, 2});
+  mesh.add_face({0, 2, 3, 1});
+  write_mesh(path("exact.ply"), mesh);
+  std::string expected =
+      "ply\nformat binary_little_endian 1.0\ncomment written by isowave\nelement vertex 4\n"
+      "property float x\nproperty float y\nproperty float z\nproperty uchar sharp\nelement face 2\n"
+      "property list uchar int vertex_indices\nend_header\n";
+  const auto append = [&](const auto& value) { expected.append(reinterpret_cast<const char*>(&value), sizeof value); };
+  for (std::size_t v = 0; v < mesh.vertex_count(); ++v) {
+    for (int k = 0; k < 3; ++k) append(static_cast<float>(mesh.positions[v][k]));
+    append(static_cast<std::uint8_t>(mesh.sharp[v]));
+  }
+  for (std::size_t f = 0; f < mesh.face_count(); ++f) {
+    append(static_cast<std::uint8_t>(mesh.face_size(f)));
+    for (std::uint32_t k = 0; k < mesh.face_size(f); ++k) append(static_cast<std::int32_t>(mesh.face_begin(f)[k]));
+  }
+  EXPECT_EQ(read_bytes("exact.ply"), expected);
+}
+
+// More vertices and faces than one block of the parallel writer (and more
+// bytes than the writer hands to disk at once): every block lands in order.
+TEST_F(MeshIoTest, LargeBinaryPlyRoundTripsAcrossWriterBlocks) {
+  PolygonMesh mesh = test::quad_grid(700, 400);
+  ASSERT_GT(mesh.vertex_count(), std::size_t{1} << 18);
+  ASSERT_GT(mesh.face_count(), std::size_t{1} << 17);
+  mesh.face_vertices.push_back(5);  // one pentagon among the quads shifts the later face records
+  mesh.face_offsets.back() += 1;
+  for (MeshWriteOptions options : {MeshWriteOptions{false, false}, MeshWriteOptions{false, true}}) {
+    write_mesh(path("large.ply"), mesh, options);
+    const PolygonMesh back = read_mesh(path("large.ply"));
+    expect_same_topology(mesh, back);
+    ASSERT_EQ(back.vertex_count(), mesh.vertex_count());
+    for (std::size_t v = 0; v < mesh.vertex_count(); ++v)
+      ASSERT_EQ(back.positions[v], mesh.positions[v]) << v;  // grid coordinates are exact in float
+  }
+}
+
+TEST_F(MeshIoTest, LargeAtomicWritesArriveWhole) {
+  std::string data(40u << 20, '\0');
+  std::mt19937 rng(5);
+  for (char& c : data) c = static_cast<char>(rng());
+  AtomicFileWriter writer(path("big.bin"));
+  for (std::size_t offset = 0; offset < data.size(); offset += 3u << 20)
+    writer.write(data.data() + offset, std::min<std::size_t>(3u << 20, data.size() - offset));
+  writer.commit();
+  EXPECT_TRUE(read_bytes("big.bin") == data);
+}
+
+// Validation runs in parallel but names the first offender, as a scan would.
+TEST(ValidateIndices, NamesTheFirstOffenderOfALargeMesh) {
+  PolygonMesh mesh = test::quad_grid(500, 400);
+  const auto message = [&] {
+    try {
+      validate_indices(mesh, "grid");
+    } catch (const Error& error) {
+      return std::string(error.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_EQ(message(), "no error");
+  mesh.face_vertices[700000] = 9000000;
+  mesh.face_vertices[300001] = 8000000;
+  EXPECT_NE(message().find("index 8000000 is out of range"), std::string::npos) << message();
+  mesh.face_vertices[700000] = mesh.face_vertices[300001] = 0;
+  mesh.positions[150000].y = std::nan("");
+  mesh.positions[90000].x = std::numeric_limits<double>::infinity();
+  EXPECT_NE(message().find("vertex 90000 has a non-finite"), std::string::npos) << message();
+}
+
+TEST(HugePages, FreshReserveGivesAnEmptyVectorWithRoom) {
+  std::vector<double> values{1, 2, 3};
+  reserve_fresh_on_huge_pages(values, 3u << 20);
+  EXPECT_TRUE(values.empty());
+  EXPECT_GE(values.capacity(), 3u << 20);
+  const double* data = values.data();
+  values.assign(3u << 20, 2.5);
+  EXPECT_EQ(values.data(), data);  // no reallocation
+  reserve_fresh_on_huge_pages(values, 1000);  // room enough: keeps the buffer
+  EXPECT_TRUE(values.empty());
+  EXPECT_EQ(values.data(), data);
 }
 
 }  // namespace

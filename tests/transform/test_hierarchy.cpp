@@ -73,6 +73,28 @@ TEST(Hierarchy, SharpFlagsAndRules) {
   EXPECT_EQ(hierarchy.control_mesh(2, std::vector<Vec3>(hierarchy.vertex_count(2))).sharp_count(), 1u);
 }
 
+TEST(Hierarchy, ControlMeshTakingThePositionsEqualsTheCopyingOne) {
+  for (const auto& [name, mesh] : test::generated_corpus()) {
+    SCOPED_TRACE(name);
+    const SubdivisionHierarchy hierarchy(mesh, 2);
+    for (int level = 0; level <= 2; ++level)
+      for (std::size_t extra : {0, 3}) {
+        // Fewer positions than vertices (the rest are zero) and more (ignored).
+        const std::size_t count = level == 0 ? hierarchy.vertex_count(level) - 1 : hierarchy.vertex_count(level) + extra;
+        std::vector<Vec3> positions(count);
+        for (std::size_t v = 0; v < count; ++v) positions[v] = {double(v), 0.5 * double(v), -1.0};
+        const PolygonMesh copied = hierarchy.control_mesh(level, positions);
+        const PolygonMesh taken = hierarchy.control_mesh(level, std::move(positions));
+        EXPECT_TRUE(taken.positions == copied.positions);
+        EXPECT_EQ(taken.face_offsets, copied.face_offsets);
+        EXPECT_EQ(taken.face_vertices, copied.face_vertices);
+        EXPECT_EQ(taken.sharp, copied.sharp);
+        ASSERT_EQ(copied.vertex_count(), hierarchy.vertex_count(level));
+        if (level > 0) EXPECT_EQ(copied.face_count(), hierarchy.step(level).face_offsets.back());
+      }
+  }
+}
+
 TEST(Hierarchy, RejectsBadBaseMeshes) {
   const auto kind_of = [](const PolygonMesh& mesh, int levels) {
     try {

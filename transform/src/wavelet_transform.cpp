@@ -44,6 +44,16 @@ inline Vec3 average(const Vec3* data, const std::uint32_t* indices, std::uint32_
   return sum * (1.0 / static_cast<double>(end - begin));
 }
 
+// The v steps gather each vertex's f and e neighbours from scattered places
+// of arrays of hundreds of megabytes: asking for those of the vertex this
+// many ahead hides much of the memory latency (the e and f steps read
+// neighbours that lie close together and gain nothing).
+constexpr std::uint32_t kPrefetchAhead = 12;
+
+inline void prefetch(const Vec3* data, const std::uint32_t* indices, std::uint32_t begin, std::uint32_t end) {
+  for (std::uint32_t k = begin; k < end; ++k) __builtin_prefetch(data + indices[k]);
+}
+
 template <Direction D>
 void lift_e_vertices(const RefinementStep& s, Vec3* data, const Step& step) {
   const Rule& r = step.smooth;
@@ -79,6 +89,11 @@ void lift_v_vertices(const RefinementStep& s, Vec3* data, const Step& step) {
   const Rule& r = step.smooth;
   for_range(s.parent_vertex_count, [&](std::uint32_t begin, std::uint32_t end) {
     for (std::uint32_t v = begin; v < end; ++v) {
+      if (v + kPrefetchAhead < end) {
+        const std::uint32_t ahead = v + kPrefetchAhead;
+        if (r.f != 0) prefetch(data, s.vertex_faces.data(), s.vertex_face_offsets[ahead], s.vertex_face_offsets[ahead + 1]);
+        if (r.e != 0) prefetch(data, s.vertex_edges.data(), s.vertex_edge_offsets[ahead], s.vertex_edge_offsets[ahead + 1]);
+      }
       if (s.vertex_rule[v] != VertexRule::Smooth) continue;
       Vec3 sum;
       if (r.f != 0) sum += r.f * average(data, s.vertex_faces.data(), s.vertex_face_offsets[v], s.vertex_face_offsets[v + 1]);

@@ -44,6 +44,8 @@ void keep_most_important(const SubdivisionHierarchy& hierarchy, std::vector<Vec3
 // as the paper does: the total is the fine control point count (base vertices
 // plus all coefficients) and the base mesh alone is the smallest choice.
 std::size_t coefficients_for_percent(const SubdivisionHierarchy& hierarchy, double percent);
+// The same from the fine and base control point counts alone.
+std::size_t coefficients_for_percent(std::size_t fine_vertices, std::size_t base_vertices, double percent);
 
 // RMS and maximum of the distances between corresponding points.
 struct PointErrors {

@@ -77,6 +77,18 @@ struct IswSectionInfo {
   std::uint64_t coefficients = 0;  // CHNK only
 };
 
+// Wall-clock seconds of the decoder's phases (for benchmarks; not part of the
+// decoded content).
+struct IswDecodeTimings {
+  double read = 0;        // read_isw: reading the file
+  double headers = 0;     // the sections before the hierarchy starts (base mesh decoded and checked)
+  double hierarchy = 0;   // building the subdivision hierarchy (on another thread, during the chunks)
+  double hierarchy_wait = 0;  // waiting for it after the chunks
+  double chunks = 0;      // range decoding the coefficient chunks
+  double rank = 0;        // ranking each chunk's coefficients by importance
+  double dequantize = 0;  // the coarse-to-fine coefficient array
+};
+
 struct IswDecoded {
   IswMetadata metadata;
   PolygonMesh base;  // topology and sharp flags; positions are the base control points
@@ -97,6 +109,7 @@ struct IswDecoded {
   std::uint64_t coefficients_total = 0;  // non-zero coefficients the encoder wrote
   bool truncated = false;          // the file ended inside the coefficient chunks
   std::string truncation_note;     // what was decoded, when truncated
+  IswDecodeTimings seconds;
 };
 
 struct IswDecodeOptions {

@@ -30,5 +30,10 @@ std::vector<RateDistortionRow> rate_distortion(const IswDecoded& decoded, const 
 // Control points of the finest level from the `keep` most important decoded
 // coefficients (base always kept).
 std::vector<Vec3> reconstruct(const IswDecoded& decoded, std::size_t keep, int level = -1);
+// The same, synthesizing in the decoded coefficient array itself, which it
+// takes out of `decoded` (left empty; the other members stay valid): spares
+// a copy of a fine-mesh-sized array when one reconstruction is all the caller
+// needs.
+std::vector<Vec3> take_reconstruction(IswDecoded& decoded, std::size_t keep, int level = -1);
 
 }  // namespace isowave

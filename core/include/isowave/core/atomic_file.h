@@ -2,6 +2,7 @@
 // Writes a file so that readers never see it half-written: the data goes to a
 // temporary file in the same directory, which replaces the target by rename()
 // only on commit(). Destroying an uncommitted writer removes the temporary.
+#include <cstdint>
 #include <cstdio>
 #include <string>
 
@@ -31,6 +32,8 @@ class AtomicFileWriter {
   char* registered_path_ = nullptr;  // copy of temporary_path_ known to remove_uncommitted_temporary_files()
   void release_registration();
   bool overwrite_ = true;
+  std::uint64_t written_ = 0;       // bytes written so far
+  std::uint64_t written_back_ = 0;  // of which writeback to disk has been started
 };
 
 // Removes the temporary file of every writer that has not committed, so that

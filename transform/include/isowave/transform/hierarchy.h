@@ -1,9 +1,10 @@
 #pragma once
 // The subdivision hierarchy over a polygonal base mesh (Bertram et al. 2000,
 // Sec. 3.3): L levels of Catmull-Clark connectivity, level 1 and finer all
-// quads. OpenSubdiv's Far::TopologyRefiner builds the topology; the hierarchy
-// then keeps, per refinement step, only the flat index arrays the averaging
-// operators need and releases the refiner.
+// quads. The hierarchy keeps, per refinement step, only the flat index arrays
+// the averaging operators need. It builds them itself, in parallel, numbered
+// exactly as OpenSubdiv's Far::TopologyRefiner numbers uniform refinement
+// (refinement_steps.h; a test compares every array with OpenSubdiv's).
 //
 // Vertex numbering (OpenSubdiv's uniform refinement order): level l holds the
 // v vertices (children of level l-1 vertices, same indices) first, then the f
@@ -100,6 +101,8 @@ class SubdivisionHierarchy {
   // vertex_count(level) of them; extra ones are ignored), sharp flags included.
   // Level 0 returns the base faces; finer levels are all quads.
   PolygonMesh control_mesh(int level, const std::vector<Vec3>& positions) const;
+  // The same, taking over the positions' array instead of copying it.
+  PolygonMesh control_mesh(int level, std::vector<Vec3>&& positions) const;
 
   // Bytes held by the hierarchy (index arrays and the base mesh copy).
   std::size_t memory_bytes() const;
