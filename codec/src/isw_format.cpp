@@ -1,6 +1,7 @@
 #include "isowave/codec/isw_format.h"
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cassert>
@@ -12,7 +13,10 @@
 #include <numeric>
 #include <optional>
 #include <string_view>
+#include <utility>
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
 #include <tbb/task_group.h>
 #include <zlib.h>
@@ -184,20 +188,51 @@ struct RankedEntry {
   std::uint32_t position;  // in the caller's list before sorting
 };
 
-// Sorts by importance, ties by index: a strict total order, so the parallel
-// sort is deterministic.
+// Sorts by importance, ties by index: a strict total order, so the result
+// does not depend on the method.
 void sort_by_importance(std::vector<RankedEntry>& entries) {
-  tbb::parallel_sort(entries.begin(), entries.end(), [](const RankedEntry& a, const RankedEntry& b) {
-    return a.key > b.key || (a.key == b.key && a.index < b.index);
+  const auto by_index = [](const RankedEntry& a, const RankedEntry& b) { return a.index < b.index; };
+  const bool positive_keys = std::all_of(entries.begin(), entries.end(), [](const RankedEntry& e) {
+    return e.key > 0 && e.key <= std::numeric_limits<double>::max();
   });
+  if (entries.size() < (1u << 16) || !positive_keys || !std::is_sorted(entries.begin(), entries.end(), by_index)) {
+    tbb::parallel_sort(entries.begin(), entries.end(), [](const RankedEntry& a, const RankedEntry& b) {
+      return a.key > b.key || (a.key == b.key && a.index < b.index);
+    });
+    return;
+  }
+  // Entries in index order, keys positive and finite, whose bit patterns
+  // order as their values: a stable radix sort on the complemented bits
+  // (largest first) keeps ties in index order, several times faster than
+  // a comparison sort of millions of entries.
+  constexpr int kDigitBits = 16;
+  constexpr std::size_t kBuckets = std::size_t{1} << kDigitBits;
+  const auto digit = [](double key, int shift) {
+    std::uint64_t bits;
+    std::memcpy(&bits, &key, sizeof bits);
+    return static_cast<std::size_t>((~bits >> shift) & (kBuckets - 1));
+  };
+  std::vector<RankedEntry> buffer(entries.size());
+  std::vector<std::size_t> start(kBuckets);
+  for (int shift = 0; shift < 64; shift += kDigitBits) {
+    std::fill(start.begin(), start.end(), 0);
+    for (const RankedEntry& e : entries) ++start[digit(e.key, shift)];
+    if (start[digit(entries.front().key, shift)] == entries.size()) continue;  // one digit: nothing moves
+    std::size_t sum = 0;
+    for (std::size_t& count : start) sum += std::exchange(count, sum);
+    for (const RankedEntry& e : entries) buffer[start[digit(e.key, shift)]++] = e;
+    entries.swap(buffer);
+  }
 }
 
 // Importance order of non-zero quantized coefficients (q holds every entry).
 void rank_by_importance(const SubdivisionHierarchy& hierarchy, const std::vector<QuantizedVector>& q, double step,
                         const std::vector<double>& weights, std::vector<std::uint32_t>& indices) {
   std::vector<RankedEntry> keyed(indices.size());
-  for (std::size_t k = 0; k < indices.size(); ++k)
-    keyed[k] = {importance_key(coefficient_class(hierarchy, indices[k]), q[indices[k]], step, weights), indices[k], 0};
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, indices.size(), 1 << 14), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t k = r.begin(); k < r.end(); ++k)
+      keyed[k] = {importance_key(coefficient_class(hierarchy, indices[k]), q[indices[k]], step, weights), indices[k], 0};
+  });
   sort_by_importance(keyed);
   for (std::size_t k = 0; k < indices.size(); ++k) indices[k] = keyed[k].index;
 }
@@ -234,31 +269,54 @@ namespace {
 
 // Every entry rounded, per component, to a multiple of its class's step; the
 // one quantization both the encoder and quantize_coefficients() use.
+constexpr std::size_t kParallelGrain = 1 << 14;
+
+bool quantizable(double scaled) { return std::isfinite(scaled) && std::abs(scaled) <= 1e9; }
+
 std::vector<QuantizedVector> quantize(const SubdivisionHierarchy& hierarchy, const std::vector<Vec3>& coefficients,
                                       double step, const std::vector<double>& weights) {
-  std::vector<QuantizedVector> q(hierarchy.fine_vertex_count());
+  std::vector<QuantizedVector> q;
+  reserve_fresh_on_huge_pages(q, hierarchy.fine_vertex_count());
+  q.resize(hierarchy.fine_vertex_count());
+  std::atomic<bool> invalid{false};
   for (int c = 0; c < coefficient_class_count(hierarchy); ++c) {
     const double s = class_step(step, weights, c);
     const auto [first, last] = coefficient_class_range(hierarchy, c);
-    for (std::size_t i = first; i < last; ++i)
-      for (int axis = 0; axis < 3; ++axis) {
-        const double scaled = coefficients[i][axis] / s;
-        if (!std::isfinite(scaled) || std::abs(scaled) > 1e9)
-          throw Error(ErrorKind::InvalidArgument, "coefficient " + std::to_string(i) +
-                                                      " is not finite or too large for the quantization step");
-        q[i][axis] = std::llround(scaled);
-      }
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(first, last, kParallelGrain), [&](const tbb::blocked_range<std::size_t>& r) {
+      for (std::size_t i = r.begin(); i < r.end(); ++i)
+        for (int axis = 0; axis < 3; ++axis) {
+          const double scaled = coefficients[i][axis] / s;
+          if (quantizable(scaled)) q[i][axis] = std::llround(scaled);
+          else invalid.store(true, std::memory_order_relaxed);
+        }
+    });
+  }
+  if (invalid) {
+    // Serially, so that the error names the first offending coefficient.
+    for (int c = 0; c < coefficient_class_count(hierarchy); ++c) {
+      const double s = class_step(step, weights, c);
+      const auto [first, last] = coefficient_class_range(hierarchy, c);
+      for (std::size_t i = first; i < last; ++i)
+        for (int axis = 0; axis < 3; ++axis)
+          if (!quantizable(coefficients[i][axis] / s))
+            throw Error(ErrorKind::InvalidArgument, "coefficient " + std::to_string(i) +
+                                                        " is not finite or too large for the quantization step");
+    }
   }
   return q;
 }
 
 std::vector<Vec3> dequantize(const SubdivisionHierarchy& hierarchy, const std::vector<QuantizedVector>& q, double step,
                              const std::vector<double>& weights) {
-  std::vector<Vec3> result(hierarchy.fine_vertex_count());
+  std::vector<Vec3> result;
+  reserve_fresh_on_huge_pages(result, hierarchy.fine_vertex_count());
+  result.resize(hierarchy.fine_vertex_count());
   for (int c = 0; c < coefficient_class_count(hierarchy); ++c) {
     const double s = class_step(step, weights, c);
     const auto [first, last] = coefficient_class_range(hierarchy, c);
-    for (std::size_t i = first; i < last; ++i) result[i] = {q[i][0] * s, q[i][1] * s, q[i][2] * s};
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(first, last, kParallelGrain), [&](const tbb::blocked_range<std::size_t>& r) {
+      for (std::size_t i = r.begin(); i < r.end(); ++i) result[i] = {q[i][0] * s, q[i][1] * s, q[i][2] * s};
+    });
   }
   return result;
 }
@@ -385,12 +443,14 @@ std::string encode_isw(const SubdivisionHierarchy& hierarchy, const std::vector<
     put_section(out, "BPTS", payload);
   }
   // CHNK: flags over the not-yet-significant coefficients in index order.
-  std::vector<std::uint64_t> rank_of(fine, UINT64_MAX);
-  for (std::size_t r = 0; r < ranked.size(); ++r) rank_of[ranked[r]] = r;
-  std::vector<std::uint8_t> significant(fine, 0);
-  std::uint64_t begin = 0;
-  for (std::size_t chunk = 0; chunk < chunk_ends.size(); ++chunk) {
-    const std::uint64_t end = chunk_ends[chunk];
+  // A coefficient is significant before chunk k when its rank precedes the
+  // chunk's first, so every chunk is coded on its own, in parallel.
+  std::vector<std::uint32_t> rank_of;
+  reserve_fresh_on_huge_pages(rank_of, fine);
+  rank_of.assign(fine, UINT32_MAX);
+  for (std::size_t r = 0; r < ranked.size(); ++r) rank_of[ranked[r]] = static_cast<std::uint32_t>(r);
+  const auto encode_chunk = [&](std::size_t chunk) {
+    const std::uint64_t begin = chunk == 0 ? 0 : chunk_ends[chunk - 1], end = chunk_ends[chunk];
     std::string coded;
     RangeEncoder rc(coded);
     ChunkModels models(classes);
@@ -398,13 +458,16 @@ std::string encode_isw(const SubdivisionHierarchy& hierarchy, const std::vector<
       const auto [first, last] = coefficient_class_range(hierarchy, c);
       int previous_flag = 0;
       std::array<int, 3> previous_bucket{0, 0, 0};
+      // The flag contexts as locals, as in the decoder (the same arithmetic).
+      Probability flag_after_zero = models.flags[static_cast<std::size_t>(c)][0];
+      Probability flag_after_one = models.flags[static_cast<std::size_t>(c)][1];
       for (std::size_t i = first; i < last; ++i) {
-        if (significant[i]) continue;
-        const int flag = rank_of[i] >= begin && rank_of[i] < end ? 1 : 0;
-        rc.encode_bit(models.flags[static_cast<std::size_t>(c)][static_cast<std::size_t>(previous_flag)], flag);
+        const std::uint32_t rank = rank_of[i];
+        if (rank < begin) continue;  // sent by an earlier chunk
+        const int flag = rank < end ? 1 : 0;
+        rc.encode_bit(previous_flag ? flag_after_one : flag_after_zero, flag);
         previous_flag = flag;
         if (!flag) continue;
-        significant[i] = 1;
         for (int axis = 0; axis < 3; ++axis) {
           detail::encode_integer(rc, models.component(c, axis, previous_bucket[static_cast<std::size_t>(axis)]), q[i][axis]);
           previous_bucket[static_cast<std::size_t>(axis)] = magnitude_bucket(q[i][axis]);
@@ -418,8 +481,19 @@ std::string encode_isw(const SubdivisionHierarchy& hierarchy, const std::vector<
     put_u64(payload, end);
     put_u64(payload, coded.size());
     payload += coded;
-    put_section(out, "CHNK", payload);
-    begin = end;
+    std::string section;
+    put_section(section, "CHNK", payload);
+    return section;
+  };
+  std::vector<std::string> chunk_sections(chunk_ends.size());
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, chunk_ends.size(), 1),
+                    [&](const tbb::blocked_range<std::size_t>& r) {
+                      for (std::size_t chunk = r.begin(); chunk < r.end(); ++chunk) chunk_sections[chunk] = encode_chunk(chunk);
+                    },
+                    tbb::simple_partitioner());
+  for (std::string& section : chunk_sections) {
+    out += section;
+    std::string().swap(section);
   }
   put_section(out, "END ", std::string());
   return out;
@@ -811,9 +885,13 @@ IswDecoded decode_isw(const std::string& bytes, const std::string& name, const I
         const auto rank_start = std::chrono::steady_clock::now();
         // Rank the new coefficients as the encoder did.
         std::vector<RankedEntry> keyed(fresh.size());
-        for (std::size_t k = 0; k < fresh.size(); ++k)
-          keyed[k] = {importance_key(layout->class_of(fresh[k]), fresh_q[k], result.step, result.class_weights), fresh[k],
-                      static_cast<std::uint32_t>(k)};
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, fresh.size(), kParallelGrain),
+                          [&](const tbb::blocked_range<std::size_t>& r) {
+                            for (std::size_t k = r.begin(); k < r.end(); ++k)
+                              keyed[k] = {importance_key(layout->class_of(fresh[k]), fresh_q[k], result.step,
+                                                         result.class_weights),
+                                          fresh[k], static_cast<std::uint32_t>(k)};
+                          });
         sort_by_importance(keyed);
         for (const RankedEntry& entry : keyed) {
           result.ranked.push_back(entry.index);

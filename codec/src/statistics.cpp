@@ -3,6 +3,9 @@
 #include <algorithm>
 #include <utility>
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include "isowave/codec/importance.h"
 #include "isowave/core/error.h"
 #include "isowave/core/huge_page_vector.h"
@@ -12,13 +15,25 @@ namespace isowave {
 
 namespace {
 
+constexpr std::size_t kGrain = 1 << 15;
+
 // reconstruct() into a caller's buffer: repeated calls reuse its pages
 // instead of faulting in a fresh fine-mesh-sized array each time.
 void reconstruct_into(const IswDecoded& decoded, std::size_t keep, int level, std::vector<Vec3>& data) {
   if (!decoded.hierarchy) throw Error(ErrorKind::InvalidArgument, "reconstruct needs a decoded file");
-  if (data.capacity() < decoded.coefficients.size()) reserve_fresh_on_huge_pages(data, decoded.coefficients.size());
-  data.assign(decoded.coefficients.begin(), decoded.coefficients.end());
-  for (std::size_t r = std::min(keep, decoded.ranked.size()); r < decoded.ranked.size(); ++r) data[decoded.ranked[r]] = Vec3{};
+  const std::size_t count = decoded.coefficients.size();
+  if (data.capacity() < count) reserve_fresh_on_huge_pages(data, count);
+  data.resize(count);
+  // Copying and zeroing touch disjoint entries per thread: the same result
+  // on any number of threads.
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, kGrain), [&](const tbb::blocked_range<std::size_t>& r) {
+    std::copy(decoded.coefficients.begin() + static_cast<std::ptrdiff_t>(r.begin()),
+              decoded.coefficients.begin() + static_cast<std::ptrdiff_t>(r.end()), data.begin() + static_cast<std::ptrdiff_t>(r.begin()));
+  });
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(std::min(keep, decoded.ranked.size()), decoded.ranked.size(), kGrain),
+                    [&](const tbb::blocked_range<std::size_t>& r) {
+                      for (std::size_t k = r.begin(); k < r.end(); ++k) data[decoded.ranked[k]] = Vec3{};
+                    });
   synthesize(*decoded.hierarchy, data, level);
   data.resize(decoded.hierarchy->vertex_count(level < 0 ? decoded.levels : level));
 }
@@ -42,7 +57,7 @@ std::vector<Vec3> take_reconstruction(IswDecoded& decoded, std::size_t keep, int
 }
 
 std::vector<RateDistortionRow> rate_distortion(const IswDecoded& decoded, const std::vector<double>& percents,
-                                               const std::vector<Vec3>* reference) {
+                                               const std::vector<Vec3>* reference, const PointErrors* all_decoded_errors) {
   if (!decoded.hierarchy || decoded.truncated || decoded.chunks_decoded != decoded.chunks_total)
     throw Error(ErrorKind::InvalidArgument, "statistics need a complete decode of the file");
   const SubdivisionHierarchy& h = *decoded.hierarchy;
@@ -79,8 +94,13 @@ std::vector<RateDistortionRow> rate_distortion(const IswDecoded& decoded, const 
     row.wavelet_coefficients = std::min(wavelets, decoded.ranked.size());
     row.kept = h.vertex_count(0) + wavelets;
     row.percent = 100.0 * static_cast<double>(row.kept) / static_cast<double>(fine);
-    reconstruct_into(decoded, wavelets, -1, reconstruction);
-    const PointErrors e = point_errors(reconstruction, compare_to, fine);
+    PointErrors e;
+    if (reference && all_decoded_errors && wavelets >= decoded.ranked.size()) {
+      e = *all_decoded_errors;
+    } else {
+      reconstruct_into(decoded, wavelets, -1, reconstruction);
+      e = point_errors(reconstruction, compare_to, fine);
+    }
     row.rms = e.rms;
     row.max = e.max;
     row.bytes = bytes_for(row.wavelet_coefficients);

@@ -2,9 +2,13 @@
 // importance-weighted truncation beats selection by raw magnitude.
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <random>
+
 #include "codec_test_data.h"
 #include "isowave/codec/importance.h"
 #include "isowave/core/error.h"
+#include "isowave/transform/wavelet_transform.h"
 
 namespace isowave {
 namespace {
@@ -41,6 +45,29 @@ TEST(Importance, WaveletNormsHalveWithEachFinerLevel) {
   for (std::size_t c : {7u, 8u}) {
     EXPECT_GT(norms[c], 0.25);
     EXPECT_LT(norms[c], 4.0);
+  }
+}
+
+TEST(Importance, WaveletNormsEqualOneSynthesisPerClass) {
+  // The definition: one synthesis of random signs per class, the signs drawn
+  // class after class from the fixed seed. Sharing syntheses must not change
+  // a bit of the weights, which every .isw file stores.
+  for (int levels : {1, 2, 3}) {
+    const SubdivisionHierarchy h(test::genus_slab(2), levels);
+    std::vector<double> expected(static_cast<std::size_t>(coefficient_class_count(h)), 1.0);
+    std::mt19937 rng(12345);
+    for (int c = 0; c < coefficient_class_count(h); ++c) {
+      std::vector<Vec3> data(h.fine_vertex_count());
+      const auto [first, last] = coefficient_class_range(h, c);
+      for (std::size_t i = first; i < last; ++i) data[i].x = (rng() & 1) ? 1.0 : -1.0;
+      synthesize(h, data);
+      double sum = 0;
+      for (const Vec3& p : data) sum += p.x * p.x;
+      expected[static_cast<std::size_t>(c)] = std::sqrt(sum / static_cast<double>(last - first));
+    }
+    const std::vector<double> norms = wavelet_norms(h);
+    ASSERT_EQ(norms.size(), expected.size());
+    for (std::size_t c = 0; c < norms.size(); ++c) EXPECT_EQ(norms[c], expected[c]) << "levels " << levels << " class " << c;
   }
 }
 

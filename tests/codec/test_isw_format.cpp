@@ -6,6 +6,7 @@
 #include <random>
 
 #include <gtest/gtest.h>
+#include <tbb/global_control.h>
 
 #include "codec_test_data.h"
 #include "isowave/codec/importance.h"
@@ -193,6 +194,61 @@ TEST(IswFormat, StatisticsMatchAnIndependentRecomputation) {
   EXPECT_LE(rows[0].rms, rows[1].rms);
   EXPECT_LE(rows[1].rms, rows[2].rms);
   EXPECT_LE(rows[2].rms, rows[3].rms);
+}
+
+TEST(IswFormat, StatisticsTakeKnownErrorsOfEveryCoefficientOnlyForFullRows) {
+  const Encoded e = encode_sample(test::genus_slab(2), 3);
+  const IswDecoded full = decode_isw(e.bytes, "test.isw");
+  const std::vector<Vec3>& reference = e.surface.fine;
+  // What convert measures before encoding: the quantized coefficients, synthesized.
+  std::vector<Vec3> quantized = quantize_coefficients(*full.hierarchy, e.surface.coefficients, full.step, full.class_weights);
+  EXPECT_EQ(quantized, full.coefficients);
+  synthesize(*full.hierarchy, quantized);
+  const PointErrors measured = point_errors(quantized, reference, quantized.size());
+  const std::vector<double> percents{100, 20, 5};
+  const std::vector<RateDistortionRow> computed = rate_distortion(full, percents, &reference);
+  const std::vector<RateDistortionRow> reused = rate_distortion(full, percents, &reference, &measured);
+  ASSERT_EQ(computed.size(), reused.size());
+  for (std::size_t r = 0; r < computed.size(); ++r) {
+    EXPECT_EQ(computed[r].rms, reused[r].rms) << r;
+    EXPECT_EQ(computed[r].max, reused[r].max) << r;
+    EXPECT_EQ(computed[r].bytes, reused[r].bytes) << r;
+    EXPECT_EQ(computed[r].kept, reused[r].kept) << r;
+  }
+  // Rows that drop coefficients never take the given errors.
+  const PointErrors wrong{123.0, 456.0};
+  const std::vector<RateDistortionRow> misled = rate_distortion(full, percents, &reference, &wrong);
+  EXPECT_EQ(misled[0].rms, 123.0);
+  for (std::size_t r = 1; r < misled.size(); ++r) EXPECT_EQ(misled[r].rms, computed[r].rms) << r;
+}
+
+TEST(IswFormat, EncodingIsTheSameOnOneThread) {
+  const test::CodedSurface s = test::make_coded_surface(test::genus_slab(3), 3, 0.05, 4);
+  IswEncodeOptions options;
+  options.step = 1e-3;
+  const std::string parallel = encode_isw(*s.hierarchy, s.coefficients, sample_metadata(), options);
+  std::string serial;
+  {
+    tbb::global_control one_thread(tbb::global_control::max_allowed_parallelism, 1);
+    serial = encode_isw(*s.hierarchy, s.coefficients, sample_metadata(), options);
+  }
+  EXPECT_EQ(parallel, serial);
+  EXPECT_GT(decode_isw(parallel, "test.isw").chunks_total, 3u);
+}
+
+TEST(IswFormat, ManyCoefficientsAreRankedByImportanceThenIndex) {
+  // Enough coefficients for the ranking's radix sort (the small files of the
+  // other tests take the comparison sort).
+  const test::CodedSurface s = test::make_coded_surface(test::genus_slab(3), 5, 0.05, 6);
+  IswEncodeOptions options;
+  options.step = 1e-6;
+  const IswDecoded d = decode_isw(encode_isw(*s.hierarchy, s.coefficients, sample_metadata(), options), "test.isw");
+  ASSERT_GT(d.ranked.size(), 1u << 16);
+  const std::vector<double> weight = importance(*d.hierarchy, d.coefficients, d.class_weights);
+  for (std::size_t r = 1; r < d.ranked.size(); ++r) {
+    const std::uint32_t a = d.ranked[r - 1], b = d.ranked[r];
+    ASSERT_TRUE(weight[a] > weight[b] || (weight[a] == weight[b] && a < b)) << r;
+  }
 }
 
 TEST(IswFormat, EveryTruncationFailsCleanlyOrDecodesTheCompleteChunks) {

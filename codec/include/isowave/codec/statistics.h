@@ -6,6 +6,7 @@
 // progressive reader needs to reach it.
 #include <vector>
 
+#include "isowave/codec/importance.h"
 #include "isowave/codec/isw_format.h"
 
 namespace isowave {
@@ -23,9 +24,14 @@ struct RateDistortionRow {
 // `decoded` must be a complete decode (all chunks). Rows for each percent (in
 // the given order), then the base mesh alone. Errors are measured against
 // `reference` (fine control points, e.g. the unquantized fitted ones) if
-// given, else against the full-resolution decode. Cost: one synthesis per row.
+// given, else against the full-resolution decode. Cost: one synthesis per row,
+// except that with `reference` and `all_decoded_errors` (the errors of the
+// synthesis of every decoded coefficient against it, which the caller
+// measured already, e.g. before encoding them) rows keeping every decoded
+// coefficient take those errors instead.
 std::vector<RateDistortionRow> rate_distortion(const IswDecoded& decoded, const std::vector<double>& percents,
-                                               const std::vector<Vec3>* reference = nullptr);
+                                               const std::vector<Vec3>* reference = nullptr,
+                                               const PointErrors* all_decoded_errors = nullptr);
 
 // Control points of the finest level from the `keep` most important decoded
 // coefficients (base always kept).
