@@ -60,7 +60,7 @@ int fit(const Args& raw) {
   spec.options.push_back({"base", true, "base mesh (.ply, .obj, .off), e.g. from the base-mesh stage", "BASE"});
   spec.options.push_back({"levels", true, "subdivision levels, 0..8", "L"});
   spec.options.push_back({"iterations", true, "relaxation + attraction rounds per coarse level (default 3)", "N"});
-  spec.options.push_back({"final-iterations", true, "rounds on the finest level (default 2)", "N"});
+  spec.options.push_back({"final-iterations", true, "rounds on the finest level (default 1)", "N"});
   spec.options.push_back({"reach", true, "attraction reach in edge lengths (default 2)", "R"});
   spec.options.push_back({"band", true, "signed-distance narrow band in cells, 0 = whole grid (default 3)", "K"});
   spec.options.push_back({"no-correction", false, "skip the final move onto the exact isosurface", ""});

@@ -25,6 +25,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <string>
@@ -265,6 +266,13 @@ int main(int argc, char** argv) {
                 wrapped.correction.mean_move_cells, wrapped.correction.max_move_cells, wrapped.correction.failed);
     std::printf("  untangle: %zu tangled faces before, %zu after %d rounds\n", wrapped.untangle.tangled_before,
                 wrapped.untangle.tangled_after, wrapped.untangle.rounds);
+    {
+      // FNV-1a over the fitted positions' bytes: equal hashes mean bit-identical fits.
+      std::uint64_t hash = 1469598103934665603ull;
+      const auto* bytes = reinterpret_cast<const unsigned char*>(wrapped.positions.data());
+      for (std::size_t i = 0; i < wrapped.positions.size() * sizeof(Vec3); ++i) hash = (hash ^ bytes[i]) * 1099511628211ull;
+      std::printf("  positions hash %016llx\n", static_cast<unsigned long long>(hash));
+    }
     std::printf("peak memory so far: %.0f MB\n", peak_megabytes());
 
     if (quality) {

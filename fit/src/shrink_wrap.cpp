@@ -6,6 +6,7 @@
 #include <cmath>
 #include <numeric>
 #include <string>
+#include <utility>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -228,11 +229,17 @@ void build_refined_connectivity(const RefinementStep& s, WrapLevelMesh& mesh,
 
 }  // namespace
 
-WrapLevelMesh make_wrap_level_mesh(const SubdivisionHierarchy& hierarchy, int level,
-                                   const std::vector<Vec3>& positions, const Volume& box_volume) {
+namespace {
+
+// make_wrap_level_mesh() into `mesh`, reusing its buffers where they have
+// room: the shrink-wrap sizes them for the finest level once, since fresh
+// pages are expensive (zeroed by the kernel and, in a virtual machine, often
+// backed by the host on first touch: on the 2-core test VM several seconds
+// per gigabyte).
+void fill_wrap_level_mesh(const SubdivisionHierarchy& hierarchy, int level, const std::vector<Vec3>& positions,
+                          const Volume& box_volume, WrapLevelMesh& mesh) {
   if (level < 0 || level > hierarchy.levels())
     throw Error(ErrorKind::InvalidArgument, "level " + std::to_string(level) + " is not in the hierarchy");
-  WrapLevelMesh mesh;
   mesh.level = level;
   const std::size_t n = hierarchy.vertex_count(level);
   mesh.vertex_count = n;
@@ -344,6 +351,33 @@ WrapLevelMesh make_wrap_level_mesh(const SubdivisionHierarchy& hierarchy, int le
       mesh.box_face[v] = static_cast<std::int8_t>(nearest);
     }
   });
+}
+
+// Room in `mesh` for the finest level of the hierarchy, the large arrays on
+// huge pages faulted in on all threads.
+void reserve_finest_wrap_level_mesh(const SubdivisionHierarchy& hierarchy, WrapLevelMesh& mesh) {
+  const int levels = hierarchy.levels();
+  if (levels < 1) return;
+  const RefinementStep& s = hierarchy.step(levels);
+  const std::size_t n = hierarchy.vertex_count(levels), faces = s.face_offsets.back();
+  const std::size_t edges = 2 * std::size_t{s.parent_edge_count} + faces;  // split edges and one per corner
+  mesh.neighbour_offsets.reserve(n + 1);
+  mesh.vertex_face_offsets.reserve(n + 1);
+  mesh.face_offsets.reserve(faces + 1);
+  detail::reserve_on_huge_pages(mesh.neighbours, 2 * edges);
+  detail::reserve_on_huge_pages(mesh.vertex_faces, 4 * faces);
+  detail::reserve_on_huge_pages(mesh.face_vertices, 4 * faces);
+  mesh.boundary_neighbours.reserve(2 * n);
+  mesh.role.reserve(n);
+  mesh.box_face.reserve(n);
+}
+
+}  // namespace
+
+WrapLevelMesh make_wrap_level_mesh(const SubdivisionHierarchy& hierarchy, int level,
+                                   const std::vector<Vec3>& positions, const Volume& box_volume) {
+  WrapLevelMesh mesh;
+  fill_wrap_level_mesh(hierarchy, level, positions, box_volume, mesh);
   return mesh;
 }
 
@@ -642,7 +676,11 @@ bool project_onto_isosurface(const WrapLevelMesh& mesh, const Box& box, const Tr
   double t = 0;
   const double tolerance = 1e-4 * cell;
   // Newton steps along the line (one or two samples near the surface), then
-  // the bracketed search if they do not settle.
+  // the bracketed search if they do not settle. Newton converges
+  // quadratically (the trilinear field is a cubic along the line), so a
+  // correction under 1e-2 cells leaves an error near 1e-4 cells: taken
+  // without another sample to confirm it.
+  const double settled = 1e-2 * cell;
   bool found = false;
   double newton = -h0 / slope;
   for (int step = 0; step < 3 && std::abs(newton) <= range; ++step) {
@@ -651,7 +689,7 @@ bool project_onto_isosurface(const WrapLevelMesh& mesh, const Box& box, const Tr
     if (!(along > 0) || !std::isfinite(sample.value)) break;
     const double correction = (sample.value - iso) / along;
     newton -= correction;
-    if (std::abs(correction) <= tolerance) {
+    if (std::abs(correction) <= settled) {
       found = std::abs(newton) <= range && newton >= t_low && newton <= t_high;
       break;
     }
@@ -662,40 +700,39 @@ bool project_onto_isosurface(const WrapLevelMesh& mesh, const Box& box, const Tr
   return is_finite(target);
 }
 
-// Sets tangled[f] to 1 if face f's normal disagrees with the field gradient
-// at its centroid, and returns their number. With `moved`, faces without a
-// moved corner keep their flag from `previous`.
+// 1 if face f's normal disagrees with the field gradient at its centroid
+// (normals toward lower values unless flipped: expected_sign -1, else +1).
+inline std::uint8_t face_tangled(const WrapLevelMesh& mesh, const TrilinearGrid& field, double expected_sign,
+                                 const std::vector<Vec3>& positions, std::size_t f) {
+  const std::uint32_t begin = mesh.face_offsets[f], size = mesh.face_offsets[f + 1] - begin;
+  const std::uint32_t* corners = mesh.face_vertices.data() + begin;
+  Vec3 newell, centroid;
+  for (std::uint32_t k = 0; k < size; ++k) {
+    const Vec3& a = positions[corners[k]];
+    newell += cross(a, positions[corners[k + 1 == size ? 0 : k + 1]]);
+    centroid += a;
+  }
+  centroid *= 1.0 / double(size);
+  return !(expected_sign * dot(newell, field.sample(centroid).gradient) > 0);
+}
+
+// The centroid's samples are near those of the first corner.
+inline void prefetch_face(const WrapLevelMesh& mesh, const TrilinearGrid& field, const std::vector<Vec3>& positions,
+                          std::size_t f) {
+  field.prefetch_at(field.grid_point(positions[mesh.face_vertices[mesh.face_offsets[f]]]));
+}
+
+// Sets tangled[f] to face_tangled() for every face and returns their number.
 std::size_t find_tangled_faces(const WrapLevelMesh& mesh, const TrilinearGrid& field, bool flip,
-                               const std::vector<Vec3>& positions, HugePageVector<std::uint8_t>& tangled,
-                               const HugePageVector<std::uint8_t>* moved = nullptr,
-                               const HugePageVector<std::uint8_t>* previous = nullptr) {
-  const double expected_sign = flip ? 1.0 : -1.0;  // normals toward lower values unless flipped
+                               const std::vector<Vec3>& positions, HugePageVector<std::uint8_t>& tangled) {
+  const double expected_sign = flip ? 1.0 : -1.0;
+  if (tangled.capacity() < mesh.face_count()) reserve_fresh_on_huge_pages(tangled, mesh.face_count());
   tangled.resize(mesh.face_count());
   const std::vector<std::size_t> counts =
       for_blocks<std::size_t>(mesh.face_count(), [&](std::size_t first, std::size_t last, std::size_t& count) {
         for (std::size_t f = first; f < last; ++f) {
-          // The centroid's samples are near those of the first corner.
-          if (f + kPrefetchDistance < last)
-            field.prefetch_at(field.grid_point(positions[mesh.face_vertices[mesh.face_offsets[f + kPrefetchDistance]]]));
-          const std::uint32_t begin = mesh.face_offsets[f], size = mesh.face_offsets[f + 1] - begin;
-          const std::uint32_t* corners = mesh.face_vertices.data() + begin;
-          if (moved) {
-            bool any = false;
-            for (std::uint32_t k = 0; k < size; ++k) any |= (*moved)[corners[k]] != 0;
-            if (!any) {
-              tangled[f] = (*previous)[f];
-              count += tangled[f];
-              continue;
-            }
-          }
-          Vec3 newell, centroid;
-          for (std::uint32_t k = 0; k < size; ++k) {
-            const Vec3& a = positions[corners[k]];
-            newell += cross(a, positions[corners[k + 1 == size ? 0 : k + 1]]);
-            centroid += a;
-          }
-          centroid *= 1.0 / double(size);
-          tangled[f] = !(expected_sign * dot(newell, field.sample(centroid).gradient) > 0);
+          if (f + kPrefetchDistance < last) prefetch_face(mesh, field, positions, f + kPrefetchDistance);
+          tangled[f] = face_tangled(mesh, field, expected_sign, positions, f);
           count += tangled[f];
         }
       });
@@ -745,41 +782,79 @@ CorrectionStatistics correct_with(const WrapLevelMesh& mesh, const TrilinearGrid
   return stats;
 }
 
+// Sets a flag that other threads may set at the same time (always to 1).
+inline void raise_flag(std::uint8_t& flag) { __atomic_store_n(&flag, std::uint8_t{1}, __ATOMIC_RELAXED); }
+
+// The indices of the set flags, ascending (the same for any thread count).
+void collect_flagged(const HugePageVector<std::uint8_t>& flags, HugePageVector<std::uint32_t>& list) {
+  const std::size_t n = flags.size();
+  std::vector<std::size_t> starts = for_blocks<std::size_t>(n, [&](std::size_t first, std::size_t last, std::size_t& count) {
+    for (std::size_t i = first; i < last; ++i) count += flags[i] != 0;
+  });
+  std::size_t total = 0;
+  for (std::size_t& start : starts) total += std::exchange(start, total);
+  list.resize(total);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, starts.size(), 1), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t b = r.begin(); b < r.end(); ++b) {
+      std::size_t out = starts[b];
+      for (std::size_t i = b * kBlock, last = std::min(n, (b + 1) * kBlock); i < last; ++i)
+        if (flags[i]) list[out++] = static_cast<std::uint32_t>(i);
+    }
+  });
+}
+
+void clear_flags(HugePageVector<std::uint8_t>& flags, std::size_t n) {
+  if (flags.capacity() < n) reserve_fresh_on_huge_pages(flags, n);
+  flags.resize(n);
+  for_blocks<char>(n, [&](std::size_t first, std::size_t last, char&) {
+    std::fill(flags.begin() + static_cast<std::ptrdiff_t>(first), flags.begin() + static_cast<std::ptrdiff_t>(last), 0);
+  });
+}
+
+// untangle() with a buffer for the moved vertices' positions supplied by the
+// caller (the shrink-wrap lends its second position buffer). Each round works
+// on lists of the selected vertices (about a third of the level on miranda)
+// rather than on whole-level passes: the new positions are computed into
+// `moved` and swapped into place, and only the faces around them are
+// checked again; a dropped round swaps the old positions back.
 UntangleStatistics untangle_with(const WrapLevelMesh& mesh, const TrilinearGrid& field, const Box& box, double cell,
                                  double iso, bool flip, int rounds, double max_move_cells,
-                                 std::vector<Vec3>& positions) {
-  assert(positions.size() >= mesh.vertex_count);
+                                 std::vector<Vec3>& positions, std::vector<Vec3>& moved) {
+  assert(positions.size() >= mesh.vertex_count && &positions != &moved);
   const double range = max_move_cells * cell;
+  const double expected_sign = flip ? 1.0 : -1.0;
   UntangleStatistics stats;
-  HugePageVector<std::uint8_t> tangled, next_tangled;
+  HugePageVector<std::uint8_t> tangled;
   stats.tangled_before = find_tangled_faces(mesh, field, flip, positions, tangled);
   stats.tangled_after = stats.tangled_before;
-  HugePageVector<std::uint8_t> corner, selected;
-  std::vector<Vec3> next;
+  HugePageVector<std::uint8_t> corner, selected, face_state;
+  HugePageVector<std::uint32_t> list;
+  const std::size_t faces = mesh.face_count();
   for (int round = 0; round < rounds && stats.tangled_after > 0; ++round) {
     // The corners of tangled faces and their neighbours.
-    corner.resize(mesh.vertex_count);
-    selected.resize(mesh.vertex_count);
-    for_vertices(mesh.vertex_count, [&](std::size_t v) {
-      std::uint8_t any = 0;
-      for (std::uint32_t k = mesh.vertex_face_offsets[v]; k < mesh.vertex_face_offsets[v + 1]; ++k)
-        any |= tangled[mesh.vertex_faces[k]];
-      corner[v] = any;
+    clear_flags(corner, mesh.vertex_count);
+    clear_flags(selected, mesh.vertex_count);
+    for_vertices(faces, [&](std::size_t f) {
+      if (!tangled[f]) return;
+      for (std::uint32_t k = mesh.face_offsets[f]; k < mesh.face_offsets[f + 1]; ++k)
+        raise_flag(corner[mesh.face_vertices[k]]);
     });
     for_vertices(mesh.vertex_count, [&](std::size_t v) {
-      std::uint8_t any = corner[v];
-      for (std::uint32_t k = mesh.neighbour_offsets[v]; k < mesh.neighbour_offsets[v + 1] && !any; ++k)
-        any = corner[mesh.neighbours[k]];
-      selected[v] = any;
+      if (!corner[v]) return;
+      raise_flag(selected[v]);
+      for (std::uint32_t k = mesh.neighbour_offsets[v]; k < mesh.neighbour_offsets[v + 1]; ++k)
+        raise_flag(selected[mesh.neighbours[k]]);
     });
-    detail::reserve_on_huge_pages(next, mesh.vertex_count);
-    next.resize(mesh.vertex_count);
-    for_vertices(mesh.vertex_count, [&](std::size_t v) {
-      next[v] = positions[v];
+    collect_flagged(selected, list);
+    const std::size_t count = list.size();
+    moved.resize(std::max(moved.size(), count));
+    // New positions from the old ones (Jacobi).
+    for_vertices(count, [&](std::size_t i) {
       // The smoothed point's samples are near the vertex's own.
-      if (v + kPrefetchDistance < mesh.vertex_count && selected[v + kPrefetchDistance])
-        field.prefetch_at(field.grid_point(positions[v + kPrefetchDistance]));
-      if (!selected[v] || mesh.role[v] == WrapRole::Fixed) return;
+      if (i + kPrefetchDistance < count) field.prefetch_at(field.grid_point(positions[list[i + kPrefetchDistance]]));
+      const std::size_t v = list[i];
+      moved[i] = positions[v];
+      if (mesh.role[v] == WrapRole::Fixed) return;
       Vec3 centroid;
       const std::uint32_t b0 = mesh.boundary_neighbours[2 * v], b1 = mesh.boundary_neighbours[2 * v + 1];
       if (mesh.role[v] == WrapRole::Boundary && b0 != kNone && b1 != kNone) {
@@ -792,15 +867,48 @@ UntangleStatistics untangle_with(const WrapLevelMesh& mesh, const TrilinearGrid&
       }
       const Vec3 smoothed = place(mesh, box, v, centroid);
       Vec3 target;
-      if (project_onto_isosurface(mesh, box, field, cell, iso, range, v, smoothed, target)) next[v] = target;
+      if (project_onto_isosurface(mesh, box, field, cell, iso, range, v, smoothed, target)) moved[i] = target;
     });
-    // Only faces with a moved corner can change.
-    const std::size_t count = find_tangled_faces(mesh, field, flip, next, next_tangled, &selected, &tangled);
-    if (count >= stats.tangled_after) break;  // a round that does not help is dropped
-    if (positions.size() == mesh.vertex_count) positions.swap(next);
-    else std::copy(next.begin(), next.end(), positions.begin());
-    tangled.swap(next_tangled);
-    stats.tangled_after = count;
+    // Now `moved` keeps the old positions; mark the faces around the
+    // vertices that moved (fixed ones, and those without a root, did not).
+    clear_flags(face_state, faces);
+    for_vertices(count, [&](std::size_t i) {
+      const std::size_t v = list[i];
+      std::swap(positions[v], moved[i]);
+      if (positions[v] == moved[i]) return;
+      for (std::uint32_t k = mesh.vertex_face_offsets[v]; k < mesh.vertex_face_offsets[v + 1]; ++k)
+        raise_flag(face_state[mesh.vertex_faces[k]]);
+    });
+    // Only faces with a moved corner can change: face_state becomes 1 + the
+    // new flag there.
+    struct Change {
+      std::size_t was = 0, now = 0;  // tangled faces among the checked ones, before and after
+    };
+    const std::vector<Change> changes = for_blocks<Change>(faces, [&](std::size_t first, std::size_t last, Change& change) {
+      for (std::size_t f = first; f < last; ++f) {
+        if (f + kPrefetchDistance < last && face_state[f + kPrefetchDistance])
+          prefetch_face(mesh, field, positions, f + kPrefetchDistance);
+        if (!face_state[f]) continue;
+        const std::uint8_t now = face_tangled(mesh, field, expected_sign, positions, f);
+        face_state[f] = static_cast<std::uint8_t>(1 + now);
+        change.was += tangled[f];
+        change.now += now;
+      }
+    });
+    Change total;
+    for (const Change& change : changes) {
+      total.was += change.was;
+      total.now += change.now;
+    }
+    const std::size_t tangled_now = stats.tangled_after - total.was + total.now;
+    if (tangled_now >= stats.tangled_after) {  // a round that does not help is dropped
+      for_vertices(count, [&](std::size_t i) { positions[list[i]] = moved[i]; });
+      break;
+    }
+    for_vertices(faces, [&](std::size_t f) {
+      if (face_state[f]) tangled[f] = static_cast<std::uint8_t>(face_state[f] - 1);
+    });
+    stats.tangled_after = tangled_now;
     ++stats.rounds;
   }
   return stats;
@@ -815,8 +923,9 @@ CorrectionStatistics correct_to_isosurface(const WrapLevelMesh& mesh, const Volu
 
 UntangleStatistics untangle(const WrapLevelMesh& mesh, const Volume& field, double iso, bool flip, int rounds,
                             double max_move_cells, std::vector<Vec3>& positions) {
+  std::vector<Vec3> moved;
   return untangle_with(mesh, TrilinearGrid(field), Box(field), field.cell_size(), iso, flip, rounds, max_move_cells,
-                       positions);
+                       positions, moved);
 }
 
 ShrinkWrapResult shrink_wrap(const SubdivisionHierarchy& hierarchy, const std::vector<Vec3>& base_positions,
@@ -859,6 +968,8 @@ ShrinkWrapResult shrink_wrap(const SubdivisionHierarchy& hierarchy, const std::v
   data.assign(base_positions.begin(), base_positions.begin() + static_cast<std::ptrdiff_t>(base_count));
   FaceNormals face_normals;
   detail::reserve_on_huge_pages(face_normals, levels > 0 ? std::size_t{hierarchy.step(levels).face_offsets.back()} : 0);
+  WrapLevelMesh mesh;
+  reserve_finest_wrap_level_mesh(hierarchy, mesh);
   double work_done = 0, work_total = 0;
   for (int level = 0; level <= levels; ++level) work_total += double(hierarchy.vertex_count(level));
 
@@ -867,14 +978,23 @@ ShrinkWrapResult shrink_wrap(const SubdivisionHierarchy& hierarchy, const std::v
   for (int level = 0; level <= levels; ++level) {
     const auto start = Clock::now();
     if (level > 0) subdivide_level(hierarchy, level, data);
-    const WrapLevelMesh mesh = make_wrap_level_mesh(hierarchy, level, data, field);
+    fill_wrap_level_mesh(hierarchy, level, data, field, mesh);
     constrain_to_box(mesh, field, data);
     WrapLevelStatistics stats;
     stats.level = level;
     stats.vertices = mesh.vertex_count;
-    for (std::size_t v = 0; v < mesh.vertex_count; ++v) {
-      stats.boundary_vertices += mesh.box_face[v] >= 0 ? 1 : 0;
-      stats.fixed_vertices += mesh.role[v] == WrapRole::Fixed ? 1 : 0;
+    struct RoleCounts {
+      std::size_t boundary = 0, fixed = 0;
+    };
+    for (const RoleCounts& counts :
+         for_blocks<RoleCounts>(mesh.vertex_count, [&](std::size_t first, std::size_t last, RoleCounts& counts) {
+           for (std::size_t v = first; v < last; ++v) {
+             counts.boundary += mesh.box_face[v] >= 0 ? 1 : 0;
+             counts.fixed += mesh.role[v] == WrapRole::Fixed ? 1 : 0;
+           }
+         })) {
+      stats.boundary_vertices += counts.boundary;
+      stats.fixed_vertices += counts.fixed;
     }
     stats.seconds_setup = seconds_since(start);
     const int rounds = level < levels ? options.iterations : options.final_level_iterations;
@@ -891,7 +1011,9 @@ ShrinkWrapResult shrink_wrap(const SubdivisionHierarchy& hierarchy, const std::v
       auto phase = Clock::now();
       // Both sample the scalar field at scattered places: a copy on huge
       // pages takes a few milliseconds and saves most of the TLB misses.
-      const HugePageVector<float> field_values(field.values.begin(), field.values.end());
+      HugePageVector<float> field_values;
+      reserve_fresh_on_huge_pages(field_values, field.values.size());
+      field_values.assign(field.values.begin(), field.values.end());
       const TrilinearGrid field_grid(field, field_values.data());
       const Box box(field);
       const double cell = field.cell_size();
@@ -903,7 +1025,7 @@ ShrinkWrapResult shrink_wrap(const SubdivisionHierarchy& hierarchy, const std::v
       phase = Clock::now();
       if (options.untangle_rounds > 0) {
         result.untangle = untangle_with(mesh, field_grid, box, cell, distance.iso, distance.flip,
-                                        options.untangle_rounds, options.correction_max_cells, data);
+                                        options.untangle_rounds, options.correction_max_cells, data, scratch);
         stats.seconds_untangle = seconds_since(phase);
       }
     }

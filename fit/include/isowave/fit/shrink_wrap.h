@@ -31,10 +31,12 @@
 // Cost per round: O(vertices of the level) plus the line searches (a few
 // trilinear samples each; near the surface usually two, see attract()).
 // Memory: the level's connectivity (about 60 bytes per vertex), two position
-// buffers sized for level L from the start, single-precision face normals
-// (12 bytes per face) and, on level L, a copy of the scalar field and a third
-// position buffer for untangle(). Large buffers live on transparent huge
-// pages, faulted in on all threads.
+// buffers, single-precision face normals (12 bytes per face), all sized for
+// level L from the start and reused by the coarser levels, and on level L a
+// copy of the scalar field and a few flags per vertex and face for
+// untangle() (which moves its selected vertices through the second position
+// buffer). Large buffers live on transparent huge pages, faulted in on all
+// threads.
 #include <cstddef>
 #include <cstdint>
 #include <vector>
@@ -127,8 +129,9 @@ struct CorrectionStatistics {
 
 // The final correction: each movable vertex moves along the gradient of the
 // trilinearly interpolated field (box-held ones along its projection into
-// their face) to where the field equals iso, searching at most
-// max_move_cells cells; in place.
+// their face) to where the field equals iso (within about 1e-4 cells, by
+// Newton steps along that line), searching at most max_move_cells cells; in
+// place.
 CorrectionStatistics correct_to_isosurface(const WrapLevelMesh& mesh, const Volume& field, double iso,
                                            double max_move_cells, std::vector<Vec3>& positions);
 
@@ -146,7 +149,8 @@ struct UntangleStatistics {
 // neighbours (boundary ones along their boundary) and back onto the
 // isosurface along the gradient (at most max_move_cells; a vertex without a
 // root there stays). A round that does not reduce the number of tangled
-// faces is dropped and ends the repair. In place.
+// faces is dropped and ends the repair. In place; a round costs O(selected
+// vertices and their faces) plus byte scans of the level.
 UntangleStatistics untangle(const WrapLevelMesh& mesh, const Volume& field, double iso, bool flip, int rounds,
                             double max_move_cells, std::vector<Vec3>& positions);
 
@@ -159,8 +163,10 @@ struct ShrinkWrapOptions {
   AttractionOptions attraction;
   bool final_correction = true;
   double correction_max_cells = 2.0;
-  // Rounds of untangle() on level L after the correction (0: none).
-  int untangle_rounds = 4;
+  // Rounds of untangle() on level L after the correction (0: none). Three: on
+  // miranda a fourth is always dropped (it does not reduce the tangles), so it
+  // only cost time; the other test volumes stop after at most two.
+  int untangle_rounds = 3;
   // Keep a copy of every level's fitted positions (for per-level reports).
   bool keep_levels = false;
 };
