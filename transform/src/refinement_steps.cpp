@@ -8,12 +8,11 @@
 
 #include <opensubdiv/far/topologyLevel.h>
 #include <opensubdiv/far/topologyRefiner.h>
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
 
 #include "isowave/core/error.h"
 #include "isowave/core/huge_page_vector.h"
 #include "opensubdiv_bridge.h"
+#include "parallel_range.h"
 
 namespace isowave::detail {
 
@@ -21,17 +20,8 @@ using OpenSubdiv::Far::TopologyLevel;
 
 namespace {
 
-// Splits [0, n) across threads in chunks large enough to amortize scheduling.
-template <class Body>
-void parallel_range(std::uint32_t n, const Body& body) {
-  constexpr std::uint32_t kGrain = 16384;
-  if (n <= kGrain) {
-    body(0u, n);
-    return;
-  }
-  tbb::parallel_for(tbb::blocked_range<std::uint32_t>(0, n, kGrain),
-                    [&](const tbb::blocked_range<std::uint32_t>& r) { body(r.begin(), r.end()); });
-}
+// Chunks of the per-element loops below.
+constexpr std::uint32_t kGrain = 16384;
 
 // `count` elements, on faulted-in huge pages: the arrays of the finer levels
 // are hundreds of megabytes, written once at scattered places.
@@ -276,7 +266,7 @@ LevelTopology level_from_base(const PolygonMesh& base) {
     if (edge_count_of[v] > kValenceLimit) throw Error(ErrorKind::Topology, "a base vertex has more than 65535 edges");
 
   // Each vertex's faces and edges in order around it.
-  parallel_range(V, [&](std::uint32_t begin, std::uint32_t end) {
+  parallel_range(V, kGrain, [&](std::uint32_t begin, std::uint32_t end) {
     std::vector<std::uint32_t> ordered_faces, ordered_edges;
     for (std::uint32_t v = begin; v < end; ++v) {
       const std::uint32_t face_total = face_count_of[v], edge_total = edge_count_of[v];
@@ -326,7 +316,7 @@ LevelTopology level_from_base(const PolygonMesh& base) {
   // edge's index in each face.
   t.vertex_face_local.resize(C);
   t.vertex_edge_local.resize(t.vertex_edges.size());
-  parallel_range(V, [&](std::uint32_t begin, std::uint32_t end) {
+  parallel_range(V, kGrain, [&](std::uint32_t begin, std::uint32_t end) {
     for (std::uint32_t v = begin; v < end; ++v) {
       for (std::uint32_t k = t.vertex_face_offsets[v]; k < t.vertex_face_offsets[v + 1]; ++k)
         t.vertex_face_local[k] = static_cast<std::uint16_t>(corner_of(t.vertex_faces[k], v));
@@ -375,7 +365,7 @@ LevelTopology refine(const LevelTopology& p, bool with_local_indices) {
   if (with_local_indices) allocate(c.edge_face_local, 2 * std::size_t{c.edge_count});
   allocate(c.edge_boundary, c.edge_count);
   c.face_offsets[C] = 4 * C;
-  parallel_range(F, [&](std::uint32_t begin, std::uint32_t end) {
+  parallel_range(F, kGrain, [&](std::uint32_t begin, std::uint32_t end) {
     for (std::uint32_t f = begin; f < end; ++f) {
       const std::uint32_t offset = p.face_offsets[f], n = p.face_size(f);
       const bool quad = n == 4;
@@ -415,7 +405,7 @@ LevelTopology refine(const LevelTopology& p, bool with_local_indices) {
   });
 
   // The two halves of each parent edge.
-  parallel_range(E, [&](std::uint32_t begin, std::uint32_t end) {
+  parallel_range(E, kGrain, [&](std::uint32_t begin, std::uint32_t end) {
     for (std::uint32_t e = begin; e < end; ++e) {
       const std::uint32_t face_count = p.edge_boundary[e] ? 1 : 2;
       for (std::uint32_t i = 0; i < 2; ++i) {
@@ -451,19 +441,19 @@ LevelTopology refine(const LevelTopology& p, bool with_local_indices) {
   allocate(c.vertex_edge_offsets, std::size_t{c.vertex_count} + 1);
   allocate(c.vertex_face_offsets, std::size_t{c.vertex_count} + 1);
   const std::uint32_t edge_rows_of_faces = p.vertex_edge_offsets[V];  // 2 E
-  parallel_range(V, [&](std::uint32_t begin, std::uint32_t end) {
+  parallel_range(V, kGrain, [&](std::uint32_t begin, std::uint32_t end) {
     for (std::uint32_t v = begin; v < end; ++v) {
       c.vertex_edge_offsets[v] = p.vertex_edge_offsets[v];
       c.vertex_face_offsets[v] = p.vertex_face_offsets[v];
     }
   });
-  parallel_range(F, [&](std::uint32_t begin, std::uint32_t end) {
+  parallel_range(F, kGrain, [&](std::uint32_t begin, std::uint32_t end) {
     for (std::uint32_t f = begin; f < end; ++f) {
       c.vertex_edge_offsets[first_face_vertex + f] = edge_rows_of_faces + p.face_offsets[f];
       c.vertex_face_offsets[first_face_vertex + f] = C + p.face_offsets[f];
     }
   });
-  parallel_range(E + 1, [&](std::uint32_t begin, std::uint32_t end) {
+  parallel_range(E + 1, kGrain, [&](std::uint32_t begin, std::uint32_t end) {
     for (std::uint32_t e = begin; e < end; ++e) {
       c.vertex_edge_offsets[first_edge_vertex + e] = edge_rows_of_faces + C + 4 * e - boundary_before[e];
       c.vertex_face_offsets[first_edge_vertex + e] = 2 * C + 4 * e - 2 * boundary_before[e];
@@ -475,7 +465,7 @@ LevelTopology refine(const LevelTopology& p, bool with_local_indices) {
   if (with_local_indices) allocate(c.vertex_face_local, c.vertex_faces.size());
 
   // v vertices: the child of each incident edge and face, in the parent's order.
-  parallel_range(V, [&](std::uint32_t begin, std::uint32_t end) {
+  parallel_range(V, kGrain, [&](std::uint32_t begin, std::uint32_t end) {
     for (std::uint32_t v = begin; v < end; ++v) {
       for (std::uint32_t k = p.vertex_edge_offsets[v]; k < p.vertex_edge_offsets[v + 1]; ++k) {
         c.vertex_edges[k] = C + 2 * p.vertex_edges[k] + p.vertex_edge_local[k];
@@ -490,7 +480,7 @@ LevelTopology refine(const LevelTopology& p, bool with_local_indices) {
   });
   // f vertices: the interior child edges, each face's leading one first, and
   // the child faces in corner order.
-  parallel_range(F, [&](std::uint32_t begin, std::uint32_t end) {
+  parallel_range(F, kGrain, [&](std::uint32_t begin, std::uint32_t end) {
     for (std::uint32_t f = begin; f < end; ++f) {
       const std::uint32_t offset = p.face_offsets[f], n = p.face_size(f);
       const std::uint32_t edge_row = c.vertex_edge_offsets[first_face_vertex + f];
@@ -508,7 +498,7 @@ LevelTopology refine(const LevelTopology& p, bool with_local_indices) {
   // e vertices: edges ordered (half, interior edge of face 0, other half,
   // interior edge of face 1); faces per parent face, the one after the edge
   // first.
-  parallel_range(E, [&](std::uint32_t begin, std::uint32_t end) {
+  parallel_range(E, kGrain, [&](std::uint32_t begin, std::uint32_t end) {
     for (std::uint32_t e = begin; e < end; ++e) {
       const std::uint32_t face_count = p.edge_boundary[e] ? 1 : 2;
       std::uint32_t* edges = &c.vertex_edges[c.vertex_edge_offsets[first_edge_vertex + e]];
@@ -556,7 +546,7 @@ RefinementStep make_step(LevelTopology&& level, const std::vector<std::uint8_t>&
 
   // Sharp edges are the boundary edges; vertex rules follow from them.
   allocate(s.vertex_rule, V);
-  parallel_range(V, [&](std::uint32_t begin, std::uint32_t end) {
+  parallel_range(V, kGrain, [&](std::uint32_t begin, std::uint32_t end) {
     for (std::uint32_t v = begin; v < end; ++v) {
       std::uint32_t sharp_edges = 0;
       for (std::uint32_t k = level.vertex_edge_offsets[v]; k < level.vertex_edge_offsets[v + 1]; ++k)
@@ -567,7 +557,7 @@ RefinementStep make_step(LevelTopology&& level, const std::vector<std::uint8_t>&
     }
   });
   allocate(s.edge_smooth, E);
-  parallel_range(E, [&](std::uint32_t begin, std::uint32_t end) {
+  parallel_range(E, kGrain, [&](std::uint32_t begin, std::uint32_t end) {
     for (std::uint32_t e = begin; e < end; ++e)
       s.edge_smooth[e] = !level.edge_boundary[e] && s.vertex_rule[level.edge_vertices[2 * e]] != VertexRule::Sharp &&
                          s.vertex_rule[level.edge_vertices[2 * e + 1]] != VertexRule::Sharp;
@@ -581,7 +571,7 @@ RefinementStep make_step(LevelTopology&& level, const std::vector<std::uint8_t>&
 
   // Level-local indices become vertex indices of the child level.
   const auto add = [](std::vector<std::uint32_t>& values, std::uint32_t offset) {
-    parallel_range(static_cast<std::uint32_t>(values.size()), [&](std::uint32_t begin, std::uint32_t end) {
+    parallel_range(static_cast<std::uint32_t>(values.size()), kGrain, [&](std::uint32_t begin, std::uint32_t end) {
       for (std::uint32_t k = begin; k < end; ++k) values[k] += offset;
     });
   };

@@ -3,11 +3,10 @@
 #include <algorithm>
 #include <cassert>
 
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
 
 #include "isowave/core/error.h"
 #include "isowave/transform/lifting_rules.h"
+#include "parallel_range.h"
 
 namespace isowave {
 namespace {
@@ -18,16 +17,10 @@ using lifting::VertexType;
 
 enum class Direction { Synthesis, Analysis };
 
-// Splits [0, n) across threads in chunks large enough to amortize scheduling.
+// Chunks of the lifting loops.
 template <class Body>
 void for_range(std::uint32_t n, const Body& body) {
-  constexpr std::uint32_t kGrain = 8192;
-  if (n <= kGrain) {
-    body(0u, n);
-    return;
-  }
-  tbb::parallel_for(tbb::blocked_range<std::uint32_t>(0, n, kGrain),
-                    [&](const tbb::blocked_range<std::uint32_t>& r) { body(r.begin(), r.end()); });
+  detail::parallel_range(n, 8192, body);
 }
 
 // target <- self*target + sum  (synthesis) or (target - sum)/self (analysis).
