@@ -552,7 +552,9 @@ struct CoefficientLayout {
 };
 
 // Builds the subdivision hierarchy on a TBB thread while the caller decodes
-// the coefficient chunks; get() waits for it and rethrows its error.
+// the coefficient chunks; get() waits for it and rethrows its error, as a
+// format error of the file (`context` names it) when the base mesh is one the
+// hierarchy cannot take.
 class HierarchyBuild {
  public:
   HierarchyBuild() = default;
@@ -560,7 +562,7 @@ class HierarchyBuild {
   HierarchyBuild& operator=(const HierarchyBuild&) = delete;
   ~HierarchyBuild() { wait(); }
 
-  void start(const PolygonMesh& base, int levels) {
+  void start(const PolygonMesh& base, int levels, const std::string& context) {
     // Its own copy of the topology: the caller goes on writing base positions.
     PolygonMesh topology;
     topology.face_offsets = base.face_offsets;
@@ -568,10 +570,12 @@ class HierarchyBuild {
     topology.sharp = base.sharp;
     topology.positions.resize(base.vertex_count());
     started_ = true;
-    group_.run([this, topology = std::move(topology), levels] {
+    group_.run([this, topology = std::move(topology), levels, context] {
       const auto start = std::chrono::steady_clock::now();
       try {
         hierarchy_ = std::make_shared<const SubdivisionHierarchy>(topology, levels);
+      } catch (const Error& error) {
+        error_ = std::make_exception_ptr(Error(ErrorKind::Format, context + error.what()));
       } catch (...) {
         error_ = std::current_exception();
       }
@@ -781,11 +785,12 @@ IswDecoded decode_isw(const std::string& bytes, const std::string& name, const I
         // With every corner counted as an edge the estimate can only grow: if
         // even that is justified, the build starts before the exact edge count.
         const bool early = !reuse && justified(CoefficientLayout(result.base, result.base.face_vertices.size(), result.levels));
-        if (early) build.start(result.base, result.levels);
+        const std::string build_context = name + ": section BASE holds a base mesh the subdivision hierarchy cannot take: ";
+        if (early) build.start(result.base, result.levels, build_context);
         layout.emplace(result.base, summarize_topology(result.base).edges, result.levels);
         if (!justified(*layout)) reader.fail("describes a hierarchy larger than the file can justify");
         if (reuse) hierarchy = options.hierarchy;
-        else if (!early) build.start(result.base, result.levels);
+        else if (!early) build.start(result.base, result.levels, build_context);
         const std::size_t base_count = layout->vertex_counts[0];
         limit = std::min<std::uint64_t>(limit, coefficients_for_percent(layout->fine(), base_count, options.max_percent));
         if (nonzero_total > layout->fine() - base_count) reader.fail("claims more coefficients than the hierarchy has");

@@ -80,9 +80,11 @@ void AtomicFileWriter::write(const void* data, std::size_t bytes) {
     throw Error(ErrorKind::Io, path_ + ": write failed: " + std::strerror(errno));
   written_ += bytes;
   // Start writing large files to disk while the rest is produced, so that
-  // commit()'s fsync waits only for the tail (a hint: errors surface there).
+  // commit()'s fsync waits only for the tail. A failed flush drops stdio's
+  // buffer, so it must fail the write rather than leave a gap in the file.
   constexpr std::uint64_t kWritebackBytes = std::uint64_t{16} << 20;
-  if (written_ - written_back_ >= kWritebackBytes && std::fflush(file_) == 0) {
+  if (written_ - written_back_ >= kWritebackBytes) {
+    if (std::fflush(file_) != 0) throw Error(ErrorKind::Io, path_ + ": write failed: " + std::strerror(errno));
     sync_file_range(fileno(file_), static_cast<off64_t>(written_back_), static_cast<off64_t>(written_ - written_back_),
                     SYNC_FILE_RANGE_WRITE);
     written_back_ = written_;
@@ -91,7 +93,8 @@ void AtomicFileWriter::write(const void* data, std::size_t bytes) {
 
 void AtomicFileWriter::commit() {
   if (!file_) throw Error(ErrorKind::Io, path_ + ": committed twice");
-  const bool flushed = std::fflush(file_) == 0 && fsync(fileno(file_)) == 0;
+  // ferror: any earlier failure of stdio on this stream (its data is lost).
+  const bool flushed = std::fflush(file_) == 0 && !std::ferror(file_) && fsync(fileno(file_)) == 0;
   const bool closed = std::fclose(file_) == 0;
   file_ = nullptr;
   if (!flushed || !closed) throw Error(ErrorKind::Io, path_ + ": write failed: " + std::strerror(errno));

@@ -12,6 +12,11 @@
 #include <fstream>
 #include <random>
 
+#include <csignal>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <gtest/gtest.h>
 
 #include "isowave/core/error.h"
@@ -292,6 +297,48 @@ TEST_F(MeshIoTest, LargeAtomicWritesArriveWhole) {
     writer.write(data.data() + offset, std::min<std::size_t>(3u << 20, data.size() - offset));
   writer.commit();
   EXPECT_TRUE(read_bytes("big.bin") == data);
+}
+
+// A write that fails part way (here: the file size limit, as a full disk
+// would) throws and leaves the user's existing file as it was, also when the
+// failure is transient (the limit is lifted right after the 16 MiB point,
+// where the writer flushes to start writeback). In a child process, so that
+// the limit does not reach the rest of the test run.
+TEST_F(MeshIoTest, FailedLargeWriteKeepsTheExistingFile) {
+  std::ofstream(path("keep.bin"), std::ios::binary) << "the user's data";
+  constexpr int kBlocksTo16MiB = 16 * 1024;
+  for (const bool transient : {false, true}) {
+    const pid_t child = fork();
+    ASSERT_GE(child, 0);
+    if (child == 0) {
+      std::signal(SIGXFSZ, SIG_IGN);
+      rlimit size_limit{(rlim_t{16} << 20) - 10240, RLIM_INFINITY};
+      setrlimit(RLIMIT_FSIZE, &size_limit);
+      const std::string block(1024, 'x');
+      try {
+        AtomicFileWriter writer(path("keep.bin"));
+        for (int k = 0; k < 40 * 1024; ++k) {
+          writer.write(block.data(), block.size());
+          if (transient && k + 1 == kBlocksTo16MiB) {
+            size_limit.rlim_cur = RLIM_INFINITY;
+            setrlimit(RLIMIT_FSIZE, &size_limit);
+          }
+        }
+        writer.commit();
+      } catch (const Error&) {
+        std::_Exit(0);
+      }
+      std::_Exit(1);
+    }
+    int status = 0;
+    ASSERT_EQ(waitpid(child, &status, 0), child);
+    ASSERT_TRUE(WIFEXITED(status));
+    EXPECT_EQ(WEXITSTATUS(status), 0) << (transient ? "transient" : "lasting") << " failure not reported";
+    EXPECT_EQ(read_bytes("keep.bin"), "the user's data");
+  }
+  std::size_t files = 0;
+  for ([[maybe_unused]] const auto& entry : fs::directory_iterator(directory_)) ++files;
+  EXPECT_EQ(files, 1u) << "a temporary file was left behind";
 }
 
 // Validation runs in parallel but names the first offender, as a scan would.
