@@ -868,6 +868,10 @@ IswDecoded decode_isw(const std::string& bytes, const std::string& name, const I
           Probability flag_after_one = models.flags[static_cast<std::size_t>(c)][1];
           for (std::size_t i = first; i < last; ++i) {
             if (significant[i]) continue;
+            // A flag costs at least 0.02 bits (the models saturate), so a
+            // stream that ran out is found within a bounded amount of work:
+            // a hostile chunk cannot make the scan outlast its bytes.
+            if ((i & 0xFFFF) == 0 && rc.overran()) reader.fail("is corrupt (coded data ends early)");
             const int flag = previous_flag ? rc.decode_bit(flag_after_one) : rc.decode_bit(flag_after_zero);
             previous_flag = flag;
             if (!flag) continue;
