@@ -45,17 +45,9 @@ std::string number(double v) {
 }  // namespace
 
 std::size_t fine_vertex_count(const PolygonMesh& base, int levels) {
-  // V' = V + F + E, F' = corners, E' = 2E + corners, corners' = 4F'.
-  double v = static_cast<double>(base.vertex_count()), f = static_cast<double>(base.face_count());
-  double corners = static_cast<double>(base.face_vertices.size());
-  double e = static_cast<double>(summarize_topology(base).edges);
-  for (int l = 0; l < levels; ++l) {
-    v += f + e;
-    e = 2 * e + corners;
-    f = corners;
-    corners = 4 * f;
-  }
-  return static_cast<std::size_t>(v);
+  const LevelCounts counts{double(base.vertex_count()), double(base.face_count()),
+                           double(summarize_topology(base).edges), double(base.face_vertices.size())};
+  return static_cast<std::size_t>(refinement_counts(counts, levels).back().vertices);
 }
 
 ConvertResult convert_volume(const Volume& volume, const std::string& source, const ConvertOptions& options,

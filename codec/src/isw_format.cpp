@@ -510,19 +510,15 @@ struct CoefficientLayout {
   std::vector<std::size_t> vertex_counts;  // per level
   std::vector<std::size_t> face_counts;    // per level below the finest
 
-  // Catmull-Clark counts: V' = V + F + E, F' = corners, E' = 2 E + corners.
   CoefficientLayout(const PolygonMesh& base, std::size_t base_edges, int levels) {
-    double v = static_cast<double>(base.vertex_count()), f = static_cast<double>(base.face_count());
-    double e = static_cast<double>(base_edges), corners = static_cast<double>(base.face_vertices.size());
+    const std::vector<LevelCounts> counts = refinement_counts(
+        {double(base.vertex_count()), double(base.face_count()), double(base_edges), double(base.face_vertices.size())},
+        levels);
     vertex_counts.push_back(base.vertex_count());
-    for (int l = 0; l < levels; ++l) {
-      face_counts.push_back(static_cast<std::size_t>(f));
-      const double next_v = v + f + e, next_e = 2 * e + corners;
-      v = next_v;
-      f = corners;
-      e = next_e;
-      corners = 4 * f;
+    for (int l = 1; l <= levels; ++l) {
+      face_counts.push_back(static_cast<std::size_t>(counts[l - 1].faces));
       // Above 2^53 the doubles are inexact; the caller rejects such sizes.
+      const double v = counts[l].vertices;
       vertex_counts.push_back(v < 9e15 ? static_cast<std::size_t>(v) : std::size_t{1} << 53);
     }
   }

@@ -22,6 +22,16 @@ std::size_t vector_bytes(const std::vector<T>& v) {
 
 }  // namespace
 
+std::vector<LevelCounts> refinement_counts(const LevelCounts& base, int levels) {
+  std::vector<LevelCounts> counts{base};
+  for (int l = 0; l < levels; ++l) {
+    const LevelCounts& parent = counts.back();
+    counts.push_back({parent.vertices + parent.faces + parent.edges, parent.corners, 2 * parent.edges + parent.corners,
+                      4 * parent.corners});
+  }
+  return counts;
+}
+
 std::size_t RefinementStep::memory_bytes() const {
   return sizeof(*this) + vector_bytes(edge_vertices) + vector_bytes(edge_faces) + vector_bytes(edge_smooth) +
          vector_bytes(face_offsets) + vector_bytes(face_vertices) + vector_bytes(face_edges) +

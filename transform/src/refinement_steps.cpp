@@ -36,13 +36,7 @@ void allocate(std::vector<T>& values, std::size_t count) {
 // the arrays the lifting steps read): V' = V + F + E, and every finer level
 // has F' = corners, E' = 2 E + corners.
 void require_32_bit_indices(double vertices, double faces, double edges, double corners, int levels) {
-  for (int l = 0; l < levels; ++l) {
-    const double next_vertices = vertices + faces + edges, next_faces = corners, next_edges = 2 * edges + corners;
-    vertices = next_vertices;
-    faces = next_faces;
-    edges = next_edges;
-    corners = 4 * next_faces;
-  }
+  vertices = refinement_counts({vertices, faces, edges, corners}, levels).back().vertices;
   if (vertices >= static_cast<double>(std::numeric_limits<std::int32_t>::max()))
     throw Error(ErrorKind::InvalidArgument, "the finest level would have " +
                                                 std::to_string(static_cast<long long>(vertices)) +

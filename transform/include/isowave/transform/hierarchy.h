@@ -70,6 +70,15 @@ struct RefinementStep {
   std::size_t memory_bytes() const;
 };
 
+// Element counts of one level of the uniform refinement, in double so that
+// sizes beyond any index type can be tested before anything is built.
+struct LevelCounts {
+  double vertices = 0, faces = 0, edges = 0, corners = 0;
+};
+// counts[0] = `base`, counts[l] after l refinements: V' = V + F + E,
+// F' = corners, E' = 2 E + corners, corners' = 4 F' (every child face a quad).
+std::vector<LevelCounts> refinement_counts(const LevelCounts& base, int levels);
+
 class SubdivisionHierarchy {
  public:
   static constexpr int kMaxLevels = 10;
