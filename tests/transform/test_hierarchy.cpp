@@ -38,6 +38,28 @@ TEST(Hierarchy, LevelsKeepTopologyAndFollowCatmullClarkCounts) {
   }
 }
 
+// The closed-form counts every size check relies on, against the counts of
+// the refined control meshes themselves.
+TEST(Hierarchy, RefinementCountsEqualTheRefinedMeshes) {
+  for (const auto& [name, mesh] : test::generated_corpus()) {
+    SCOPED_TRACE(name);
+    const SubdivisionHierarchy hierarchy(mesh, 3);
+    const TopologySummary base = summarize_topology(mesh);
+    const std::vector<LevelCounts> counts =
+        refinement_counts({double(base.vertices), double(base.faces), double(base.edges),
+                           double(mesh.face_vertices.size())}, 3);
+    ASSERT_EQ(counts.size(), 4u);
+    for (int level = 0; level <= 3; ++level) {
+      const PolygonMesh control = hierarchy.control_mesh(level, std::vector<Vec3>(hierarchy.vertex_count(level)));
+      const TopologySummary s = summarize_topology(control);
+      EXPECT_EQ(counts[level].vertices, double(s.vertices)) << level;
+      EXPECT_EQ(counts[level].faces, double(s.faces)) << level;
+      EXPECT_EQ(counts[level].edges, double(s.edges)) << level;
+      EXPECT_EQ(counts[level].corners, double(control.face_vertices.size())) << level;
+    }
+  }
+}
+
 TEST(Hierarchy, IndexLevelsFollowTheCoarseToFineLayout) {
   const SubdivisionHierarchy hierarchy(test::cube(), 2);
   EXPECT_EQ(hierarchy.vertex_count(0), 8u);
