@@ -35,6 +35,17 @@ void allocate(std::vector<T>& values, std::size_t count) {
 // level with these counts fits 32-bit indices (with room for the offsets of
 // the arrays the lifting steps read): V' = V + F + E, and every finer level
 // has F' = corners, E' = 2 E + corners.
+// Sec. 3.4: a vertex is sharp if flagged or on three or more sharp (here:
+// boundary) edges, a crease vertex on exactly two, smooth otherwise; an edge
+// is smooth unless it is sharp or ends at a sharp vertex.
+VertexRule vertex_rule(bool flagged_sharp, std::uint32_t sharp_edges) {
+  if (flagged_sharp || sharp_edges >= 3) return VertexRule::Sharp;
+  return sharp_edges == 2 ? VertexRule::Crease : VertexRule::Smooth;
+}
+bool edge_is_smooth(bool sharp, VertexRule first_end, VertexRule second_end) {
+  return !sharp && first_end != VertexRule::Sharp && second_end != VertexRule::Sharp;
+}
+
 void require_32_bit_indices(double vertices, double faces, double edges, double corners, int levels) {
   vertices = refinement_counts({vertices, faces, edges, corners}, levels).back().vertices;
   if (vertices >= static_cast<double>(std::numeric_limits<std::int32_t>::max()))
@@ -80,11 +91,8 @@ RefinementStep make_step_from_opensubdiv(const TopologyLevel& parent, const std:
       sharp_edge_count[endpoint] = static_cast<std::uint8_t>(std::min(255, sharp_edge_count[endpoint] + 1));
   }
   s.vertex_rule.resize(V);
-  for (std::uint32_t v = 0; v < V; ++v) {
-    if ((v < flagged_sharp.size() && flagged_sharp[v]) || sharp_edge_count[v] >= 3) s.vertex_rule[v] = VertexRule::Sharp;
-    else if (sharp_edge_count[v] == 2) s.vertex_rule[v] = VertexRule::Crease;
-    else s.vertex_rule[v] = VertexRule::Smooth;
-  }
+  for (std::uint32_t v = 0; v < V; ++v)
+    s.vertex_rule[v] = vertex_rule(v < flagged_sharp.size() && flagged_sharp[v], sharp_edge_count[v]);
 
   s.edge_vertices.resize(2 * std::size_t{E});
   s.edge_faces.resize(2 * std::size_t{E});
@@ -96,8 +104,7 @@ RefinementStep make_step_from_opensubdiv(const TopologyLevel& parent, const std:
     s.edge_vertices[2 * e + 1] = static_cast<std::uint32_t>(ends[1]);
     s.edge_faces[2 * e] = f0 + static_cast<std::uint32_t>(faces[0]);
     s.edge_faces[2 * e + 1] = f0 + static_cast<std::uint32_t>(faces[faces.size() > 1 ? 1 : 0]);
-    s.edge_smooth[e] = !edge_sharp[e] && s.vertex_rule[ends[0]] != VertexRule::Sharp &&
-                       s.vertex_rule[ends[1]] != VertexRule::Sharp;
+    s.edge_smooth[e] = edge_is_smooth(edge_sharp[e], s.vertex_rule[ends[0]], s.vertex_rule[ends[1]]);
   }
 
   s.face_offsets.resize(std::size_t{F} + 1);
@@ -545,16 +552,14 @@ RefinementStep make_step(LevelTopology&& level, const std::vector<std::uint8_t>&
       std::uint32_t sharp_edges = 0;
       for (std::uint32_t k = level.vertex_edge_offsets[v]; k < level.vertex_edge_offsets[v + 1]; ++k)
         sharp_edges += level.edge_boundary[level.vertex_edges[k]];
-      if ((v < flagged_sharp.size() && flagged_sharp[v]) || sharp_edges >= 3) s.vertex_rule[v] = VertexRule::Sharp;
-      else if (sharp_edges == 2) s.vertex_rule[v] = VertexRule::Crease;
-      else s.vertex_rule[v] = VertexRule::Smooth;
+      s.vertex_rule[v] = vertex_rule(v < flagged_sharp.size() && flagged_sharp[v], sharp_edges);
     }
   });
   allocate(s.edge_smooth, E);
   parallel_range(E, kGrain, [&](std::uint32_t begin, std::uint32_t end) {
     for (std::uint32_t e = begin; e < end; ++e)
-      s.edge_smooth[e] = !level.edge_boundary[e] && s.vertex_rule[level.edge_vertices[2 * e]] != VertexRule::Sharp &&
-                         s.vertex_rule[level.edge_vertices[2 * e + 1]] != VertexRule::Sharp;
+      s.edge_smooth[e] = edge_is_smooth(level.edge_boundary[e], s.vertex_rule[level.edge_vertices[2 * e]],
+                                        s.vertex_rule[level.edge_vertices[2 * e + 1]]);
   });
   for (std::uint32_t v = 0; v < V; ++v) {
     if (s.vertex_rule[v] != VertexRule::Crease) continue;
