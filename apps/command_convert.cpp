@@ -106,6 +106,7 @@ int convert(const Args& raw) {
       {"base-vertices", true, "base mesh vertex target", "N"},
       {"base-ratio", true, "base mesh vertex target as a fraction of the isosurface's vertices (default 0.02)", "R"},
       {"no-flips", false, "base mesh by the paper's collapse rules only (no valence-lowering flips)", ""},
+      {"verify", false, "decode each written file again and check it holds exactly the coded coefficients", ""},
       {"step", true, "quantization step in cells (default 0.01: adds about 0.5% of a cell RMSE)", "CELLS"},
       {"output", true, "output file (one input and one isovalue)", "OUT.isw"},
       {"out-dir", true, "output directory: NAME.isw, or NAME_isoV.isw with several isovalues", "DIR"},
@@ -141,6 +142,7 @@ int convert(const Args& raw) {
   convert_options.base_vertices = static_cast<std::size_t>(args.get_int("base-vertices", 0, 4, 1 << 30));
   convert_options.base_ratio = args.get_double("base-ratio", 0.02);
   convert_options.valence_flips = !args.has("no-flips");
+  convert_options.verify_file = args.has("verify");
   if (!(convert_options.base_ratio > 0 && convert_options.base_ratio <= 1))
     throw Error(ErrorKind::InvalidArgument, "--base-ratio must be in (0, 1]");
   const IsosurfaceOptions extraction = cli::extraction_options(args);

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "commands.h"
+#include "isowave/core/huge_page_vector.h"
 #include "isowave/core/atomic_file.h"
 #include "isowave/core/error.h"
 
@@ -46,6 +47,7 @@ void print_overview() {
 }  // namespace
 
 int main(int argc, char** argv) {
+  isowave::keep_freed_memory_for_reuse();
   std::signal(SIGINT, remove_temporaries_and_exit);
   std::signal(SIGTERM, remove_temporaries_and_exit);
   if (argc < 2) {

@@ -36,6 +36,7 @@
 #include <unistd.h>
 #include <vector>
 
+#include "isowave/core/huge_page_vector.h"
 #include "isowave/codec/convert.h"
 #include "isowave/codec/importance.h"
 #include "isowave/codec/isw_format.h"
@@ -285,6 +286,7 @@ void run_coding_stages(const std::string& path) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  isowave::keep_freed_memory_for_reuse();
   try {
     if (argc == 3 && std::string(argv[1]) == "--decode-only") {
       run_decode_only(argv[2]);

@@ -29,6 +29,7 @@
 #include <string>
 #include <vector>
 
+#include "isowave/core/huge_page_vector.h"
 #include "isowave/core/error.h"
 #include "isowave/extract/isosurface.h"
 #include "isowave/extract/volume_io.h"
@@ -89,6 +90,7 @@ class StageTimer : public isowave::ProgressSink {
 }  // namespace
 
 int main(int argc, char** argv) {
+  isowave::keep_freed_memory_for_reuse();
   std::string path = std::string(ISOWAVE_SHARED_DATA_DIR) + "/volumes/miranda_256x256x256.nrrd";
   double iso = 1.5;
   int repeat = 3;

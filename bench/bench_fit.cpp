@@ -35,6 +35,7 @@
 #include <openvdb/tools/MeshToVolume.h>
 #include <tbb/global_control.h>
 
+#include "isowave/core/huge_page_vector.h"
 #include "isowave/core/error.h"
 #include "isowave/codec/importance.h"
 #include "isowave/core/mesh_io.h"
@@ -84,6 +85,7 @@ void print_quality(const FitQuality& q) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  isowave::keep_freed_memory_for_reuse();
   std::string input = std::string(ISOWAVE_SHARED_DATA_DIR) + "/volumes/miranda_256x256x256.nrrd";
   double iso = 1.5;
   std::size_t min_component = 50, base_vertices = 0;

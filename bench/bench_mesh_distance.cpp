@@ -8,10 +8,12 @@
 #include <cstdio>
 #include <cstdlib>
 
+#include "isowave/core/huge_page_vector.h"
 #include "isowave/core/mesh_io.h"
 #include "isowave/core/surface_distance.h"
 
 int main(int argc, char** argv) {
+  isowave::keep_freed_memory_for_reuse();
   if (argc < 3) {
     std::fprintf(stderr, "usage: bench_mesh_distance MESH REFERENCE [CELL]\n");
     return 2;

@@ -28,6 +28,7 @@
 #include <CGAL/Surface_mesh_simplification/edge_collapse.h>
 #include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
 
+#include "isowave/core/huge_page_vector.h"
 #include "isowave/core/error.h"
 #include "isowave/core/mesh_io.h"
 #include "isowave/core/mesh_topology.h"
@@ -181,6 +182,7 @@ void compare_openmesh(const isowave::PolygonMesh& triangles) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  isowave::keep_freed_memory_for_reuse();
   std::string volume_path = std::string(ISOWAVE_SHARED_DATA_DIR) + "/volumes/miranda_256x256x256.nrrd";
   double iso = 1.5;
   std::size_t min_component_vertices = 0, target_vertices = 0;

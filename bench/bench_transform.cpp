@@ -22,6 +22,7 @@
 
 #include <tbb/global_control.h>
 
+#include "isowave/core/huge_page_vector.h"
 #include "isowave/core/mesh_io.h"
 #include "isowave/transform/hierarchy.h"
 #include "isowave/transform/wavelet_transform.h"
@@ -143,6 +144,7 @@ void run(const std::string& name, const PolygonMesh& base, int levels) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  isowave::keep_freed_memory_for_reuse();
   try {
     if (argc == 3) {
       PolygonMesh mesh = read_mesh(argv[1]);

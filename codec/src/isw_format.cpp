@@ -321,6 +321,16 @@ std::vector<Vec3> dequantize(const SubdivisionHierarchy& hierarchy, const std::v
   return result;
 }
 
+// The non-zero wavelet coefficients in the order the encoder sends them.
+std::vector<std::uint32_t> ranked_nonzero(const SubdivisionHierarchy& hierarchy, const std::vector<QuantizedVector>& q,
+                                          double step, const std::vector<double>& weights) {
+  std::vector<std::uint32_t> ranked;
+  for (std::size_t i = hierarchy.vertex_count(0); i < hierarchy.fine_vertex_count(); ++i)
+    if (q[i][0] != 0 || q[i][1] != 0 || q[i][2] != 0) ranked.push_back(static_cast<std::uint32_t>(i));
+  rank_by_importance(hierarchy, q, step, weights, ranked);
+  return ranked;
+}
+
 void check_encode_arguments(const SubdivisionHierarchy& hierarchy, const std::vector<Vec3>& coefficients, double step,
                             const std::vector<double>& weights) {
   if (hierarchy.levels() > kMaxLevels)
@@ -342,6 +352,25 @@ std::vector<Vec3> quantize_coefficients(const SubdivisionHierarchy& hierarchy, c
   return dequantize(hierarchy, quantize(hierarchy, coefficients, step, class_weights), step, class_weights);
 }
 
+IswDecoded expected_decode(const std::shared_ptr<const SubdivisionHierarchy>& hierarchy,
+                          const std::vector<Vec3>& coefficients, const std::string& bytes, const std::string& name,
+                          const IswEncodeOptions& options) {
+  assert(hierarchy);
+  IswDecodeOptions headers;
+  headers.headers_only = true;
+  headers.hierarchy = hierarchy;  // reused: the header decode builds none
+  IswDecoded result = decode_isw(bytes, name, headers);
+  if (result.levels != hierarchy->levels() || result.base.face_vertices != hierarchy->base().face_vertices ||
+      result.step != options.step)
+    throw Error(ErrorKind::InvalidArgument, name + ": the file was not written from this hierarchy and step");
+  const std::vector<QuantizedVector> q = quantize(*hierarchy, coefficients, result.step, result.class_weights);
+  result.ranked = ranked_nonzero(*hierarchy, q, result.step, result.class_weights);
+  result.coefficients = dequantize(*hierarchy, q, result.step, result.class_weights);
+  result.hierarchy = hierarchy;
+  result.chunks_decoded = result.chunks_total;
+  return result;
+}
+
 std::string encode_isw(const PolygonMesh& base, int levels, const std::vector<Vec3>& coefficients,
                        const IswMetadata& metadata, const IswEncodeOptions& options) {
   if (levels < 0 || levels > kMaxLevels)
@@ -361,10 +390,7 @@ std::string encode_isw(const SubdivisionHierarchy& hierarchy, const std::vector<
 
   // Quantize every entry with its class's step; rank by importance.
   const std::vector<QuantizedVector> q = quantize(hierarchy, coefficients, options.step, weights);
-  std::vector<std::uint32_t> ranked;
-  for (std::size_t i = base_count; i < fine; ++i)
-    if (q[i][0] != 0 || q[i][1] != 0 || q[i][2] != 0) ranked.push_back(static_cast<std::uint32_t>(i));
-  rank_by_importance(hierarchy, q, options.step, weights, ranked);
+  const std::vector<std::uint32_t> ranked = ranked_nonzero(hierarchy, q, options.step, weights);
 
   // Chunk boundaries (cumulative ranks).
   std::vector<std::uint64_t> chunk_ends;

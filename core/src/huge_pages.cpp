@@ -1,5 +1,8 @@
 #include <algorithm>
 #include <cstdint>
+#include <limits>
+
+#include <malloc.h>
 
 #include <sys/mman.h>
 #include <tbb/parallel_for.h>
@@ -30,6 +33,11 @@ void fault_in_pages(const void* data, std::size_t bytes) {
   (void)data;
   (void)bytes;
 #endif
+}
+
+void keep_freed_memory_for_reuse() {
+  mallopt(M_MMAP_MAX, 0);  // every block from the heap, reusable after free
+  mallopt(M_TRIM_THRESHOLD, std::numeric_limits<int>::max());  // freed memory stays for reuse
 }
 
 }  // namespace isowave

@@ -51,6 +51,7 @@ void check_options(const SimplifyOptions& options) {
     fail("flip normal threshold must be in [-1, 1]");
   if (options.max_valence < 3 || options.max_valence > 32) fail("maximum valence must be in 3..32");
   if (options.bucket_count < 1) fail("bucket count must be at least 1");
+  if (options.max_flip_rounds < 0) fail("flip rounds must not be negative");
 }
 
 // Fewest vertices the rules allow for one component (see SimplifyReport).
@@ -456,6 +457,11 @@ SimplifyResult simplify(const PolygonMesh& input, const SimplifyOptions& options
       if ((report.collapses & 0xFFFF) == 0) progress.update(double(report.collapses) / double(planned));
     }
   };
+  bool serial_phase_announced = false;
+  const auto announce_serial_phase = [&] {
+    if (!serial_phase_announced && options.serial_phase_begins) options.serial_phase_begins();
+    serial_phase_announced = true;
+  };
   if (in_parallel) {
     collapse_in_parallel(mesh, initial_buckets, report.target_vertices, options, report);
     std::vector<std::uint32_t>().swap(initial_buckets);
@@ -464,6 +470,7 @@ SimplifyResult simplify(const PolygonMesh& input, const SimplifyOptions& options
     queue_all_edges(options.max_valence);
     report.seconds_parallel = seconds_since_start(clock);
   }
+  announce_serial_phase();
   if (collapse_wanted) {
     run_queue();
     report.vertices_after_paper_collapse = mesh.alive_vertices();
@@ -473,7 +480,8 @@ SimplifyResult simplify(const PolygonMesh& input, const SimplifyOptions& options
     // later collapse re-evaluates it. Stop when a round gains under 1%.
     with_flips = options.valence_flips;
     bool gained = true;
-    while (with_flips && gained && mesh.alive_vertices() > target) {
+    while (with_flips && gained && report.flip_rounds < std::size_t(options.max_flip_rounds) &&
+           mesh.alive_vertices() > target) {
       const std::size_t before = mesh.alive_vertices();
       ++report.flip_rounds;
       queue_all_edges(relaxed_valence);

@@ -92,6 +92,42 @@ TEST(IswFormat, DecodeReusesAMatchingHierarchyAndIgnoresAnotherOne) {
   EXPECT_EQ(other.coefficients, built.coefficients);
 }
 
+TEST(IswFormat, ExpectedDecodeEqualsTheDecodeOfTheFile) {
+  PolygonMesh base = test::genus_slab(2);
+  base.sharp.assign(base.vertex_count(), 0);
+  base.sharp[5] = 1;
+  const Encoded e = encode_sample(base, 3);
+  IswEncodeOptions options;
+  options.step = e.step;
+  const auto hierarchy = std::make_shared<const SubdivisionHierarchy>(e.surface.base, 3);
+  const IswDecoded expected = expected_decode(hierarchy, e.surface.coefficients, e.bytes, "test.isw", options);
+  const IswDecoded decoded = decode_isw(e.bytes, "test.isw");
+  EXPECT_EQ(expected.hierarchy, hierarchy);
+  EXPECT_EQ(expected.ranked, decoded.ranked);
+  EXPECT_EQ(expected.coefficients, decoded.coefficients);
+  EXPECT_EQ(expected.base.positions, decoded.base.positions);
+  EXPECT_EQ(expected.metadata.values, decoded.metadata.values);
+  EXPECT_EQ(expected.chunks_decoded, decoded.chunks_decoded);
+  ASSERT_EQ(expected.sections.size(), decoded.sections.size());
+  for (std::size_t k = 0; k < expected.sections.size(); ++k) {
+    EXPECT_EQ(expected.sections[k].tag, decoded.sections[k].tag);
+    EXPECT_EQ(expected.sections[k].offset, decoded.sections[k].offset);
+    EXPECT_EQ(expected.sections[k].bytes, decoded.sections[k].bytes);
+    EXPECT_EQ(expected.sections[k].coefficients, decoded.sections[k].coefficients);
+  }
+  // So the statistics are the same as from the decode.
+  const std::vector<RateDistortionRow> from_expected = rate_distortion(expected, {100, 20, 5}, &e.surface.fine);
+  const std::vector<RateDistortionRow> from_decode = rate_distortion(decoded, {100, 20, 5}, &e.surface.fine);
+  ASSERT_EQ(from_expected.size(), from_decode.size());
+  for (std::size_t k = 0; k < from_expected.size(); ++k) {
+    EXPECT_EQ(from_expected[k].rms, from_decode[k].rms);
+    EXPECT_EQ(from_expected[k].bytes, from_decode[k].bytes);
+  }
+  // Another step or level count is not this file.
+  options.step = 2 * e.step;
+  EXPECT_THROW(expected_decode(hierarchy, e.surface.coefficients, e.bytes, "test.isw", options), Error);
+}
+
 TEST(IswFormat, BaseOnlyDecodeIsTheSubdividedBaseMesh) {
   const Encoded e = encode_sample(test::mixed_disk(), 3);
   IswDecodeOptions options;

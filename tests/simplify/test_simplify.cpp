@@ -161,6 +161,7 @@ TEST(Simplify, ValenceFlipsNeverStopEarlierThanThePaperRulesAlone) {
     expect_valid_base_mesh(generated.mesh, with, generated.name);
     EXPECT_EQ(without.report.flips + without.report.input_valence_flips, 0u);
     EXPECT_LE(with.report.vertices_after_collapse, without.report.vertices_after_collapse) << generated.name;
+    EXPECT_LE(with.report.flip_rounds, std::size_t(flips.max_flip_rounds)) << generated.name;
     if (with.report.vertices_after_collapse < without.report.vertices_after_collapse) ++gained;
   }
   EXPECT_GT(gained, 0u);
@@ -317,6 +318,9 @@ TEST(SimplifyBadInput, OptionsOutOfRange) {
   options = {};
   options.max_valence = 2;
   EXPECT_EQ(error_kind_of(test::icosphere(1), options), ErrorKind::InvalidArgument);
+  options = {};
+  options.max_flip_rounds = -1;
+  EXPECT_EQ(error_kind_of(test::icosphere(1), options), ErrorKind::InvalidArgument);
 }
 
 TEST(SimplifyBadInput, DegenerateTrianglesAreAcceptedAndNoneIsCreated) {
@@ -408,7 +412,11 @@ TEST(SimplifyIsosurfaces, ParallelPhaseKeepsTheRulesAndDoesNotDependOnTiming) {
   options.parallel_min_vertices = 0;
   options.validate_every_collapse = true;
   options.compute_distance = false;
+  // The serial phase is announced once, after the parallel collapses.
+  int announcements = 0;
+  options.serial_phase_begins = [&] { ++announcements; };
   const SimplifyResult parallel = simplify(surface.mesh, options);
+  EXPECT_EQ(announcements, 1);
   expect_valid_base_mesh(surface.mesh, parallel, "mixing, parallel", max_valence_of(surface.mesh) <= 8);
   // On a mesh this small the band between the halves is wide; still, a good
   // part of the work is parallel.

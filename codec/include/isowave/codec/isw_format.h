@@ -128,6 +128,17 @@ struct IswDecodeOptions {
   std::shared_ptr<const SubdivisionHierarchy> hierarchy;
 };
 
+// What decode_isw(bytes) returns when `bytes` is what encode_isw(*hierarchy,
+// coefficients, metadata, options) wrote, computed from the coefficients (the
+// encoder's quantization and ranking) and the file's section table instead of
+// by decoding the chunks, which is serial: convert summarizes its file with
+// it while a full decode checks the file on another thread. Throws
+// Error(InvalidArgument) when the file's levels, base topology or step differ.
+// Cost: a quantization and a sort, O(n log n), in parallel.
+IswDecoded expected_decode(const std::shared_ptr<const SubdivisionHierarchy>& hierarchy,
+                          const std::vector<Vec3>& coefficients, const std::string& bytes, const std::string& name,
+                          const IswEncodeOptions& options);
+
 // Decodes an .isw file's bytes; `name` is used in error messages.
 IswDecoded decode_isw(const std::string& bytes, const std::string& name, const IswDecodeOptions& options = {});
 
