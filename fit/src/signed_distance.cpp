@@ -24,6 +24,9 @@ namespace {
 // propagation loop touches one array fewer per update.
 constexpr std::uint32_t kQueuedBit = 0x80000000u;
 constexpr std::uint32_t kNoPoint = 0x7fffffffu;
+// Propagation prefetch distances in queue places (tuned on miranda: 32..96
+// and 8..32 all within noise of these).
+constexpr std::size_t kPrefetchNodesAhead = 48, kPrefetchPointsAhead = 20;
 // Per-node flag bits: the sample's side; the cell whose lowest corner is this
 // node carries the surface mesh (kKeptCell) or has corners on both sides
 // (kCrossCell); seed; and the sign repair's flip, visited and open marks.
@@ -49,6 +52,12 @@ class NodeQueue {
     if (tail >= ring_.size()) tail -= ring_.size();
     ring_[tail] = node;
     ++size_;
+  }
+  // The node `ahead` places behind the front (precondition: ahead < size()).
+  std::uint32_t peek(std::size_t ahead) const {
+    std::size_t at = head_ + ahead;
+    if (at >= ring_.size()) at -= ring_.size();
+    return ring_[at];
   }
   std::uint32_t pop() {
     const std::uint32_t node = ring_[head_];
@@ -450,6 +459,27 @@ SignedDistanceField compute_signed_distance(const Volume& field, const SignedDis
   std::size_t peak_queue_bytes = queue.capacity_bytes();
   const std::size_t report_every = std::size_t{1} << 22;
   while (!queue.empty()) {
+    // The queue says which nodes come next: fetch their cache lines (the
+    // node's and its y and z neighbours' distance and closest point; for a
+    // nearer one its closest point's coordinates) while this one is worked
+    // on. Propagation on miranda: 0.70 s -> 0.43 s.
+    if (queue.size() > kPrefetchNodesAhead) {
+      const std::uint32_t q = queue.peek(kPrefetchNodesAhead);
+      __builtin_prefetch(&squared[q]);
+      __builtin_prefetch(&closest[q]);
+      for (const std::size_t offset : {nx, slice}) {
+        if (q >= offset) {
+          __builtin_prefetch(&squared[q - offset]);
+          __builtin_prefetch(&closest[q - offset]);
+        }
+        if (q + offset < node_count) {
+          __builtin_prefetch(&squared[q + offset]);
+          __builtin_prefetch(&closest[q + offset]);
+        }
+      }
+    }
+    if (queue.size() > kPrefetchPointsAhead)
+      __builtin_prefetch(&points[closest[queue.peek(kPrefetchPointsAhead)] & ~kQueuedBit]);
     const std::uint32_t n = queue.pop();
     const std::uint32_t c = closest[n] & ~kQueuedBit;
     closest[n] = c;
