@@ -17,9 +17,9 @@
 // the phases.
 //
 // With --coding-stages FILE.isw it times the coding stages of convert
-// (weights, quantization error, encode, decode, error summary) on the file's
-// decoded coefficients, with their synthesis as the fitted points (best of 3;
-// the error summary reuses the quantization error, as convert does).
+// (weights, quantization error, encode, the summary from the encoder's
+// coefficients, and the full decode that convert --verify adds) on the file's
+// decoded coefficients, with their synthesis as the fitted points (best of 3).
 //
 // usage: bench_codec [VOLUME --iso V [--min-component-vertices N] [--levels L] [--base-ratio R]]
 //        bench_codec --decode-only FILE.isw
@@ -238,10 +238,11 @@ void run_coding_stages(const std::string& path) {
   synthesize(h, fitted);
   std::printf("coding stages of %s: %zu fine control points\n", path.c_str(), h.fine_vertex_count());
   constexpr int kRuns = 3;
-  std::vector<double> best(7, 1e300);
+  std::vector<double> best(8, 1e300);
   std::vector<double> last_rms;
   IswDecodeTimings phases;
   for (int k = 0; k < kRuns; ++k) {
+    // As convert_volume() runs them.
     std::vector<double> t;
     auto start = Clock::now();
     IswEncodeOptions options;
@@ -249,35 +250,42 @@ void run_coding_stages(const std::string& path) {
     options.class_weights = wavelet_norms(h);
     t.push_back(seconds_since(start));
     start = Clock::now();
-    std::vector<Vec3> quantized = quantize_coefficients(h, coefficients, options.step, options.class_weights);
-    synthesize(h, quantized);
-    const PointErrors quantization_errors = point_errors(quantized, fitted, quantized.size());
-    const double rms = quantization_errors.rms;
-    std::vector<Vec3>().swap(quantized);
+    std::vector<Vec3> stored = quantize_coefficients(h, coefficients, options.step, options.class_weights);
+    std::vector<Vec3> synthesized = stored;
+    synthesize(h, synthesized);
+    const PointErrors quantization_errors = point_errors(synthesized, fitted, synthesized.size());
+    std::vector<Vec3>().swap(synthesized);
     t.push_back(seconds_since(start));
     start = Clock::now();
     IswMetadata metadata;
-    metadata.values["quantization_rmse"] = std::to_string(rms);
-    const std::string bytes = encode_isw(h, coefficients, metadata, options);
+    metadata.values["quantization_rmse"] = std::to_string(quantization_errors.rms);
+    std::vector<std::uint32_t> ranked;
+    const std::string bytes = encode_isw(h, coefficients, metadata, options, &ranked);
     t.push_back(seconds_since(start));
+    start = Clock::now();
+    const IswDecoded expected = expected_decode(file.hierarchy, std::move(stored), std::move(ranked), bytes, "memory");
+    t.push_back(seconds_since(start));
+    start = Clock::now();
+    const std::vector<RateDistortionRow> rows = rate_distortion(expected, {100, 20, 10, 5}, &fitted, &quantization_errors);
+    t.push_back(seconds_since(start));
+    // What convert --verify adds: a full decode of the file.
     start = Clock::now();
     IswDecodeOptions decode_options;
     decode_options.hierarchy = file.hierarchy;
     const IswDecoded decoded = decode_isw(bytes, "memory", decode_options);
     t.push_back(seconds_since(start));
-    if (t.back() < best[3]) phases = decoded.seconds;
-    start = Clock::now();
-    const std::vector<RateDistortionRow> rows = rate_distortion(decoded, {100, 20, 10, 5}, &fitted, &quantization_errors);
-    t.push_back(seconds_since(start));
+    if (t.back() < best[5]) phases = decoded.seconds;
+    if (decoded.coefficients != expected.coefficients || decoded.ranked != expected.ranked)
+      throw std::runtime_error("the file does not decode to the coded coefficients");
     t.push_back(t[0] + t[1] + t[2]);
     t.push_back(t[3] + t[4]);
     for (std::size_t i = 0; i < t.size(); ++i) best[i] = std::min(best[i], t[i]);
     last_rms.clear();
     for (const RateDistortionRow& row : rows) last_rms.push_back(row.rms);
   }
-  std::printf("best of %d: weights %.3f, quantization error %.3f, encode_isw %.3f (encode stage %.3f); decode %.3f, "
-              "rate_distortion %.3f (evaluate stage %.3f) s\nrow RMS:", kRuns, best[0], best[1], best[2], best[5],
-              best[3], best[4], best[6]);
+  std::printf("best of %d: weights %.3f, quantization error %.3f, encode_isw %.3f (encode stage %.3f); expected "
+              "decode %.3f, rate_distortion %.3f (evaluate stage %.3f) s; a full decode (--verify) %.3f s\nrow RMS:",
+              kRuns, best[0], best[1], best[2], best[6], best[3], best[4], best[7], best[5]);
   for (double rms : last_rms) std::printf(" %.10g", rms);
   std::printf("\ndecode phases: headers %.3f, chunks %.3f, rank %.3f, dequantize %.3f s\n", phases.headers,
               phases.chunks, phases.rank, phases.dequantize);

@@ -352,21 +352,18 @@ std::vector<Vec3> quantize_coefficients(const SubdivisionHierarchy& hierarchy, c
   return dequantize(hierarchy, quantize(hierarchy, coefficients, step, class_weights), step, class_weights);
 }
 
-IswDecoded expected_decode(const std::shared_ptr<const SubdivisionHierarchy>& hierarchy,
-                          const std::vector<Vec3>& coefficients, const std::string& bytes, const std::string& name,
-                          const IswEncodeOptions& options) {
+IswDecoded expected_decode(const std::shared_ptr<const SubdivisionHierarchy>& hierarchy, std::vector<Vec3> stored,
+                          std::vector<std::uint32_t> ranked, const std::string& bytes, const std::string& name) {
   assert(hierarchy);
   IswDecodeOptions headers;
   headers.headers_only = true;
   headers.hierarchy = hierarchy;  // reused: the header decode builds none
   IswDecoded result = decode_isw(bytes, name, headers);
-  if (result.levels != hierarchy->levels() || result.base.face_vertices != hierarchy->base().face_vertices ||
-      result.step != options.step)
-    throw Error(ErrorKind::InvalidArgument, name + ": the file was not written from this hierarchy and step");
-  const std::vector<QuantizedVector> q = quantize(*hierarchy, coefficients, result.step, result.class_weights);
-  result.ranked = ranked_nonzero(*hierarchy, q, result.step, result.class_weights);
-  result.coefficients = dequantize(*hierarchy, q, result.step, result.class_weights);
-  result.hierarchy = hierarchy;
+  if (result.hierarchy != hierarchy || stored.size() != hierarchy->fine_vertex_count() ||
+      ranked.size() != result.coefficients_total)
+    throw Error(ErrorKind::InvalidArgument, name + ": the file was not written from these coefficients");
+  result.coefficients = std::move(stored);
+  result.ranked = std::move(ranked);
   result.chunks_decoded = result.chunks_total;
   return result;
 }
@@ -379,7 +376,8 @@ std::string encode_isw(const PolygonMesh& base, int levels, const std::vector<Ve
 }
 
 std::string encode_isw(const SubdivisionHierarchy& hierarchy, const std::vector<Vec3>& coefficients,
-                       const IswMetadata& metadata, const IswEncodeOptions& options) {
+                       const IswMetadata& metadata, const IswEncodeOptions& options,
+                       std::vector<std::uint32_t>* ranked_out) {
   const PolygonMesh& base = hierarchy.base();
   const int levels = hierarchy.levels();
   const std::vector<double> weights = options.class_weights.empty() ? wavelet_norms(hierarchy) : options.class_weights;
@@ -390,7 +388,7 @@ std::string encode_isw(const SubdivisionHierarchy& hierarchy, const std::vector<
 
   // Quantize every entry with its class's step; rank by importance.
   const std::vector<QuantizedVector> q = quantize(hierarchy, coefficients, options.step, weights);
-  const std::vector<std::uint32_t> ranked = ranked_nonzero(hierarchy, q, options.step, weights);
+  std::vector<std::uint32_t> ranked = ranked_nonzero(hierarchy, q, options.step, weights);
 
   // Chunk boundaries (cumulative ranks).
   std::vector<std::uint64_t> chunk_ends;
@@ -522,6 +520,7 @@ std::string encode_isw(const SubdivisionHierarchy& hierarchy, const std::vector<
     std::string().swap(section);
   }
   put_section(out, "END ", std::string());
+  if (ranked_out) *ranked_out = std::move(ranked);
   return out;
 }
 

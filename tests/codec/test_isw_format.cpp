@@ -96,12 +96,18 @@ TEST(IswFormat, ExpectedDecodeEqualsTheDecodeOfTheFile) {
   PolygonMesh base = test::genus_slab(2);
   base.sharp.assign(base.vertex_count(), 0);
   base.sharp[5] = 1;
-  const Encoded e = encode_sample(base, 3);
+  const test::CodedSurface surface = test::make_coded_surface(std::move(base), 3, 0.05, 9);
+  const auto hierarchy = std::make_shared<const SubdivisionHierarchy>(surface.base, 3);
   IswEncodeOptions options;
-  options.step = e.step;
-  const auto hierarchy = std::make_shared<const SubdivisionHierarchy>(e.surface.base, 3);
-  const IswDecoded expected = expected_decode(hierarchy, e.surface.coefficients, e.bytes, "test.isw", options);
-  const IswDecoded decoded = decode_isw(e.bytes, "test.isw");
+  options.step = 1e-3;
+  options.class_weights = wavelet_norms(*hierarchy);
+  std::vector<std::uint32_t> ranked;
+  const std::string bytes = encode_isw(*hierarchy, surface.coefficients, sample_metadata(), options, &ranked);
+  const IswDecoded decoded = decode_isw(bytes, "test.isw");
+  EXPECT_EQ(ranked, decoded.ranked);
+  const std::vector<Vec3> stored =
+      quantize_coefficients(*hierarchy, surface.coefficients, options.step, options.class_weights);
+  const IswDecoded expected = expected_decode(hierarchy, stored, ranked, bytes, "test.isw");
   EXPECT_EQ(expected.hierarchy, hierarchy);
   EXPECT_EQ(expected.ranked, decoded.ranked);
   EXPECT_EQ(expected.coefficients, decoded.coefficients);
@@ -116,16 +122,17 @@ TEST(IswFormat, ExpectedDecodeEqualsTheDecodeOfTheFile) {
     EXPECT_EQ(expected.sections[k].coefficients, decoded.sections[k].coefficients);
   }
   // So the statistics are the same as from the decode.
-  const std::vector<RateDistortionRow> from_expected = rate_distortion(expected, {100, 20, 5}, &e.surface.fine);
-  const std::vector<RateDistortionRow> from_decode = rate_distortion(decoded, {100, 20, 5}, &e.surface.fine);
+  const std::vector<RateDistortionRow> from_expected = rate_distortion(expected, {100, 20, 5}, &surface.fine);
+  const std::vector<RateDistortionRow> from_decode = rate_distortion(decoded, {100, 20, 5}, &surface.fine);
   ASSERT_EQ(from_expected.size(), from_decode.size());
   for (std::size_t k = 0; k < from_expected.size(); ++k) {
     EXPECT_EQ(from_expected[k].rms, from_decode[k].rms);
     EXPECT_EQ(from_expected[k].bytes, from_decode[k].bytes);
   }
-  // Another step or level count is not this file.
-  options.step = 2 * e.step;
-  EXPECT_THROW(expected_decode(hierarchy, e.surface.coefficients, e.bytes, "test.isw", options), Error);
+  // Counts that do not match, or another hierarchy, are not this file.
+  EXPECT_THROW(expected_decode(hierarchy, stored, {}, bytes, "test.isw"), Error);
+  const auto other = std::make_shared<const SubdivisionHierarchy>(surface.base, 2);
+  EXPECT_THROW(expected_decode(other, stored, ranked, bytes, "test.isw"), Error);
 }
 
 TEST(IswFormat, BaseOnlyDecodeIsTheSubdividedBaseMesh) {

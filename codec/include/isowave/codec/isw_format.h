@@ -61,8 +61,11 @@ struct IswEncodeOptions {
 std::string encode_isw(const PolygonMesh& base, int levels, const std::vector<Vec3>& coefficients,
                        const IswMetadata& metadata, const IswEncodeOptions& options = {});
 // The same for a hierarchy already built (its base mesh and levels are coded).
+// `ranked`, if given, receives the indices of the non-zero quantized wavelet
+// coefficients in the order the file sends them (as a decode lists them).
 std::string encode_isw(const SubdivisionHierarchy& hierarchy, const std::vector<Vec3>& coefficients,
-                       const IswMetadata& metadata, const IswEncodeOptions& options = {});
+                       const IswMetadata& metadata, const IswEncodeOptions& options = {},
+                       std::vector<std::uint32_t>* ranked = nullptr);
 
 // The coefficients exactly as encode_isw() stores them (quantized per class
 // with step / class_weights[c], then scaled back): lets a caller measure the
@@ -128,16 +131,14 @@ struct IswDecodeOptions {
   std::shared_ptr<const SubdivisionHierarchy> hierarchy;
 };
 
-// What decode_isw(bytes) returns when `bytes` is what encode_isw(*hierarchy,
-// coefficients, metadata, options) wrote, computed from the coefficients (the
-// encoder's quantization and ranking) and the file's section table instead of
-// by decoding the chunks, which is serial: convert summarizes its file with
-// it while a full decode checks the file on another thread. Throws
-// Error(InvalidArgument) when the file's levels, base topology or step differ.
-// Cost: a quantization and a sort, O(n log n), in parallel.
-IswDecoded expected_decode(const std::shared_ptr<const SubdivisionHierarchy>& hierarchy,
-                          const std::vector<Vec3>& coefficients, const std::string& bytes, const std::string& name,
-                          const IswEncodeOptions& options);
+// What decode_isw(bytes) returns, made without decoding the chunks (which is
+// serial) when `bytes` is what encode_isw() wrote from the hierarchy, with
+// `stored` = quantize_coefficients() of its coefficients and `ranked` the
+// order encode_isw() reported: convert summarizes its file with it. Throws
+// Error(InvalidArgument) when the file's levels or base topology differ from
+// the hierarchy's or the counts do not match. Cost: the header sections.
+IswDecoded expected_decode(const std::shared_ptr<const SubdivisionHierarchy>& hierarchy, std::vector<Vec3> stored,
+                          std::vector<std::uint32_t> ranked, const std::string& bytes, const std::string& name);
 
 // Decodes an .isw file's bytes; `name` is used in error messages.
 IswDecoded decode_isw(const std::string& bytes, const std::string& name, const IswDecodeOptions& options = {});
