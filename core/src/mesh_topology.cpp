@@ -184,6 +184,33 @@ std::vector<std::uint32_t> face_components(const PolygonMesh& mesh, std::size_t*
   return result;
 }
 
+namespace {
+
+// Calls visit(c) with one boundary half-edge c of every boundary loop:
+// follows boundary half-edges through each vertex's unique outgoing one.
+template <typename Visit>
+void for_each_boundary_loop(const HalfEdges& he, Visit&& visit) {
+  std::vector<std::uint8_t> seen(he.opposite.size(), 0);
+  for (std::uint32_t c = 0; c < he.opposite.size(); ++c) {
+    if (he.opposite[c] != kNone || seen[c]) continue;
+    visit(c);
+    for (std::uint32_t b = c; b != kNone && !seen[b];) {
+      seen[b] = 1;
+      const std::uint32_t out = he.outgoing[he.target(b)];
+      b = (out != kNone && he.opposite[out] == kNone) ? out : kNone;
+    }
+  }
+}
+
+void set_euler_and_genus(TopologySummary& s) {
+  s.euler_characteristic = static_cast<long long>(s.vertices) - static_cast<long long>(s.edges) +
+                           static_cast<long long>(s.faces);
+  s.genus = (2 * static_cast<long long>(s.components) - s.euler_characteristic -
+             static_cast<long long>(s.boundary_loops)) / 2;
+}
+
+}  // namespace
+
 TopologySummary summarize_topology(const PolygonMesh& mesh) {
   TopologySummary s;
   const HalfEdges he = build_half_edges(mesh, "mesh");
@@ -195,25 +222,40 @@ TopologySummary summarize_topology(const PolygonMesh& mesh) {
     else ++interior_half_edges;
   }
   s.edges = s.boundary_edges + interior_half_edges / 2;
-  // Boundary loops: follow boundary half-edges through each vertex's unique
-  // outgoing boundary half-edge.
-  std::vector<std::uint8_t> seen(he.opposite.size(), 0);
-  for (std::uint32_t c = 0; c < he.opposite.size(); ++c) {
-    if (he.opposite[c] != kNone || seen[c]) continue;
-    ++s.boundary_loops;
-    for (std::uint32_t b = c; b != kNone && !seen[b];) {
-      seen[b] = 1;
-      const std::uint32_t next_vertex = he.target(b);
-      const std::uint32_t out = he.outgoing[next_vertex];
-      b = (out != kNone && he.opposite[out] == kNone) ? out : kNone;
+  for_each_boundary_loop(he, [&](std::uint32_t) { ++s.boundary_loops; });
+  face_components(mesh, &s.components);
+  set_euler_and_genus(s);
+  return s;
+}
+
+std::vector<TopologySummary> summarize_components(const PolygonMesh& mesh, std::vector<std::uint32_t>* face_component) {
+  const HalfEdges he = build_half_edges(mesh, "mesh");
+  std::size_t count = 0;
+  std::vector<std::uint32_t> component = face_components(mesh, &count);
+  std::vector<TopologySummary> result(count);
+  for (TopologySummary& s : result) s.components = 1;
+  std::vector<std::uint8_t> counted(mesh.vertex_count(), 0);
+  for (std::uint32_t f = 0; f < mesh.face_count(); ++f) {
+    TopologySummary& s = result[component[f]];
+    ++s.faces;
+    for (std::uint32_t c = mesh.face_offsets[f]; c < mesh.face_offsets[f + 1]; ++c) {
+      const std::uint32_t v = mesh.face_vertices[c];
+      if (!counted[v]) {
+        counted[v] = 1;
+        ++s.vertices;
+      }
+      if (he.opposite[c] == kNone) {
+        ++s.boundary_edges;
+        ++s.edges;
+      } else if (c < he.opposite[c]) {
+        ++s.edges;
+      }
     }
   }
-  face_components(mesh, &s.components);
-  s.euler_characteristic = static_cast<long long>(s.vertices) - static_cast<long long>(s.edges) +
-                           static_cast<long long>(s.faces);
-  s.genus = (2 * static_cast<long long>(s.components) - s.euler_characteristic -
-             static_cast<long long>(s.boundary_loops)) / 2;
-  return s;
+  for_each_boundary_loop(he, [&](std::uint32_t c) { ++result[component[he.face_of[c]]].boundary_loops; });
+  for (TopologySummary& s : result) set_euler_and_genus(s);
+  if (face_component) *face_component = std::move(component);
+  return result;
 }
 
 }  // namespace isowave

@@ -132,12 +132,60 @@ ComponentSizes component_sizes(const PolygonMesh& mesh) {
   return result;
 }
 
-ComponentRemoval remove_small_components(PolygonMesh& mesh, std::size_t min_vertices) {
+namespace {
+
+// Counts and area of every component of a mesh and each face's component:
+// one half-edge build serves the statistics before and after the clean-up
+// and the clean-up itself (miranda: extraction 1.7 s, 1.6 of it counting).
+struct ComponentTable {
+  std::vector<TopologySummary> topology;
+  std::vector<double> area;
+  std::vector<std::uint32_t> face_component;
+};
+
+ComponentTable component_table(const PolygonMesh& mesh) {
+  ComponentTable table;
+  table.topology = summarize_components(mesh, &table.face_component);
+  table.area.assign(table.topology.size(), 0.0);
+  for (std::size_t f = 0; f < mesh.face_count(); ++f) table.area[table.face_component[f]] += face_area(mesh, f);
+  return table;
+}
+
+// The statistics of the components c with keep[c] (all without `keep`).
+SurfaceStatistics statistics_of(const ComponentTable& table, const std::vector<std::uint8_t>* keep = nullptr) {
+  SurfaceStatistics stats;
+  std::vector<std::size_t> sizes;
+  for (std::size_t c = 0; c < table.topology.size(); ++c) {
+    if (keep && !(*keep)[c]) continue;
+    const TopologySummary& t = table.topology[c];
+    stats.vertices += t.vertices;
+    stats.edges += t.edges;
+    stats.faces += t.faces;
+    stats.boundary_edges += t.boundary_edges;
+    stats.boundary_loops += t.boundary_loops;
+    stats.components += t.components;
+    stats.euler_characteristic += t.euler_characteristic;
+    stats.genus += t.genus;
+    stats.area += table.area[c];
+    sizes.push_back(t.vertices);
+  }
+  stats.component_size_histogram = size_histogram(sizes);
+  return stats;
+}
+
+// remove_small_components() with the mesh's table; keep[c] says which stayed.
+ComponentRemoval remove_components(PolygonMesh& mesh, const ComponentTable& table, std::size_t min_vertices,
+                                   std::vector<std::uint8_t>& keep) {
   ComponentRemoval removal;
+  keep.assign(table.topology.size(), 1);
   if (min_vertices <= 1 || mesh.face_count() == 0) return removal;
-  const ComponentSizes sizes = component_sizes(mesh);
-  for (std::size_t size : sizes.component_vertices)
-    if (size < min_vertices) ++removal.components;
+  for (std::size_t c = 0; c < table.topology.size(); ++c)
+    if (table.topology[c].vertices < min_vertices) {
+      keep[c] = 0;
+      ++removal.components;
+      removal.faces += table.topology[c].faces;
+      removal.area += table.area[c];
+    }
   if (removal.components == 0) return removal;
 
   std::vector<std::uint32_t> kept_offsets{0};
@@ -145,11 +193,7 @@ ComponentRemoval remove_small_components(PolygonMesh& mesh, std::size_t min_vert
   kept_offsets.reserve(mesh.face_count() + 1);
   kept_vertices.reserve(mesh.face_vertices.size());
   for (std::size_t f = 0; f < mesh.face_count(); ++f) {
-    if (sizes.component_vertices[sizes.face_component[f]] < min_vertices) {
-      ++removal.faces;
-      removal.area += face_area(mesh, f);
-      continue;
-    }
+    if (!keep[table.face_component[f]]) continue;
     kept_vertices.insert(kept_vertices.end(), mesh.face_begin(f), mesh.face_begin(f) + mesh.face_size(f));
     kept_offsets.push_back(static_cast<std::uint32_t>(kept_vertices.size()));
   }
@@ -160,6 +204,14 @@ ComponentRemoval remove_small_components(PolygonMesh& mesh, std::size_t min_vert
   return removal;
 }
 
+}  // namespace
+
+ComponentRemoval remove_small_components(PolygonMesh& mesh, std::size_t min_vertices) {
+  if (min_vertices <= 1 || mesh.face_count() == 0) return {};
+  std::vector<std::uint8_t> keep;
+  return remove_components(mesh, component_table(mesh), min_vertices, keep);
+}
+
 double surface_area(const PolygonMesh& mesh) {
   double area = 0;
   for (std::size_t f = 0; f < mesh.face_count(); ++f) area += face_area(mesh, f);
@@ -167,15 +219,12 @@ double surface_area(const PolygonMesh& mesh) {
 }
 
 SurfaceStatistics surface_statistics(const PolygonMesh& mesh) {
-  SurfaceStatistics stats;
   if (mesh.face_count() == 0) {
+    SurfaceStatistics stats;
     stats.vertices = mesh.vertex_count();
     return stats;
   }
-  static_cast<TopologySummary&>(stats) = summarize_topology(mesh);
-  stats.area = surface_area(mesh);
-  stats.component_size_histogram = size_histogram(component_sizes(mesh).component_vertices);
-  return stats;
+  return statistics_of(component_table(mesh));
 }
 
 Isosurface extract_isosurface(const Volume& volume, const IsosurfaceOptions& options, ProgressSink& progress) {
@@ -194,37 +243,38 @@ Isosurface extract_isosurface(const Volume& volume, const IsosurfaceOptions& opt
   result.mesh = contour_volume(volume, options.iso, options.flip, &report.centroid_vertices);
   progress.end_stage();
   progress.begin_stage("topology");
-  report.before = surface_statistics(result.mesh);
+  const bool empty = result.mesh.face_count() == 0;
+  ComponentTable table = empty ? ComponentTable{} : component_table(result.mesh);
+  report.before = empty ? surface_statistics(result.mesh) : statistics_of(table);
   progress.end_stage();
 
-  bool changed = false;
+  bool smoothed = false;
   if (options.smooth_sigma > 0) {
     progress.begin_stage("smooth");
     result.mesh = PolygonMesh();  // free the unsmoothed contour first
     {
-      const Volume smoothed = gaussian_smoothed(volume, options.smooth_sigma);
-      result.mesh = contour_volume(smoothed, options.iso, options.flip, &report.centroid_vertices);
+      const Volume smoothed_field = gaussian_smoothed(volume, options.smooth_sigma);
+      result.mesh = contour_volume(smoothed_field, options.iso, options.flip, &report.centroid_vertices);
     }
+    table = result.mesh.face_count() == 0 ? ComponentTable{} : component_table(result.mesh);
     progress.end_stage();
-    changed = true;
+    smoothed = true;
   }
+  std::vector<std::uint8_t> keep;
+  bool removed = false;
   if (options.min_component_vertices > 1) {
     progress.begin_stage("components");
-    const ComponentRemoval removal = remove_small_components(result.mesh, options.min_component_vertices);
+    const ComponentRemoval removal = remove_components(result.mesh, table, options.min_component_vertices, keep);
     report.dropped_components = removal.components;
     report.dropped_vertices = removal.vertices;
     report.dropped_triangles = removal.faces;
     report.dropped_area = removal.area;
-    changed = changed || removal.components > 0;
+    removed = removal.components > 0;
     progress.end_stage();
   }
-  if (changed) {
-    progress.begin_stage("topology");
-    report.after = surface_statistics(result.mesh);
-    progress.end_stage();
-  } else {
-    report.after = report.before;
-  }
+  if (smoothed && result.mesh.face_count() == 0) report.after = surface_statistics(result.mesh);
+  else if (smoothed || removed) report.after = statistics_of(table, removed ? &keep : nullptr);
+  else report.after = report.before;
   report.sharp_vertices = result.mesh.sharp_count();
   return result;
 }

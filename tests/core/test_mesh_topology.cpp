@@ -40,6 +40,51 @@ TEST(MeshTopology, GeneratedCorpusIsManifoldWithKnownCounts) {
   }
 }
 
+TEST(MeshTopology, ComponentCountsAddUpToTheWholeMeshCounts) {
+  // Every corpus mesh, and all of them as one mesh of many components.
+  PolygonMesh all;
+  std::vector<std::pair<std::string, PolygonMesh>> meshes;
+  for (const auto& generated : test::generated_corpus()) {
+    meshes.emplace_back(generated.name, generated.mesh);
+    const auto offset = static_cast<std::uint32_t>(all.vertex_count());
+    all.positions.insert(all.positions.end(), generated.mesh.positions.begin(), generated.mesh.positions.end());
+    for (std::size_t f = 0; f < generated.mesh.face_count(); ++f) {
+      std::vector<std::uint32_t> face(generated.mesh.face_begin(f), generated.mesh.face_begin(f) + generated.mesh.face_size(f));
+      for (std::uint32_t& v : face) v += offset;
+      all.add_face(face.data(), face.size());
+    }
+  }
+  meshes.emplace_back("all", all);
+  for (const auto& [name, mesh] : meshes) {
+    SCOPED_TRACE(name);
+    std::vector<std::uint32_t> face_component;
+    const std::vector<TopologySummary> parts = summarize_components(mesh, &face_component);
+    EXPECT_EQ(face_component, face_components(mesh, nullptr));
+    const TopologySummary whole = summarize_topology(mesh);
+    TopologySummary sum;
+    for (const TopologySummary& part : parts) {
+      EXPECT_EQ(part.components, 1u);
+      EXPECT_GE(part.genus, 0);
+      sum.vertices += part.vertices;
+      sum.edges += part.edges;
+      sum.faces += part.faces;
+      sum.boundary_edges += part.boundary_edges;
+      sum.boundary_loops += part.boundary_loops;
+      sum.components += part.components;
+      sum.euler_characteristic += part.euler_characteristic;
+      sum.genus += part.genus;
+    }
+    EXPECT_EQ(sum.vertices, whole.vertices);
+    EXPECT_EQ(sum.edges, whole.edges);
+    EXPECT_EQ(sum.faces, whole.faces);
+    EXPECT_EQ(sum.boundary_edges, whole.boundary_edges);
+    EXPECT_EQ(sum.boundary_loops, whole.boundary_loops);
+    EXPECT_EQ(sum.components, whole.components);
+    EXPECT_EQ(sum.euler_characteristic, whole.euler_characteristic);
+    EXPECT_EQ(sum.genus, whole.genus);
+  }
+}
+
 std::string topology_error(const PolygonMesh& mesh) {
   try {
     require_manifold(mesh, "test mesh");

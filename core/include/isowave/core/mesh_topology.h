@@ -32,6 +32,15 @@ void require_manifold(const PolygonMesh& mesh, const std::string& source);
 // Counts for a mesh that passed require_manifold(). O(n log n).
 TopologySummary summarize_topology(const PolygonMesh& mesh);
 
+// The counts of every connected component (components joined through shared
+// vertices, in order of first face; each entry has components = 1), and each
+// face's component in `face_component` if given. For a mesh that passed
+// require_manifold(); the entries add up to summarize_topology()'s counts
+// (genus included), so a caller can total any subset of the components
+// without recounting. O(n log n).
+std::vector<TopologySummary> summarize_components(const PolygonMesh& mesh,
+                                                  std::vector<std::uint32_t>* face_component = nullptr);
+
 // Component index per face (0-based, in order of first face), for a mesh that
 // passed require_manifold(); components are joined through shared vertices.
 std::vector<std::uint32_t> face_components(const PolygonMesh& mesh, std::size_t* component_count);
