@@ -676,6 +676,19 @@ int CollapseMesh::lower_valence(std::uint32_t v, int count, const std::uint32_t*
   return done;
 }
 
+int CollapseMesh::flip_capacity(std::uint32_t v, const std::uint32_t* keep, int keep_count) const {
+  const int room = int(vertices_[v].valence) - (is_boundary(v) ? 2 : 3);
+  if (room <= 0 || is_sharp(v)) return 0;
+  int capacity = 0;
+  for_each_corner(v, [&](std::uint32_t c) {
+    const std::uint32_t w = target(c);
+    if (corners_[c].opposite == kNone || is_sharp(w) || std::find(keep, keep + keep_count, w) != keep + keep_count) return;
+    const std::uint32_t a = corners_[prev(c)].vertex, b = corners_[prev(corners_[c].opposite)].vertex;
+    if (int(vertices_[a].valence) < rules_.max_valence && int(vertices_[b].valence) < rules_.max_valence) ++capacity;
+  });
+  return std::min(capacity, room);
+}
+
 void CollapseMesh::gather_stencil(const std::uint32_t* centres, int count, std::vector<std::uint32_t>& edges,
                                   int lane) {
   Lane& state = lanes_[lane];

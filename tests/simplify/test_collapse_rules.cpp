@@ -480,6 +480,26 @@ TEST(EdgeFlip, LowerValenceFlipsSpokesAndUndoRestores) {
   EXPECT_EQ(mesh.validate(), "");
 }
 
+TEST(EdgeFlip, FlipCapacityOfZeroMeansNoFlipAndCountsTheWheelSpokes) {
+  CollapseMesh wheel(test::wheel(12));
+  // Every spoke is flippable; the centre may lose 12 - 3.
+  EXPECT_EQ(wheel.flip_capacity(0, nullptr, 0), 9);
+  const std::uint32_t keep[2] = {1, 2};
+  EXPECT_EQ(wheel.flip_capacity(0, keep, 2), 9);
+  // On meshes without room, a capacity of 0 means lower_valence() flips nothing.
+  for (const PolygonMesh& input : {test::icosphere(2), test::tetrahedron(), test::fan_triangulate(test::wheel(6))}) {
+    CollapseMesh mesh(input);
+    for (std::uint32_t v = 0; v < mesh.vertex_slots(); ++v) {
+      const int capacity = mesh.flip_capacity(v, nullptr, 0);
+      EXPECT_GE(capacity, 0);
+      EXPECT_LE(capacity, std::max(0, int(mesh.valence(v)) - 2));
+      if (capacity > 0) continue;
+      std::vector<std::uint32_t> flipped;
+      EXPECT_EQ(mesh.lower_valence(v, 3, nullptr, 0, flipped), 0) << v;
+    }
+  }
+}
+
 // --- (4.1)-(4.3) through the mesh, and the error propagation ---
 
 // Reference (4.1)-(4.2) written out independently for the test.

@@ -200,6 +200,12 @@ class CollapseMesh {
   // many it flipped. Prefers flips whose raised vertices have low valence.
   int lower_valence(std::uint32_t v, int count, const std::uint32_t* keep, int keep_count,
                     std::vector<std::uint32_t>& flipped);
+  // About the most lower_valence(v, ..., keep, keep_count) can achieve: the
+  // edges at v that can_flip() might accept now (interior, to a non-sharp
+  // vertex outside `keep`, both opposite vertices below the valence limit),
+  // capped by the valence v may lose. Not a strict bound: a flip changes the
+  // opposite vertices of the edges next to it. Reads only. O(valence).
+  int flip_capacity(std::uint32_t v, const std::uint32_t* keep, int keep_count) const;
   // The four vertices around edge e: v_i, v_j, a, b (b = kNone on the boundary).
   std::array<std::uint32_t, 4> edge_vertices(std::uint32_t e) const;
 
