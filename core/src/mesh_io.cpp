@@ -511,6 +511,9 @@ void write_binary_ply_body(AtomicFileWriter& file, const PolygonMesh& mesh, cons
 }
 
 void write_ply(AtomicFileWriter& file, const PolygonMesh& mesh, const MeshWriteOptions& options) {
+  // The face lists hold "int" (int32) indices.
+  if (mesh.vertex_count() > std::size_t(std::numeric_limits<std::int32_t>::max()))
+    throw Error(ErrorKind::Unsupported, file.path() + ": PLY vertex indices are limited to 2^31 - 1 vertices");
   const bool with_sharp = mesh.sharp_count() > 0;
   const char* scalar = options.double_precision ? "double" : "float";
   std::string header = "ply\nformat ";
