@@ -16,6 +16,7 @@
 #include "isowave/codec/convert.h"
 #include "isowave/codec/isw_format.h"
 #include "isowave/core/error.h"
+#include "isowave/core/huge_page_vector.h"
 #include "isowave/extract/volume_io.h"
 #include "volume_options.h"
 
@@ -218,6 +219,7 @@ int convert(const Args& raw) {
         std::lock_guard<std::mutex> lock(print_mutex);
         std::fprintf(stderr, "isowave convert: %s: %s (skipped)\n", job.input.c_str(), error.what());
       }
+      release_freed_memory();  // what this input left must not stay under the next one
     }
   };
   std::vector<std::thread> threads;

@@ -99,6 +99,7 @@ void run(const Dataset& dataset) {
   std::printf("\n== %s (%s, iso %g", dataset.name.c_str(), dataset.path.c_str(), dataset.options.iso);
   if (dataset.options.min_component_vertices) std::printf(", --min-component-vertices %zu", dataset.options.min_component_vertices);
   std::printf(")\n");
+  release_freed_memory();  // the previous dataset's leftovers
   reset_peak_rss();
   auto start = Clock::now();
   const Volume volume = read_volume(dataset.path);

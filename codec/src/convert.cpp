@@ -9,6 +9,8 @@
 #include <memory>
 #include <sstream>
 
+#include <tbb/task_arena.h>
+
 #include "isowave/codec/importance.h"
 #include "isowave/codec/statistics.h"
 #include "isowave/core/error.h"
@@ -79,7 +81,10 @@ ConvertResult convert_volume(const Volume& volume, const std::string& source, co
   const auto start_distance = [&] {
     if (distance_pending.valid()) return;
     distance_pending = std::async(std::launch::async, [&field, &distance_options] {
-      return std::make_unique<SignedDistanceField>(compute_signed_distance(field, distance_options));
+      // On one thread: two would take the core the simplification runs on.
+      tbb::task_arena one_thread(1);
+      return one_thread.execute(
+          [&] { return std::make_unique<SignedDistanceField>(compute_signed_distance(field, distance_options)); });
     });
   };
 
