@@ -8,9 +8,9 @@
 #include <vector>
 
 #include "commands.h"
-#include "isowave/core/huge_page_vector.h"
 #include "isowave/core/atomic_file.h"
 #include "isowave/core/error.h"
+#include "isowave/core/huge_page_vector.h"
 
 namespace {
 

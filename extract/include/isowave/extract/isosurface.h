@@ -118,14 +118,6 @@ Isosurface extract_isosurface(const Volume& volume, const IsosurfaceOptions& opt
 // reach). O(samples * sigma).
 Volume gaussian_smoothed(const Volume& volume, double sigma);
 
-// Vertex count of the connected component of every face (components joined
-// through shared vertices), and of every component in order of first face.
-struct ComponentSizes {
-  std::vector<std::uint32_t> face_component;    // per face
-  std::vector<std::size_t> component_vertices;  // per component
-};
-ComponentSizes component_sizes(const PolygonMesh& mesh);
-
 struct ComponentRemoval {
   std::size_t components = 0;
   std::size_t vertices = 0;
