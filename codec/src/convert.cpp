@@ -31,12 +31,15 @@ std::string number(double v) {
   return s.str();
 }
 
+LevelCounts counts_of(const PolygonMesh& base) {
+  return {double(base.vertex_count()), double(base.face_count()), double(summarize_topology(base).edges),
+          double(base.face_vertices.size())};
+}
+
 }  // namespace
 
 std::size_t fine_vertex_count(const PolygonMesh& base, int levels) {
-  const LevelCounts counts{double(base.vertex_count()), double(base.face_count()),
-                           double(summarize_topology(base).edges), double(base.face_vertices.size())};
-  return static_cast<std::size_t>(refinement_counts(counts, levels).back().vertices);
+  return static_cast<std::size_t>(refinement_counts(counts_of(base), levels).back().vertices);
 }
 
 ConvertResult convert_volume(const Volume& volume, const std::string& source, const ConvertOptions& options,
@@ -79,7 +82,6 @@ ConvertResult convert_volume(const Volume& volume, const std::string& source, co
   distance_options.band_cells = options.distance_band_cells;
   std::future<std::unique_ptr<SignedDistanceField>> distance_pending;
   const auto start_distance = [&] {
-    if (distance_pending.valid()) return;
     distance_pending = std::async(std::launch::async, [&field, &distance_options] {
       // On one thread: two would take the core the simplification runs on.
       tbb::task_arena one_thread(1);
@@ -99,7 +101,6 @@ ConvertResult convert_volume(const Volume& volume, const std::string& source, co
   simplify_options.valence_flips = options.valence_flips;
   simplify_options.serial_phase_begins = start_distance;
   simplify::SimplifyResult simplified = simplify::simplify(surface.mesh, simplify_options, progress);
-  start_distance();  // if the simplification had no serial phase
   result.simplification = simplified.report;
   PolygonMesh base = std::move(simplified.base);
   result.base_vertices = base.vertex_count();
@@ -118,8 +119,9 @@ ConvertResult convert_volume(const Volume& volume, const std::string& source, co
   int levels = options.levels;
   if (levels == 0) {
     double best = 1e300;
+    const std::vector<LevelCounts> counts = refinement_counts(counts_of(base), 6);
     for (int l = 1; l <= 6; ++l) {
-      const double fine = static_cast<double>(fine_vertex_count(base, l));
+      const double fine = std::floor(counts[static_cast<std::size_t>(l)].vertices);
       const double misfit = std::abs(std::log(fine / static_cast<double>(result.extracted_vertices)));
       if (misfit < best) {
         best = misfit;

@@ -834,8 +834,6 @@ IswDecoded decode_isw(const std::string& bytes, const std::string& name, const I
           result.base.positions[v] = {base_q[v][0] * s, base_q[v][1] * s, base_q[v][2] * s};
         }
         if (rc.overran()) reader.fail("is corrupt (coded data ends early)");
-        reserve_fresh_on_huge_pages(significant, layout->fine());
-        significant.assign(layout->fine(), 0);
         if (options.headers_only) {
           if (build.started()) hierarchy = build.get();
           result.hierarchy = hierarchy;
@@ -862,6 +860,8 @@ IswDecoded decode_isw(const std::string& bytes, const std::string& name, const I
           }
           return result;
         }
+        reserve_fresh_on_huge_pages(significant, layout->fine());
+        significant.assign(layout->fine(), 0);
       } else if (tag == "CHNK") {
         const auto chunk_start = std::chrono::steady_clock::now();
         const auto chunk = reader.read<std::uint32_t>();

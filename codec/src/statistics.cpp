@@ -17,6 +17,17 @@ namespace {
 
 constexpr std::size_t kGrain = 1 << 15;
 
+// Zeroes the coefficients ranked at `keep` and after in `data` (the decoded
+// array), then synthesizes level `level` and trims `data` to it.
+void keep_and_synthesize(const IswDecoded& decoded, std::size_t keep, int level, std::vector<Vec3>& data) {
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(std::min(keep, decoded.ranked.size()), decoded.ranked.size(), kGrain),
+                    [&](const tbb::blocked_range<std::size_t>& r) {
+                      for (std::size_t k = r.begin(); k < r.end(); ++k) data[decoded.ranked[k]] = Vec3{};
+                    });
+  synthesize(*decoded.hierarchy, data, level);
+  data.resize(decoded.hierarchy->vertex_count(level < 0 ? decoded.levels : level));
+}
+
 // reconstruct() into a caller's buffer: repeated calls reuse its pages
 // instead of faulting in a fresh fine-mesh-sized array each time.
 void reconstruct_into(const IswDecoded& decoded, std::size_t keep, int level, std::vector<Vec3>& data) {
@@ -30,12 +41,7 @@ void reconstruct_into(const IswDecoded& decoded, std::size_t keep, int level, st
     std::copy(decoded.coefficients.begin() + static_cast<std::ptrdiff_t>(r.begin()),
               decoded.coefficients.begin() + static_cast<std::ptrdiff_t>(r.end()), data.begin() + static_cast<std::ptrdiff_t>(r.begin()));
   });
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(std::min(keep, decoded.ranked.size()), decoded.ranked.size(), kGrain),
-                    [&](const tbb::blocked_range<std::size_t>& r) {
-                      for (std::size_t k = r.begin(); k < r.end(); ++k) data[decoded.ranked[k]] = Vec3{};
-                    });
-  synthesize(*decoded.hierarchy, data, level);
-  data.resize(decoded.hierarchy->vertex_count(level < 0 ? decoded.levels : level));
+  keep_and_synthesize(decoded, keep, level, data);
 }
 
 }  // namespace
@@ -50,9 +56,7 @@ std::vector<Vec3> take_reconstruction(IswDecoded& decoded, std::size_t keep, int
   if (!decoded.hierarchy) throw Error(ErrorKind::InvalidArgument, "reconstruct needs a decoded file");
   std::vector<Vec3> data = std::move(decoded.coefficients);
   decoded.coefficients.clear();
-  for (std::size_t r = std::min(keep, decoded.ranked.size()); r < decoded.ranked.size(); ++r) data[decoded.ranked[r]] = Vec3{};
-  synthesize(*decoded.hierarchy, data, level);
-  data.resize(decoded.hierarchy->vertex_count(level < 0 ? decoded.levels : level));
+  keep_and_synthesize(decoded, keep, level, data);
   return data;
 }
 

@@ -139,17 +139,9 @@ SurfaceStatistics statistics_of(const ComponentTable& table, const std::vector<s
   std::vector<std::size_t> sizes;
   for (std::size_t c = 0; c < table.topology.size(); ++c) {
     if (keep && !(*keep)[c]) continue;
-    const TopologySummary& t = table.topology[c];
-    stats.vertices += t.vertices;
-    stats.edges += t.edges;
-    stats.faces += t.faces;
-    stats.boundary_edges += t.boundary_edges;
-    stats.boundary_loops += t.boundary_loops;
-    stats.components += t.components;
-    stats.euler_characteristic += t.euler_characteristic;
-    stats.genus += t.genus;
+    static_cast<TopologySummary&>(stats) += table.topology[c];
     stats.area += table.area[c];
-    sizes.push_back(t.vertices);
+    sizes.push_back(table.topology[c].vertices);
   }
   stats.component_size_histogram = size_histogram(sizes);
   return stats;
@@ -200,14 +192,7 @@ double surface_area(const PolygonMesh& mesh) {
   return area;
 }
 
-SurfaceStatistics surface_statistics(const PolygonMesh& mesh) {
-  if (mesh.face_count() == 0) {
-    SurfaceStatistics stats;
-    stats.vertices = mesh.vertex_count();
-    return stats;
-  }
-  return statistics_of(component_table(mesh));
-}
+SurfaceStatistics surface_statistics(const PolygonMesh& mesh) { return statistics_of(component_table(mesh)); }
 
 Isosurface extract_isosurface(const Volume& volume, const IsosurfaceOptions& options, ProgressSink& progress) {
   if (!std::isfinite(options.iso)) throw Error(ErrorKind::InvalidArgument, "the isovalue must be finite");
@@ -225,9 +210,8 @@ Isosurface extract_isosurface(const Volume& volume, const IsosurfaceOptions& opt
   result.mesh = contour_volume(volume, options.iso, options.flip, &report.centroid_vertices);
   progress.end_stage();
   progress.begin_stage("topology");
-  const bool empty = result.mesh.face_count() == 0;
-  ComponentTable table = empty ? ComponentTable{} : component_table(result.mesh);
-  report.before = empty ? surface_statistics(result.mesh) : statistics_of(table);
+  ComponentTable table = component_table(result.mesh);
+  report.before = statistics_of(table);
   progress.end_stage();
 
   bool smoothed = false;
@@ -238,7 +222,7 @@ Isosurface extract_isosurface(const Volume& volume, const IsosurfaceOptions& opt
       const Volume smoothed_field = gaussian_smoothed(volume, options.smooth_sigma);
       result.mesh = contour_volume(smoothed_field, options.iso, options.flip, &report.centroid_vertices);
     }
-    table = result.mesh.face_count() == 0 ? ComponentTable{} : component_table(result.mesh);
+    table = component_table(result.mesh);
     progress.end_stage();
     smoothed = true;
   }
@@ -254,8 +238,7 @@ Isosurface extract_isosurface(const Volume& volume, const IsosurfaceOptions& opt
     removed = removal.components > 0;
     progress.end_stage();
   }
-  if (smoothed && result.mesh.face_count() == 0) report.after = surface_statistics(result.mesh);
-  else if (smoothed || removed) report.after = statistics_of(table, removed ? &keep : nullptr);
+  if (smoothed || removed) report.after = statistics_of(table, removed ? &keep : nullptr);
   else report.after = report.before;
   report.sharp_vertices = result.mesh.sharp_count();
   return result;

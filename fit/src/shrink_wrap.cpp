@@ -879,8 +879,8 @@ UntangleStatistics untangle_with(const WrapLevelMesh& mesh, const TrilinearGrid&
       for (std::uint32_t k = mesh.vertex_face_offsets[v]; k < mesh.vertex_face_offsets[v + 1]; ++k)
         raise_flag(face_state[mesh.vertex_faces[k]]);
     });
-    // Only faces with a moved corner can change: face_state becomes 1 + the
-    // new flag there.
+    // Only faces with a moved corner can change. `tangled` takes their new
+    // flags at once: a dropped round ends the repair, so it is not read again.
     struct Change {
       std::size_t was = 0, now = 0;  // tangled faces among the checked ones, before and after
     };
@@ -890,9 +890,9 @@ UntangleStatistics untangle_with(const WrapLevelMesh& mesh, const TrilinearGrid&
           prefetch_face(mesh, field, positions, f + kPrefetchDistance);
         if (!face_state[f]) continue;
         const std::uint8_t now = face_tangled(mesh, field, expected_sign, positions, f);
-        face_state[f] = static_cast<std::uint8_t>(1 + now);
         change.was += tangled[f];
         change.now += now;
+        tangled[f] = now;
       }
     });
     Change total;
@@ -905,9 +905,6 @@ UntangleStatistics untangle_with(const WrapLevelMesh& mesh, const TrilinearGrid&
       for_vertices(count, [&](std::size_t i) { positions[list[i]] = moved[i]; });
       break;
     }
-    for_vertices(faces, [&](std::size_t f) {
-      if (face_state[f]) tangled[f] = static_cast<std::uint8_t>(face_state[f] - 1);
-    });
     stats.tangled_after = tangled_now;
     ++stats.rounds;
   }

@@ -465,11 +465,6 @@ SimplifyResult simplify(const PolygonMesh& input, const SimplifyOptions& options
       if ((report.collapses & 0xFFFF) == 0) progress.update(double(report.collapses) / double(planned));
     }
   };
-  bool serial_phase_announced = false;
-  const auto announce_serial_phase = [&] {
-    if (!serial_phase_announced && options.serial_phase_begins) options.serial_phase_begins();
-    serial_phase_announced = true;
-  };
   if (in_parallel) {
     collapse_in_parallel(mesh, initial_buckets, report.target_vertices, options, report);
     std::vector<std::uint32_t>().swap(initial_buckets);
@@ -478,7 +473,7 @@ SimplifyResult simplify(const PolygonMesh& input, const SimplifyOptions& options
     queue_all_edges(options.max_valence);
     report.seconds_parallel = seconds_since_start(clock);
   }
-  announce_serial_phase();
+  if (options.serial_phase_begins) options.serial_phase_begins();
   if (collapse_wanted) {
     run_queue();
     report.vertices_after_paper_collapse = mesh.alive_vertices();

@@ -24,6 +24,14 @@ IswMetadata sample_metadata() {
   return m;
 }
 
+// A genus-2 slab with one sharp vertex: sharp flags are coded with the base mesh.
+PolygonMesh slab_with_sharp_vertex(std::uint32_t sharp_vertex) {
+  PolygonMesh base = test::genus_slab(2);
+  base.sharp.assign(base.vertex_count(), 0);
+  base.sharp[sharp_vertex] = 1;
+  return base;
+}
+
 struct Encoded {
   test::CodedSurface surface;
   std::string bytes;
@@ -39,9 +47,7 @@ Encoded encode_sample(PolygonMesh base, int levels, double step = 1e-3) {
 }
 
 TEST(IswFormat, FullDecodeMatchesTheFittedMeshWithinTheQuantizationTolerance) {
-  PolygonMesh base = test::genus_slab(2);
-  base.sharp.assign(base.vertex_count(), 0);
-  base.sharp[3] = 1;
+  const PolygonMesh base = slab_with_sharp_vertex(3);
   const Encoded e = encode_sample(base, 3);
   const IswDecoded d = decode_isw(e.bytes, "test.isw");
   EXPECT_FALSE(d.truncated);
@@ -93,10 +99,7 @@ TEST(IswFormat, DecodeReusesAMatchingHierarchyAndIgnoresAnotherOne) {
 }
 
 TEST(IswFormat, ExpectedDecodeEqualsTheDecodeOfTheFile) {
-  PolygonMesh base = test::genus_slab(2);
-  base.sharp.assign(base.vertex_count(), 0);
-  base.sharp[5] = 1;
-  const test::CodedSurface surface = test::make_coded_surface(std::move(base), 3, 0.05, 9);
+  const test::CodedSurface surface = test::make_coded_surface(slab_with_sharp_vertex(5), 3, 0.05, 9);
   const auto hierarchy = std::make_shared<const SubdivisionHierarchy>(surface.base, 3);
   IswEncodeOptions options;
   options.step = 1e-3;
@@ -150,9 +153,7 @@ TEST(IswFormat, BaseOnlyDecodeIsTheSubdividedBaseMesh) {
 }
 
 TEST(IswFormat, ReconstructionInTheDecodedArrayEqualsTheCopyingOne) {
-  PolygonMesh base = test::genus_slab(2);
-  base.sharp.assign(base.vertex_count(), 0);
-  base.sharp[3] = 1;
+  const PolygonMesh base = slab_with_sharp_vertex(3);
   const Encoded e = encode_sample(base, 3);
   const IswDecoded d = decode_isw(e.bytes, "test.isw");
   ASSERT_GT(d.ranked.size(), 100u);

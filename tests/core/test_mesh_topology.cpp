@@ -65,14 +65,7 @@ TEST(MeshTopology, ComponentCountsAddUpToTheWholeMeshCounts) {
     for (const TopologySummary& part : parts) {
       EXPECT_EQ(part.components, 1u);
       EXPECT_GE(part.genus, 0);
-      sum.vertices += part.vertices;
-      sum.edges += part.edges;
-      sum.faces += part.faces;
-      sum.boundary_edges += part.boundary_edges;
-      sum.boundary_loops += part.boundary_loops;
-      sum.components += part.components;
-      sum.euler_characteristic += part.euler_characteristic;
-      sum.genus += part.genus;
+      sum += part;
     }
     EXPECT_EQ(sum.vertices, whole.vertices);
     EXPECT_EQ(sum.edges, whole.edges);

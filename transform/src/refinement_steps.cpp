@@ -31,10 +31,6 @@ void allocate(std::vector<T>& values, std::size_t count) {
   values.resize(count);
 }
 
-// Throws Error(InvalidArgument) unless the finest of `levels` refinements of a
-// level with these counts fits 32-bit indices (with room for the offsets of
-// the arrays the lifting steps read): V' = V + F + E, and every finer level
-// has F' = corners, E' = 2 E + corners.
 // Sec. 3.4: a vertex is sharp if flagged or on three or more sharp (here:
 // boundary) edges, a crease vertex on exactly two, smooth otherwise; an edge
 // is smooth unless it is sharp or ends at a sharp vertex.
@@ -46,6 +42,10 @@ bool edge_is_smooth(bool sharp, VertexRule first_end, VertexRule second_end) {
   return !sharp && first_end != VertexRule::Sharp && second_end != VertexRule::Sharp;
 }
 
+// Throws Error(InvalidArgument) unless the finest of `levels` refinements of a
+// level with these counts fits 32-bit indices (with room for the offsets of
+// the arrays the lifting steps read): V' = V + F + E, and every finer level
+// has F' = corners, E' = 2 E + corners.
 void require_32_bit_indices(double vertices, double faces, double edges, double corners, int levels) {
   vertices = refinement_counts({vertices, faces, edges, corners}, levels).back().vertices;
   if (vertices >= static_cast<double>(std::numeric_limits<std::int32_t>::max()))

@@ -20,6 +20,19 @@ struct TopologySummary {
   long long euler_characteristic = 0;  // V - E + F
   // Sum over components of g_c, where chi_c = 2 - 2 g_c - b_c.
   long long genus = 0;
+
+  // Every count is additive over disjoint components (summarize_components).
+  TopologySummary& operator+=(const TopologySummary& other) {
+    vertices += other.vertices;
+    edges += other.edges;
+    faces += other.faces;
+    boundary_edges += other.boundary_edges;
+    boundary_loops += other.boundary_loops;
+    components += other.components;
+    euler_characteristic += other.euler_characteristic;
+    genus += other.genus;
+    return *this;
+  }
 };
 
 // Throws Error(Topology), naming `source` and the first offending vertex, edge
