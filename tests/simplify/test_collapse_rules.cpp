@@ -480,24 +480,27 @@ TEST(EdgeFlip, LowerValenceFlipsSpokesAndUndoRestores) {
   EXPECT_EQ(mesh.validate(), "");
 }
 
-TEST(EdgeFlip, FlipCapacityOfZeroMeansNoFlipAndCountsTheWheelSpokes) {
+TEST(EdgeFlip, FlipCapacityCountsFlippableSpokesAndZeroMeansNoFlip) {
   CollapseMesh wheel(test::wheel(12));
   // Every spoke is flippable; the centre may lose 12 - 3.
   EXPECT_EQ(wheel.flip_capacity(0, nullptr, 0), 9);
-  const std::uint32_t keep[2] = {1, 2};
-  EXPECT_EQ(wheel.flip_capacity(0, keep, 2), 9);
-  // On meshes without room, a capacity of 0 means lower_valence() flips nothing.
-  for (const PolygonMesh& input : {test::icosphere(2), test::tetrahedron(), test::fan_triangulate(test::wheel(6))}) {
-    CollapseMesh mesh(input);
-    for (std::uint32_t v = 0; v < mesh.vertex_slots(); ++v) {
-      const int capacity = mesh.flip_capacity(v, nullptr, 0);
-      EXPECT_GE(capacity, 0);
-      EXPECT_LE(capacity, std::max(0, int(mesh.valence(v)) - 2));
-      if (capacity > 0) continue;
-      std::vector<std::uint32_t> flipped;
-      EXPECT_EQ(mesh.lower_valence(v, 3, nullptr, 0, flipped), 0) << v;
-    }
-  }
+  // Spokes to kept vertices are not: 2 of 12 remain.
+  const std::uint32_t keep[10] = {1, 2, 3, 4, 5, 6, 7, 8, 9, 10};
+  EXPECT_EQ(wheel.flip_capacity(0, keep, 10), 2);
+  std::vector<std::uint32_t> flipped;
+  EXPECT_LE(wheel.lower_valence(0, 9, keep, 10, flipped), 2);
+  for (std::size_t k = flipped.size(); k-- > 0;) wheel.flip(flipped[k]);
+  // With the valence limit at the ring's smallest valence, every spoke's
+  // opposite vertices are full: no capacity, and lower_valence flips nothing.
+  std::uint32_t smallest_ring_valence = 99;
+  for (std::uint32_t v = 1; v <= 12; ++v) smallest_ring_valence = std::min(smallest_ring_valence, wheel.valence(v));
+  CollapseRules rules;
+  rules.max_valence = static_cast<int>(smallest_ring_valence);
+  CollapseMesh full(test::wheel(12), rules);
+  EXPECT_EQ(full.flip_capacity(0, nullptr, 0), 0);
+  flipped.clear();
+  EXPECT_EQ(full.lower_valence(0, 3, nullptr, 0, flipped), 0);
+  EXPECT_EQ(full.validate(), "");
 }
 
 // --- (4.1)-(4.3) through the mesh, and the error propagation ---

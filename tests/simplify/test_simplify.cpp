@@ -147,7 +147,7 @@ TEST(Simplify, AsFarAsPossibleStopsAtALegalMinimumAboveTheLowerBound) {
 }
 
 TEST(Simplify, ValenceFlipsNeverStopEarlierThanThePaperRulesAlone) {
-  std::size_t gained = 0;
+  std::size_t gained = 0, flip_round_collapses = 0;
   for (Generated& generated : generated_meshes()) {
     test::jitter(generated.mesh, 0.01, 11);
     SimplifyOptions paper;
@@ -161,10 +161,17 @@ TEST(Simplify, ValenceFlipsNeverStopEarlierThanThePaperRulesAlone) {
     expect_valid_base_mesh(generated.mesh, with, generated.name);
     EXPECT_EQ(without.report.flips + without.report.input_valence_flips, 0u);
     EXPECT_LE(with.report.vertices_after_collapse, without.report.vertices_after_collapse) << generated.name;
-    EXPECT_LE(with.report.flip_rounds, std::size_t(flips.max_flip_rounds)) << generated.name;
+    // No flip round when none is allowed (the input's own flips still happen).
+    SimplifyOptions no_rounds = flips;
+    no_rounds.max_flip_rounds = 0;
+    const SimplifyResult rounds_off = simplify(generated.mesh, no_rounds);
+    EXPECT_EQ(rounds_off.report.flip_rounds, 0u) << generated.name;
+    EXPECT_EQ(rounds_off.report.collapses_after_flips, 0u) << generated.name;
+    flip_round_collapses += with.report.collapses_after_flips;
     if (with.report.vertices_after_collapse < without.report.vertices_after_collapse) ++gained;
   }
   EXPECT_GT(gained, 0u);
+  EXPECT_GT(flip_round_collapses, 0u);  // so that turning the rounds off is seen
 }
 
 TEST(Simplify, InputVerticesAboveTheValenceLimitAreFlippedDown) {
