@@ -107,7 +107,7 @@ int convert(const Args& raw) {
       {"base-vertices", true, "base mesh vertex target", "N"},
       {"base-ratio", true, "base mesh vertex target as a fraction of the isosurface's vertices (default 0.02)", "R"},
       {"no-flips", false, "base mesh by the paper's collapse rules only (no valence-lowering flips)", ""},
-      {"verify", false, "decode each written file again and check it holds exactly the coded coefficients", ""},
+      {"verify", false, "decode each encoded file once more before writing it and check it gives exactly the coded coefficients", ""},
       {"step", true, "quantization step in cells (default 0.01: adds about 0.5% of a cell RMSE)", "CELLS"},
       {"output", true, "output file (one input and one isovalue)", "OUT.isw"},
       {"out-dir", true, "output directory: NAME.isw, or NAME_isoV.isw with several isovalues", "DIR"},

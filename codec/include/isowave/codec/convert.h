@@ -42,7 +42,7 @@ struct ConvertOptions {
   std::vector<double> summary_percents{100, 20, 10, 5};
   // Keep the extracted triangle mesh in the result (for comparisons).
   bool keep_extracted_mesh = false;
-  // Decode the written file once more and require exactly the coded
+  // Decode the encoded bytes once more and require exactly the coded
   // coefficients in the coded order (a self-check; the round-trip tests
   // check the coder). The summary never needs it: it is made from what the
   // encoder stored. The chunk decoding is serial: about 1.5 s on miranda.

@@ -105,7 +105,8 @@ struct IswDecoded {
   // `coefficients`, most important first (the order the encoder ranked them).
   std::vector<std::uint32_t> ranked;
   std::vector<IswSectionInfo> sections;
-  // The subdivision hierarchy of `base` and `levels` (null with headers_only).
+  // The subdivision hierarchy of `base` and `levels` (options.hierarchy when
+  // that one matches the file).
   std::shared_ptr<const SubdivisionHierarchy> hierarchy;
   std::size_t chunks_total = 0;    // chunks the encoder wrote (from QUAN)
   std::size_t chunks_decoded = 0;

@@ -68,7 +68,7 @@ void fault_in_pages(const void* data, std::size_t bytes);
 // kernel zeroes every fresh page on first touch, which on this machine ran
 // at about 1 GB/s and cost convert 1.3 s and the first shrink-wrap 1.5 s on
 // miranda. The peak resident size stays about the same (the freed blocks
-// are what the next stage allocates); the process keeps it until it exits.
+// are what the next stage allocates); the process keeps it until release_freed_memory() or exit.
 void keep_freed_memory_for_reuse();
 // Gives the memory kept for reuse back to the kernel (malloc_trim): between
 // the inputs of a batch, so that one input's leftovers do not stay resident,
