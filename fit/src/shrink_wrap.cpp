@@ -15,7 +15,6 @@
 #include "isowave/core/huge_page_vector.h"
 #include "isowave/fit/trilinear.h"
 #include "isowave/transform/wavelet_transform.h"
-#include "huge_pages.h"
 #include "root_search.h"
 
 namespace isowave {
@@ -139,9 +138,9 @@ void build_refined_connectivity(const RefinementStep& s, WrapLevelMesh& mesh,
   });
   std::partial_sum(mesh.neighbour_offsets.begin(), mesh.neighbour_offsets.end(), mesh.neighbour_offsets.begin());
   std::partial_sum(mesh.vertex_face_offsets.begin(), mesh.vertex_face_offsets.end(), mesh.vertex_face_offsets.begin());
-  detail::reserve_on_huge_pages(mesh.neighbours, mesh.neighbour_offsets[n]);
+  reserve_on_huge_pages(mesh.neighbours, mesh.neighbour_offsets[n]);
   mesh.neighbours.resize(mesh.neighbour_offsets[n]);
-  detail::reserve_on_huge_pages(mesh.vertex_faces, mesh.vertex_face_offsets[n]);
+  reserve_on_huge_pages(mesh.vertex_faces, mesh.vertex_face_offsets[n]);
   mesh.vertex_faces.resize(mesh.vertex_face_offsets[n]);
   mesh.boundary_neighbours.assign(2 * n, kNone);
   boundary_edge_count.assign(n, 0);
@@ -149,7 +148,7 @@ void build_refined_connectivity(const RefinementStep& s, WrapLevelMesh& mesh,
   // Faces: parent face corner k becomes child face k.
   mesh.face_offsets.resize(child_faces + 1);
   for_vertices(child_faces + 1, [&](std::size_t f) { mesh.face_offsets[f] = static_cast<std::uint32_t>(4 * f); });
-  detail::reserve_on_huge_pages(mesh.face_vertices, 4 * child_faces);
+  reserve_on_huge_pages(mesh.face_vertices, 4 * child_faces);
   mesh.face_vertices.resize(4 * child_faces);
   for_vertices(parent_faces, [&](std::size_t f) {
     const std::uint32_t centre = first_face + static_cast<std::uint32_t>(f);
@@ -364,9 +363,9 @@ void reserve_finest_wrap_level_mesh(const SubdivisionHierarchy& hierarchy, WrapL
   mesh.neighbour_offsets.reserve(n + 1);
   mesh.vertex_face_offsets.reserve(n + 1);
   mesh.face_offsets.reserve(faces + 1);
-  detail::reserve_on_huge_pages(mesh.neighbours, 2 * edges);
-  detail::reserve_on_huge_pages(mesh.vertex_faces, 4 * faces);
-  detail::reserve_on_huge_pages(mesh.face_vertices, 4 * faces);
+  reserve_on_huge_pages(mesh.neighbours, 2 * edges);
+  reserve_on_huge_pages(mesh.vertex_faces, 4 * faces);
+  reserve_on_huge_pages(mesh.face_vertices, 4 * faces);
   mesh.boundary_neighbours.reserve(2 * n);
   mesh.role.reserve(n);
   mesh.box_face.reserve(n);
@@ -960,11 +959,11 @@ ShrinkWrapResult shrink_wrap(const SubdivisionHierarchy& hierarchy, const std::v
   std::vector<Vec3>& data = result.positions;
   std::vector<Vec3> scratch;
   const std::size_t fine_count = hierarchy.vertex_count(levels);
-  detail::reserve_on_huge_pages(data, fine_count);
-  detail::reserve_on_huge_pages(scratch, fine_count);
+  reserve_on_huge_pages(data, fine_count);
+  reserve_on_huge_pages(scratch, fine_count);
   data.assign(base_positions.begin(), base_positions.begin() + static_cast<std::ptrdiff_t>(base_count));
   FaceNormals face_normals;
-  detail::reserve_on_huge_pages(face_normals, levels > 0 ? std::size_t{hierarchy.step(levels).face_offsets.back()} : 0);
+  reserve_on_huge_pages(face_normals, levels > 0 ? std::size_t{hierarchy.step(levels).face_offsets.back()} : 0);
   WrapLevelMesh mesh;
   reserve_finest_wrap_level_mesh(hierarchy, mesh);
   double work_done = 0, work_total = 0;

@@ -14,7 +14,6 @@
 #include "isowave/core/error.h"
 #include "isowave/core/huge_page_vector.h"
 #include "isowave/fit/trilinear.h"
-#include "huge_pages.h"
 #include "root_search.h"
 
 namespace isowave {
@@ -187,7 +186,7 @@ SignedDistanceField compute_signed_distance(const Volume& field, const SignedDis
 
   // Inside/outside per node; later the cell, seed and sign-repair bits.
   HugePageVector<std::uint8_t> flags;
-  detail::reserve_on_huge_pages(flags, node_count);
+  reserve_on_huge_pages(flags, node_count);
   flags.resize(node_count);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nz), [&](const tbb::blocked_range<std::size_t>& r) {
     for (std::size_t n = r.begin() * slice; n < r.end() * slice; ++n)
@@ -420,9 +419,10 @@ SignedDistanceField compute_signed_distance(const Volume& field, const SignedDis
   // Random access at every update: huge pages, faulted in on all threads
   // (the result keeps `squared`).
   std::vector<float> squared;
-  detail::assign_on_huge_pages(squared, node_count, std::numeric_limits<float>::infinity());
+  reserve_fresh_on_huge_pages(squared, node_count);
+  squared.assign(node_count, std::numeric_limits<float>::infinity());
   HugePageVector<std::uint32_t> closest;
-  detail::reserve_on_huge_pages(closest, node_count);
+  reserve_on_huge_pages(closest, node_count);
   closest.assign(node_count, kNoPoint);
   std::vector<Point3f> points;
   points.reserve(stats.seed_nodes);

@@ -314,8 +314,10 @@ TEST(CollapseLegality, InteriorEdgeJoiningBoundaryVerticesAndLoopMinimum) {
   mesh.collapse(boundary_edge, evaluation.position, removed, opposite);
   EXPECT_EQ(mesh.validate(), "");
   EXPECT_EQ(mesh.alive_vertices(), 3u);
-  for (std::uint32_t e = 0; e < mesh.edge_slots(); ++e)
-    if (mesh.edge_alive(e)) EXPECT_EQ(mesh.evaluate(e).legality, Legality::BoundaryLoopMinimum);
+  for (std::uint32_t e = 0; e < mesh.edge_slots(); ++e) {
+    if (!mesh.edge_alive(e)) continue;
+    EXPECT_EQ(mesh.evaluate(e).legality, Legality::BoundaryLoopMinimum);
+  }
 }
 
 TEST(CollapseLegality, TetrahedronIsTheMinimumOfAClosedComponent) {

@@ -76,17 +76,27 @@ void keep_freed_memory_for_reuse();
 // instead of 0.3 GB), and before a benchmark measures a dataset's peak.
 void release_freed_memory();
 
-// Leaves `values` empty with room for `count` elements on huge pages that are
-// already faulted in, unless it has that room already; then resize() or
-// assign() fills it without page faults.
+// Makes room for `count` elements in `values`, keeping its contents, in a
+// buffer on huge pages that are already faulted in, unless it has that room
+// already; then resize() or assign() fills it without page faults. For
+// vectors whose type an interface fixes (the allocator is std::allocator).
+template <typename T, typename Allocator>
+void reserve_on_huge_pages(std::vector<T, Allocator>& values, std::size_t count) {
+  if (values.capacity() >= count) return;
+  if (values.empty()) std::vector<T, Allocator>().swap(values);  // free the old buffer before the new one
+  std::vector<T, Allocator> fresh;
+  fresh.reserve(count);
+  advise_huge_pages_in(fresh.data(), count * sizeof(T));
+  fault_in_pages(fresh.data(), count * sizeof(T));
+  fresh.assign(values.begin(), values.end());
+  values.swap(fresh);
+}
+
+// The same for an emptied `values`.
 template <typename T, typename Allocator>
 void reserve_fresh_on_huge_pages(std::vector<T, Allocator>& values, std::size_t count) {
   values.clear();
-  if (values.capacity() >= count) return;
-  std::vector<T, Allocator>().swap(values);
-  values.reserve(count);
-  advise_huge_pages_in(values.data(), count * sizeof(T));
-  fault_in_pages(values.data(), count * sizeof(T));
+  reserve_on_huge_pages(values, count);
 }
 
 }  // namespace isowave
