@@ -1,6 +1,7 @@
 #include "isowave/codec/importance.h"
 
 #include <algorithm>
+#include <cassert>
 #include <cmath>
 #include <limits>
 #include <numeric>
@@ -12,22 +13,46 @@
 
 namespace isowave {
 
-int coefficient_class(const SubdivisionHierarchy& hierarchy, std::size_t index) {
-  const int level = hierarchy.level_of_index(index);
+CoefficientClasses::CoefficientClasses(const SubdivisionHierarchy& hierarchy) : levels_(hierarchy.levels()) {
+  for (int l = 0; l <= levels_; ++l) vertex_counts_[static_cast<std::size_t>(l)] = hierarchy.vertex_count(l);
+  for (int l = 1; l <= levels_; ++l) parent_faces_[static_cast<std::size_t>(l - 1)] = hierarchy.step(l).parent_face_count;
+}
+
+CoefficientClasses::CoefficientClasses(const std::size_t* vertex_counts, const std::size_t* parent_faces, int levels)
+    : levels_(levels) {
+  assert(levels >= 0 && levels <= SubdivisionHierarchy::kMaxLevels);
+  std::copy(vertex_counts, vertex_counts + levels + 1, vertex_counts_.begin());
+  std::copy(parent_faces, parent_faces + levels, parent_faces_.begin());
+}
+
+std::pair<std::size_t, std::size_t> CoefficientClasses::range(int c) const {
+  assert(c >= 0 && c < count());
+  if (c == 0) return {0, vertex_counts_[0]};
+  const auto level = static_cast<std::size_t>(1 + (c - 1) / 2);
+  const std::size_t first_face = vertex_counts_[level - 1], first_edge = first_face + parent_faces_[level - 1];
+  return (c - 1) % 2 == 0 ? std::make_pair(first_face, first_edge) : std::make_pair(first_edge, vertex_counts_[level]);
+}
+
+int CoefficientClasses::of(std::size_t index) const {
+  const auto end = vertex_counts_.begin() + levels_ + 1;
+  const auto level = static_cast<std::size_t>(std::upper_bound(vertex_counts_.begin(), end, index) - vertex_counts_.begin());
   if (level == 0) return 0;
-  const bool is_edge = index >= hierarchy.vertex_count(level - 1) + hierarchy.step(level).parent_face_count;
-  return 1 + 2 * (level - 1) + (is_edge ? 1 : 0);
+  const bool is_edge = index >= vertex_counts_[level - 1] + parent_faces_[level - 1];
+  return 1 + 2 * static_cast<int>(level - 1) + (is_edge ? 1 : 0);
+}
+
+bool CoefficientClasses::operator==(const CoefficientClasses& other) const {
+  return levels_ == other.levels_ && vertex_counts_ == other.vertex_counts_ && parent_faces_ == other.parent_faces_;
+}
+
+int coefficient_class(const SubdivisionHierarchy& hierarchy, std::size_t index) {
+  return CoefficientClasses(hierarchy).of(index);
 }
 
 int coefficient_class_count(const SubdivisionHierarchy& hierarchy) { return 1 + 2 * hierarchy.levels(); }
 
 std::pair<std::size_t, std::size_t> coefficient_class_range(const SubdivisionHierarchy& hierarchy, int class_index) {
-  if (class_index == 0) return {0, hierarchy.vertex_count(0)};
-  const int level = 1 + (class_index - 1) / 2;
-  const std::size_t first_face = hierarchy.vertex_count(level - 1);
-  const std::size_t first_edge = first_face + hierarchy.step(level).parent_face_count;
-  return (class_index - 1) % 2 == 0 ? std::make_pair(first_face, first_edge)
-                                     : std::make_pair(first_edge, hierarchy.vertex_count(level));
+  return CoefficientClasses(hierarchy).range(class_index);
 }
 
 std::vector<double> wavelet_norms(const SubdivisionHierarchy& hierarchy) {

@@ -229,9 +229,10 @@ void sort_by_importance(std::vector<RankedEntry>& entries) {
 void rank_by_importance(const SubdivisionHierarchy& hierarchy, const std::vector<QuantizedVector>& q, double step,
                         const std::vector<double>& weights, std::vector<std::uint32_t>& indices) {
   std::vector<RankedEntry> keyed(indices.size());
+  const CoefficientClasses classes(hierarchy);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, indices.size(), 1 << 14), [&](const tbb::blocked_range<std::size_t>& r) {
     for (std::size_t k = r.begin(); k < r.end(); ++k)
-      keyed[k] = {importance_key(coefficient_class(hierarchy, indices[k]), q[indices[k]], step, weights), indices[k], 0};
+      keyed[k] = {importance_key(classes.of(indices[k]), q[indices[k]], step, weights), indices[k], 0};
   });
   sort_by_importance(keyed);
   for (std::size_t k = 0; k < indices.size(); ++k) indices[k] = keyed[k].index;
@@ -528,49 +529,20 @@ std::string encode_isw(const SubdivisionHierarchy& hierarchy, const std::vector<
 
 namespace {
 
-// The coefficient classes of a hierarchy from its counts alone (as
-// coefficient_class() and coefficient_class_range() give them), so that the
-// chunks can be decoded while the hierarchy is still being built.
-struct CoefficientLayout {
-  std::vector<std::size_t> vertex_counts;  // per level
-  std::vector<std::size_t> face_counts;    // per level below the finest
-
-  CoefficientLayout(const PolygonMesh& base, std::size_t base_edges, int levels) {
-    const std::vector<LevelCounts> counts = refinement_counts(
-        {double(base.vertex_count()), double(base.face_count()), double(base_edges), double(base.face_vertices.size())},
-        levels);
-    vertex_counts.push_back(base.vertex_count());
-    for (int l = 1; l <= levels; ++l) {
-      face_counts.push_back(static_cast<std::size_t>(counts[l - 1].faces));
-      // Above 2^53 the doubles are inexact; the caller rejects such sizes.
-      const double v = counts[l].vertices;
-      vertex_counts.push_back(v < 9e15 ? static_cast<std::size_t>(v) : std::size_t{1} << 53);
-    }
-  }
-  std::size_t fine() const { return vertex_counts.back(); }
-  int class_count() const { return 1 + 2 * static_cast<int>(face_counts.size()); }
-  std::pair<std::size_t, std::size_t> class_range(int c) const {
-    if (c == 0) return {0, vertex_counts[0]};
-    const auto level = static_cast<std::size_t>(1 + (c - 1) / 2);
-    const std::size_t first_face = vertex_counts[level - 1], first_edge = first_face + face_counts[level - 1];
-    return (c - 1) % 2 == 0 ? std::make_pair(first_face, first_edge) : std::make_pair(first_edge, vertex_counts[level]);
-  }
-  int class_of(std::size_t index) const {
-    const auto level = static_cast<std::size_t>(std::upper_bound(vertex_counts.begin(), vertex_counts.end(), index) -
-                                                vertex_counts.begin());
-    if (level == 0) return 0;
-    const bool is_edge = index >= vertex_counts[level - 1] + face_counts[level - 1];
-    return 1 + 2 * static_cast<int>(level - 1) + (is_edge ? 1 : 0);
-  }
-  bool matches(const SubdivisionHierarchy& hierarchy) const {
-    if (hierarchy.levels() + 1 != static_cast<int>(vertex_counts.size())) return false;
-    for (int l = 0; l <= hierarchy.levels(); ++l)
-      if (hierarchy.vertex_count(l) != vertex_counts[static_cast<std::size_t>(l)]) return false;
-    for (int l = 1; l <= hierarchy.levels(); ++l)
-      if (hierarchy.step(l).parent_face_count != face_counts[static_cast<std::size_t>(l - 1)]) return false;
-    return true;
-  }
-};
+// The coefficient classes of the hierarchy a file's base mesh and level
+// count make, from the counts alone (see CoefficientClasses). Above 2^53 the
+// counts are inexact (hostile files); the caller rejects such sizes.
+CoefficientClasses classes_from_counts(const PolygonMesh& base, std::size_t base_edges, int levels) {
+  const std::vector<LevelCounts> counts = refinement_counts(
+      {double(base.vertex_count()), double(base.face_count()), double(base_edges), double(base.face_vertices.size())},
+      levels);
+  const auto exact = [](double v) { return v < 9e15 ? static_cast<std::size_t>(v) : std::size_t{1} << 53; };
+  std::array<std::size_t, SubdivisionHierarchy::kMaxLevels + 1> vertex_counts{};
+  std::array<std::size_t, SubdivisionHierarchy::kMaxLevels> parent_faces{};
+  for (int l = 0; l <= levels; ++l) vertex_counts[static_cast<std::size_t>(l)] = exact(counts[static_cast<std::size_t>(l)].vertices);
+  for (int l = 1; l <= levels; ++l) parent_faces[static_cast<std::size_t>(l - 1)] = exact(counts[static_cast<std::size_t>(l - 1)].faces);
+  return CoefficientClasses(vertex_counts.data(), parent_faces.data(), levels);
+}
 
 // Builds the subdivision hierarchy on a TBB thread while the caller decodes
 // the coefficient chunks; get() waits for it and rethrows its error, as a
@@ -654,7 +626,7 @@ IswDecoded decode_isw(const std::string& bytes, const std::string& name, const I
   // The hierarchy is built during the chunk decoding, which needs only its
   // counts (the layout).
   HierarchyBuild build;
-  std::optional<CoefficientLayout> layout;
+  std::optional<CoefficientClasses> layout;
   std::uint64_t limit = options.max_coefficients;
   // Quantized base control points (the prediction reads them), then the
   // decoded wavelet coefficients' values in rank order, parallel to
@@ -791,7 +763,7 @@ IswDecoded decode_isw(const std::string& bytes, const std::string& name, const I
         result.coefficients_total = nonzero_total;
         // The hierarchy (and so the fine vertex count) follows from the base
         // mesh and the levels; bound it by the file size before building it.
-        const auto justified = [&](const CoefficientLayout& counts) {
+        const auto justified = [&](const CoefficientClasses& counts) {
           const double estimate = static_cast<double>(counts.fine());
           return estimate <= static_cast<double>(kMaxFineVertices) &&
                  estimate <= static_cast<double>(kFineVerticesPerFileByte * bytes.size() + (1u << 20));
@@ -805,14 +777,14 @@ IswDecoded decode_isw(const std::string& bytes, const std::string& name, const I
         result.seconds.headers = seconds_since(decode_start);
         // With every corner counted as an edge the estimate can only grow: if
         // even that is justified, the build starts before the exact edge count.
-        const bool early = !reuse && justified(CoefficientLayout(result.base, result.base.face_vertices.size(), result.levels));
+        const bool early = !reuse && justified(classes_from_counts(result.base, result.base.face_vertices.size(), result.levels));
         const std::string build_context = name + ": section BASE holds a base mesh the subdivision hierarchy cannot take: ";
         if (early) build.start(result.base, result.levels, build_context);
-        layout.emplace(result.base, summarize_topology(result.base).edges, result.levels);
+        layout.emplace(classes_from_counts(result.base, summarize_topology(result.base).edges, result.levels));
         if (!justified(*layout)) reader.fail("describes a hierarchy larger than the file can justify");
         if (reuse) hierarchy = options.hierarchy;
         else if (!early) build.start(result.base, result.levels, build_context);
-        const std::size_t base_count = layout->vertex_counts[0];
+        const std::size_t base_count = layout->base();
         limit = std::min<std::uint64_t>(limit, coefficients_for_percent(layout->fine(), base_count, options.max_percent));
         if (nonzero_total > layout->fine() - base_count) reader.fail("claims more coefficients than the hierarchy has");
       } else if (tag == "BPTS") {
@@ -874,13 +846,13 @@ IswDecoded decode_isw(const std::string& bytes, const std::string& name, const I
         if (coded_size != reader.remaining()) reader.fail("has an inconsistent size");
         const std::string_view coded = reader.bytes(coded_size);
         RangeDecoder rc(reinterpret_cast<const std::uint8_t*>(coded.data()), coded.size());
-        const int classes = layout->class_count();
+        const int classes = layout->count();
         ChunkModels models(classes);
         std::uint64_t found = 0;
         std::vector<std::uint32_t> fresh;
         std::vector<QuantizedVector> fresh_q;
         for (int c = 1; c < classes; ++c) {
-          const auto [first, last] = layout->class_range(c);
+          const auto [first, last] = layout->range(c);
           int previous_flag = 0;
           std::array<int, 3> previous_bucket{0, 0, 0};
           // The two flag contexts as locals, so that they stay in registers
@@ -918,7 +890,7 @@ IswDecoded decode_isw(const std::string& bytes, const std::string& name, const I
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, fresh.size(), kParallelGrain),
                           [&](const tbb::blocked_range<std::size_t>& r) {
                             for (std::size_t k = r.begin(); k < r.end(); ++k)
-                              keyed[k] = {importance_key(layout->class_of(fresh[k]), fresh_q[k], result.step,
+                              keyed[k] = {importance_key(layout->of(fresh[k]), fresh_q[k], result.step,
                                                          result.class_weights),
                                           fresh[k], static_cast<std::uint32_t>(k)};
                           });
@@ -953,7 +925,7 @@ IswDecoded decode_isw(const std::string& bytes, const std::string& name, const I
     result.seconds.hierarchy_wait = seconds_since(wait_start);
     result.seconds.hierarchy = build.seconds();
   }
-  assert(layout->matches(*hierarchy));
+  assert(*layout == CoefficientClasses(*hierarchy));
   result.hierarchy = hierarchy;
   const bool stopped_early = result.ranked.size() >= limit && result.chunks_decoded < result.chunks_total;
   if (!saw_end && !stopped_early) result.truncated = true;
@@ -976,7 +948,7 @@ IswDecoded decode_isw(const std::string& bytes, const std::string& name, const I
   std::copy(result.base.positions.begin(), result.base.positions.end(), result.coefficients.begin());
   for (std::size_t r = 0; r < result.ranked.size(); ++r) {
     const std::uint32_t i = result.ranked[r];
-    const double s = class_step(result.step, result.class_weights, layout->class_of(i));
+    const double s = class_step(result.step, result.class_weights, layout->of(i));
     result.coefficients[i] = {ranked_q[r][0] * s, ranked_q[r][1] * s, ranked_q[r][2] * s};
   }
   result.seconds.dequantize = seconds_since(dequantize_start);

@@ -7,6 +7,8 @@
 // fine control points, of the class's wavelets: with random signs s_i on every
 // coefficient i of a class, E ||synthesis(s)||^2 = sum_i ||psi_i||^2, so one
 // synthesis per class gives the class mean exactly in expectation.
+#include <array>
+#include <cstddef>
 #include <cstdint>
 #include <utility>
 #include <vector>
@@ -16,9 +18,35 @@
 
 namespace isowave {
 
-// Class of the entry at `index` of the coarse-to-fine array: 0 for base
-// control points, then 1 + 2 (level - 1) for f details and 2 + 2 (level - 1)
-// for e details of `level`. Classes: 1 + 2 L.
+// The classes of the coarse-to-fine array: 0 for base control points, then
+// 1 + 2 (level - 1) for f details and 2 + 2 (level - 1) for e details of
+// `level`; 1 + 2 L classes, each a contiguous index range. They follow from
+// the counts alone, so a decoder lays them out from a file's counts while the
+// hierarchy is still being built. Small and cheap to copy (no allocation).
+class CoefficientClasses {
+ public:
+  explicit CoefficientClasses(const SubdivisionHierarchy& hierarchy);
+  // vertex_counts[l]: control points of levels 0..l together (l = 0..levels,
+  // ascending); parent_faces[l - 1]: the faces of level l - 1, whose f details
+  // open level l. Precondition: 0 <= levels <= SubdivisionHierarchy::kMaxLevels.
+  CoefficientClasses(const std::size_t* vertex_counts, const std::size_t* parent_faces, int levels);
+
+  int count() const { return 1 + 2 * levels_; }
+  std::size_t base() const { return vertex_counts_[0]; }
+  std::size_t fine() const { return vertex_counts_[static_cast<std::size_t>(levels_)]; }
+  // [first, second) of class c, 0 <= c < count().
+  std::pair<std::size_t, std::size_t> range(int c) const;
+  // Class of entry `index` < fine(). O(log levels).
+  int of(std::size_t index) const;
+  bool operator==(const CoefficientClasses& other) const;
+
+ private:
+  int levels_ = 0;
+  std::array<std::size_t, SubdivisionHierarchy::kMaxLevels + 1> vertex_counts_{};
+  std::array<std::size_t, SubdivisionHierarchy::kMaxLevels> parent_faces_{};
+};
+
+// CoefficientClasses(hierarchy).of(index), .count() and .range(class_index).
 int coefficient_class(const SubdivisionHierarchy& hierarchy, std::size_t index);
 int coefficient_class_count(const SubdivisionHierarchy& hierarchy);
 // The entries of a class form one contiguous index range [first, second).
