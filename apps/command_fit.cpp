@@ -63,6 +63,9 @@ int fit(const Args& raw) {
   spec.options.push_back({"final-iterations", true, "rounds on the finest level (default 1)", "N"});
   spec.options.push_back({"reach", true, "attraction reach in edge lengths (default 2)", "R"});
   spec.options.push_back({"band", true, "signed-distance narrow band in cells, 0 = whole grid (default 3)", "K"});
+  spec.options.push_back({"droplet-vertices", true,
+                          "closed base components of at most N vertices, within 3 cells of their centre, are fitted "
+                          "along rays from it; 0 = the paper's steps everywhere (default 8)", "N"});
   spec.options.push_back({"no-correction", false, "skip the final move onto the exact isosurface", ""});
   spec.options.push_back({"no-report", false, "skip the quality report (it needs distance trees)", ""});
   spec.options.push_back({"ascii", false, "write ASCII PLY instead of binary", ""});
@@ -86,6 +89,8 @@ int fit(const Args& raw) {
   wrap_options.iterations = args.get_int("iterations", wrap_options.iterations, 0, 100);
   wrap_options.final_level_iterations = args.get_int("final-iterations", wrap_options.final_level_iterations, 0, 100);
   wrap_options.attraction.reach_edges = args.get_double("reach", wrap_options.attraction.reach_edges);
+  wrap_options.small_component_vertices = static_cast<std::size_t>(
+      args.get_int("droplet-vertices", static_cast<int>(wrap_options.small_component_vertices), 0, 1000000));
   wrap_options.final_correction = !args.has("no-correction");
   const bool report = !args.has("no-report") && !args.has("quiet");
   wrap_options.keep_levels = report;

@@ -13,6 +13,7 @@
 //                  [--reach R] [--min-reach C] [--weight W] [--no-correction]
 //                  [--correction-cells C] [--untangle N] [--base FILE]
 //                  [--write-base FILE] [--no-peer] [--repeat N] [--final-quality] [--rmse]
+//                  [--small-components N] [--no-nearest-correction]
 //   INPUT is a volume file or builtin:NAME[:N]; --base-vertices 0 simplifies
 //   as far as the rules allow (default). --base reads the base mesh instead of
 //   simplifying (e.g. one saved with --write-base: repeatable runs while the
@@ -95,6 +96,8 @@ int main(int argc, char** argv) {
   std::string base_input, base_output;
   int repeat = 1;
   int untangle_rounds = ShrinkWrapOptions().untangle_rounds;
+  std::size_t small_components = ShrinkWrapOptions().small_component_vertices;
+  bool nearest_correction = ShrinkWrapOptions().correction_from_nearest_point;
   double weight = 0.5, correction_cells = ShrinkWrapOptions().correction_max_cells;
   double reach = ShrinkWrapOptions().attraction.reach_edges, min_reach = ShrinkWrapOptions().attraction.min_reach_cells;
   int iterations = ShrinkWrapOptions().iterations, final_iterations = ShrinkWrapOptions().final_level_iterations;
@@ -119,6 +122,8 @@ int main(int argc, char** argv) {
     else if (arg == "--weight") weight = std::stod(next());
     else if (arg == "--correction-cells") correction_cells = std::stod(next());
     else if (arg == "--untangle") untangle_rounds = std::stoi(next());
+    else if (arg == "--small-components") small_components = std::stoul(next());
+    else if (arg == "--no-nearest-correction") nearest_correction = false;
     else if (arg == "--reach") reach = std::stod(next());
     else if (arg == "--min-reach") min_reach = std::stod(next());
     else if (arg == "--iterations") iterations = std::stoi(next());
@@ -243,6 +248,8 @@ int main(int argc, char** argv) {
     wrap_options.relaxation_weight = weight;
     wrap_options.correction_max_cells = correction_cells;
     wrap_options.untangle_rounds = untangle_rounds;
+    wrap_options.small_component_vertices = small_components;
+    wrap_options.correction_from_nearest_point = nearest_correction;
     ShrinkWrapResult wrapped;
     double wrap_seconds = 0;
     for (int run = 0; run < repeat; ++run) {
@@ -264,8 +271,9 @@ int main(int argc, char** argv) {
                   s.last_attraction.attracted,
                   s.last_attraction.mean_move_cells, s.last_attraction.max_move_cells, s.last_attraction.out_of_reach,
                   s.last_attraction.no_direction);
-    std::printf("  correction: %zu corrected (mean %.4f, max %.3f cell), %zu failed\n", wrapped.correction.corrected,
-                wrapped.correction.mean_move_cells, wrapped.correction.max_move_cells, wrapped.correction.failed);
+    std::printf("  correction: %zu corrected (mean %.4f, max %.3f cell; %zu from the nearest point), %zu failed\n",
+                wrapped.correction.corrected, wrapped.correction.mean_move_cells, wrapped.correction.max_move_cells,
+                wrapped.correction.from_nearest_point, wrapped.correction.failed);
     std::printf("  untangle: %zu tangled faces before, %zu after %d rounds\n", wrapped.untangle.tangled_before,
                 wrapped.untangle.tangled_after, wrapped.untangle.rounds);
     {

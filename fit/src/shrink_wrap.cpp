@@ -387,30 +387,6 @@ void constrain_to_box(const WrapLevelMesh& mesh, const Volume& box_volume, std::
   });
 }
 
-void relax(const WrapLevelMesh& mesh, const Volume& box_volume, double weight, const std::vector<Vec3>& in,
-           std::vector<Vec3>& out) {
-  assert(in.size() >= mesh.vertex_count && &in != &out);
-  out.resize(std::max(out.size(), mesh.vertex_count));
-  const Box box(box_volume);
-  for_vertices(mesh.vertex_count, [&](std::size_t v) {
-    const Vec3& p = in[v];
-    out[v] = p;
-    if (mesh.role[v] == WrapRole::Fixed) return;
-    Vec3 centroid;
-    const std::uint32_t b0 = mesh.boundary_neighbours[2 * v], b1 = mesh.boundary_neighbours[2 * v + 1];
-    if (mesh.role[v] == WrapRole::Boundary && b0 != kNone && b1 != kNone) {
-      centroid = 0.5 * (in[b0] + in[b1]);
-    } else {
-      const std::uint32_t begin = mesh.neighbour_offsets[v], end = mesh.neighbour_offsets[v + 1];
-      if (begin == end) return;
-      for (std::uint32_t k = begin; k < end; ++k) centroid += in[mesh.neighbours[k]];
-      centroid *= 1.0 / double(end - begin);
-    }
-    const Vec3 moved = place(mesh, box, v, (1.0 - weight) * p + weight * centroid);
-    if (is_finite(moved)) out[v] = moved;
-  });
-}
-
 namespace {
 
 // Unit face normals in single precision: the vertex loops gather them at
@@ -443,7 +419,52 @@ Vec3 vertex_normal(const WrapLevelMesh& mesh, const FaceNormals& face_normals, s
   return normalized(Vec3{x, y, z});
 }
 
+// relax() with, optionally, a flag per vertex: a flagged free vertex moves
+// only within the plane normal to its vertex normal (the normal part of the
+// move, which on a coarse closed mesh is mostly a shrink, is left to the
+// attraction).
+void relax_with(const WrapLevelMesh& mesh, const Volume& box_volume, double weight, const std::vector<Vec3>& in,
+                std::vector<Vec3>& out, const std::uint8_t* tangent_only) {
+  assert(in.size() >= mesh.vertex_count && &in != &out);
+  out.resize(std::max(out.size(), mesh.vertex_count));
+  const Box box(box_volume);
+  for_vertices(mesh.vertex_count, [&](std::size_t v) {
+    const Vec3& p = in[v];
+    out[v] = p;
+    if (mesh.role[v] == WrapRole::Fixed) return;
+    Vec3 centroid;
+    const std::uint32_t b0 = mesh.boundary_neighbours[2 * v], b1 = mesh.boundary_neighbours[2 * v + 1];
+    const bool on_boundary = mesh.role[v] == WrapRole::Boundary && b0 != kNone && b1 != kNone;
+    if (on_boundary) {
+      centroid = 0.5 * (in[b0] + in[b1]);
+    } else {
+      const std::uint32_t begin = mesh.neighbour_offsets[v], end = mesh.neighbour_offsets[v + 1];
+      if (begin == end) return;
+      for (std::uint32_t k = begin; k < end; ++k) centroid += in[mesh.neighbours[k]];
+      centroid *= 1.0 / double(end - begin);
+    }
+    Vec3 relaxed = (1.0 - weight) * p + weight * centroid;
+    if (tangent_only && tangent_only[v] && !on_boundary && mesh.role[v] == WrapRole::Free) {
+      // The unit average of the normals of its faces (as in the attraction).
+      Vec3 sum;
+      for (std::uint32_t k = mesh.vertex_face_offsets[v]; k < mesh.vertex_face_offsets[v + 1]; ++k) {
+        const std::uint32_t f = mesh.vertex_faces[k];
+        sum += face_normal(mesh.face_vertices.data() + mesh.face_offsets[f], mesh.face_offsets[f + 1] - mesh.face_offsets[f], in);
+      }
+      const Vec3 n = normalized(sum);
+      relaxed -= dot(relaxed - p, n) * n;
+    }
+    const Vec3 moved = place(mesh, box, v, relaxed);
+    if (is_finite(moved)) out[v] = moved;
+  });
+}
+
 }  // namespace
+
+void relax(const WrapLevelMesh& mesh, const Volume& box_volume, double weight, const std::vector<Vec3>& in,
+           std::vector<Vec3>& out) {
+  relax_with(mesh, box_volume, weight, in, out, nullptr);
+}
 
 std::vector<Vec3> vertex_normals(const WrapLevelMesh& mesh, const std::vector<Vec3>& positions) {
   FaceNormals face_normals;
@@ -741,12 +762,32 @@ std::size_t find_tangled_faces(const WrapLevelMesh& mesh, const TrilinearGrid& f
 }
 
 struct CorrectionPartial {
-  std::size_t movable = 0, corrected = 0, failed = 0;
+  std::size_t movable = 0, corrected = 0, failed = 0, nearest = 0;
   double move_sum = 0, move_max = 0;
 };
 
+// The nearest point of the zero set of `distance` (Newton steps along its
+// gradient, kept in the box) within `range` of p; false if they do not settle.
+bool nearest_zero(const TrilinearGrid& distance, const Box& box, double cell, double range, const Vec3& p, Vec3& x) {
+  x = p;
+  for (int step = 0; step < 10; ++step) {
+    const TrilinearSample s = distance.sample(x);
+    const double gg = dot(s.gradient, s.gradient);
+    if (!(gg > 0) || !std::isfinite(s.value)) return false;
+    const Vec3 move = (s.value / gg) * s.gradient;
+    x = box.clamp(x - move);
+    if (!(norm(x - p) <= range)) return false;
+    if (norm(move) <= 1e-4 * cell) return true;
+  }
+  return false;
+}
+
+// correct_to_isosurface(); with `nearest` (the signed-distance field), a free
+// vertex whose gradient line has no root within range starts again from the
+// nearest point of the distance field's zero set.
 CorrectionStatistics correct_with(const WrapLevelMesh& mesh, const TrilinearGrid& field, const Box& box, double cell,
-                                  double iso, double max_move_cells, std::vector<Vec3>& positions) {
+                                  double iso, double max_move_cells, std::vector<Vec3>& positions,
+                                  const TrilinearGrid* nearest = nullptr) {
   assert(positions.size() >= mesh.vertex_count);
   const double range = max_move_cells * cell;
   const std::vector<CorrectionPartial> partials = for_blocks<CorrectionPartial>(
@@ -756,10 +797,15 @@ CorrectionStatistics correct_with(const WrapLevelMesh& mesh, const TrilinearGrid
           if (mesh.role[v] == WrapRole::Fixed) continue;
           ++partial.movable;
           const Vec3 p = positions[v];
-          Vec3 target;
+          Vec3 target, start;
           if (!project_onto_isosurface(mesh, box, field, cell, iso, range, v, p, target)) {
-            ++partial.failed;
-            continue;
+            if (!nearest || mesh.role[v] != WrapRole::Free || mesh.box_face[v] >= 0 ||
+                !nearest_zero(*nearest, box, cell, range, p, start) ||
+                !project_onto_isosurface(mesh, box, field, cell, iso, range, v, start, target)) {
+              ++partial.failed;
+              continue;
+            }
+            ++partial.nearest;
           }
           positions[v] = target;
           ++partial.corrected;
@@ -774,6 +820,7 @@ CorrectionStatistics correct_with(const WrapLevelMesh& mesh, const TrilinearGrid
     stats.movable += partial.movable;
     stats.corrected += partial.corrected;
     stats.failed += partial.failed;
+    stats.from_nearest_point += partial.nearest;
     sum += partial.move_sum;
     stats.max_move_cells = std::max(stats.max_move_cells, partial.move_max);
   }
@@ -924,6 +971,156 @@ UntangleStatistics untangle(const WrapLevelMesh& mesh, const Volume& field, doub
                        positions, moved);
 }
 
+namespace {
+
+// Closed components of the base mesh with few vertices (see
+// ShrinkWrapOptions::small_component_vertices): droplets a few cells across
+// or less, on which a tetrahedron's valence-3 corners give vertex normals
+// that point anywhere but at the surface.
+struct SmallComponents {
+  std::vector<std::vector<std::uint32_t>> base_faces;  // per component
+  std::vector<double> inside_sign;                     // sign of field - iso inside
+  std::vector<std::vector<std::uint32_t>> vertices;    // on the current level, ascending
+
+  bool empty() const { return base_faces.empty(); }
+
+  // Vertices of level `level`: the corners of the faces descending from the
+  // components' base faces (on level l >= 1 base face f owns faces
+  // [offset(f), offset(f + 1)) * 4^(l-1)).
+  void set_level(const SubdivisionHierarchy& hierarchy, int level, const WrapLevelMesh& mesh) {
+    const PolygonMesh& base = hierarchy.base();
+    vertices.assign(base_faces.size(), {});
+    for (std::size_t c = 0; c < base_faces.size(); ++c) {
+      std::vector<std::uint32_t>& list = vertices[c];
+      for (const std::uint32_t f : base_faces[c]) {
+        std::size_t first = f, last = std::size_t{f} + 1;
+        if (level >= 1) {
+          first = std::size_t{base.face_offsets[f]} << (2 * (level - 1));
+          last = std::size_t{base.face_offsets[f + 1]} << (2 * (level - 1));
+        }
+        for (std::size_t g = first; g < last; ++g)
+          for (std::uint32_t k = mesh.face_offsets[g]; k < mesh.face_offsets[g + 1]; ++k)
+            list.push_back(mesh.face_vertices[k]);
+      }
+      std::sort(list.begin(), list.end());
+      list.erase(std::unique(list.begin(), list.end()), list.end());
+    }
+  }
+};
+
+// The closed components of the base (no box-held, boundary or sharp vertex)
+// with at most max_vertices vertices, all within max_radius of their
+// centroid, and a nonzero signed volume.
+SmallComponents find_small_components(const SubdivisionHierarchy& hierarchy, const WrapLevelMesh& mesh,
+                                      const std::vector<Vec3>& positions, std::size_t max_vertices,
+                                      double max_radius, bool flip) {
+  const PolygonMesh& base = hierarchy.base();
+  const std::size_t n = base.vertex_count();
+  std::vector<std::uint32_t> parent(n);
+  std::iota(parent.begin(), parent.end(), 0u);
+  const auto find = [&](std::uint32_t x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  };
+  for (std::size_t f = 0; f < base.face_count(); ++f)
+    for (std::uint32_t k = 1; k < base.face_size(f); ++k) parent[find(base.face_begin(f)[k])] = find(base.face_begin(f)[0]);
+  std::vector<std::uint32_t> size(n, 0);
+  std::vector<std::uint8_t> open(n, 0);
+  std::vector<Vec3> centroid(n);
+  for (std::uint32_t v = 0; v < n; ++v) {
+    const std::uint32_t r = find(v);
+    ++size[r];
+    centroid[r] += positions[v];
+    if (mesh.role[v] != WrapRole::Free || mesh.box_face[v] >= 0 || mesh.boundary_neighbours[2 * std::size_t{v}] != kNone)
+      open[r] = 1;
+  }
+  std::vector<double> radius(n, 0.0);
+  for (std::uint32_t v = 0; v < n; ++v) {
+    const std::uint32_t r = find(v);
+    radius[r] = std::max(radius[r], norm(positions[v] - centroid[r] * (1.0 / double(size[r]))));
+  }
+  std::vector<double> volume(n, 0.0);
+  std::vector<std::int32_t> index(n, -1);
+  SmallComponents small;
+  for (std::size_t f = 0; f < base.face_count(); ++f) {
+    const std::uint32_t r = find(base.face_begin(f)[0]);
+    if (open[r] || size[r] > max_vertices || !(radius[r] <= max_radius)) continue;
+    if (index[r] < 0) {
+      index[r] = static_cast<std::int32_t>(small.base_faces.size());
+      small.base_faces.emplace_back();
+    }
+    small.base_faces[static_cast<std::size_t>(index[r])].push_back(static_cast<std::uint32_t>(f));
+    const std::uint32_t* face = base.face_begin(f);
+    const std::uint32_t count = base.face_size(f);
+    const Vec3 c = centroid[r] * (1.0 / double(size[r]));
+    Vec3 newell, middle;
+    for (std::uint32_t k = 0; k < count; ++k) {
+      newell += cross(positions[face[k]] - c, positions[face[k + 1 == count ? 0 : k + 1]] - c);
+      middle += positions[face[k]] - c;
+    }
+    volume[r] += dot(newell, middle) / (6.0 * double(count));
+  }
+  small.inside_sign.assign(small.base_faces.size(), 0.0);
+  for (std::uint32_t r = 0; r < n; ++r)
+    if (index[r] >= 0 && volume[r] != 0)  // outward faces (positive volume) have the lower values outside
+      small.inside_sign[static_cast<std::size_t>(index[r])] = (volume[r] > 0) != flip ? 1.0 : -1.0;
+  return small;
+}
+
+// Attraction (and correction) of the small components' free vertices along
+// the ray from their component's centroid (of `source`) through the vertex
+// (in `source`) to the first crossing of the trilinear field's isosurface,
+// written to `target`. A component whose centroid is not inside, and a vertex
+// without a crossing within max(3 times the component's radius, 0.02 cells),
+// are left as they are in `target`.
+void fit_small_components(const WrapLevelMesh& mesh, const SmallComponents& small, const TrilinearGrid& field,
+                          const Box& box, double cell, double iso, const std::vector<Vec3>& source,
+                          std::vector<Vec3>& target) {
+  // Samples along each ray, then bisection steps (to 2^-30 of the search
+  // length): the components are tiny, but a large volume has thousands.
+  constexpr int kSamples = 32, kBisections = 30;
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, small.vertices.size(), 1), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t c = r.begin(); c < r.end(); ++c) {
+      const std::vector<std::uint32_t>& list = small.vertices[c];
+      if (list.empty() || small.inside_sign[c] == 0) continue;
+      Vec3 centre;
+      for (const std::uint32_t v : list) centre += source[v];
+      centre *= 1.0 / double(list.size());
+      double radius = 0;
+      for (const std::uint32_t v : list) radius = std::max(radius, norm(source[v] - centre));
+      const double sign = small.inside_sign[c];
+      const auto inside = [&](const Vec3& x) { return sign * (field.sample(x).value - iso) > 0; };
+      if (!is_finite(centre) || !inside(centre)) continue;
+      const double limit = std::max(3.0 * radius, 0.02 * cell);
+      for (const std::uint32_t v : list) {
+        if (mesh.role[v] != WrapRole::Free) continue;
+        const Vec3 offset = source[v] - centre;
+        const double length = norm(offset);
+        if (!(length > 0)) continue;
+        const Vec3 u = offset * (1.0 / length);
+        double a = 0, b = -1;
+        for (int i = 1; i <= kSamples; ++i) {
+          const double t = limit * double(i) / kSamples;
+          if (!inside(centre + t * u)) {
+            b = t;
+            break;
+          }
+          a = t;
+        }
+        if (b < 0) continue;
+        for (int i = 0; i < kBisections; ++i) {
+          const double m = 0.5 * (a + b);
+          (inside(centre + m * u) ? a : b) = m;
+        }
+        const Vec3 x = place(mesh, box, v, centre + (0.5 * (a + b)) * u);
+        if (is_finite(x)) target[v] = x;
+      }
+    }
+  });
+}
+
+}  // namespace
+
 ShrinkWrapResult shrink_wrap(const SubdivisionHierarchy& hierarchy, const std::vector<Vec3>& base_positions,
                              const SignedDistanceField& distance, const Volume& field,
                              const ShrinkWrapOptions& options, ProgressSink& progress) {
@@ -951,6 +1148,8 @@ ShrinkWrapResult shrink_wrap(const SubdivisionHierarchy& hierarchy, const std::v
     throw Error(ErrorKind::InvalidArgument, "attraction reach must be positive and finite");
   if (!(options.correction_max_cells > 0) || !std::isfinite(options.correction_max_cells))
     throw Error(ErrorKind::InvalidArgument, "correction distance must be positive and finite");
+  if (!(options.small_component_cells >= 0) || !std::isfinite(options.small_component_cells))
+    throw Error(ErrorKind::InvalidArgument, "small component size must be non-negative and finite");
 
   progress.begin_stage("shrink-wrap");
   ShrinkWrapResult result;
@@ -966,6 +1165,11 @@ ShrinkWrapResult shrink_wrap(const SubdivisionHierarchy& hierarchy, const std::v
   reserve_on_huge_pages(face_normals, levels > 0 ? std::size_t{hierarchy.step(levels).face_offsets.back()} : 0);
   WrapLevelMesh mesh;
   reserve_finest_wrap_level_mesh(hierarchy, mesh);
+  SmallComponents small;
+  std::vector<std::uint8_t> tangent_only;
+  const TrilinearGrid scalar_grid(field);
+  const Box box(field);
+  const double cell = field.cell_size();
   double work_done = 0, work_total = 0;
   for (int level = 0; level <= levels; ++level) work_total += double(hierarchy.vertex_count(level));
 
@@ -992,15 +1196,29 @@ ShrinkWrapResult shrink_wrap(const SubdivisionHierarchy& hierarchy, const std::v
       stats.boundary_vertices += counts.boundary;
       stats.fixed_vertices += counts.fixed;
     }
+    if (options.small_component_vertices > 0) {
+      if (level == 0)
+        small = find_small_components(hierarchy, mesh, data, options.small_component_vertices,
+                                      options.small_component_cells * cell, distance.flip);
+      if (!small.empty()) small.set_level(hierarchy, level, mesh);
+    }
     stats.seconds_setup = seconds_since(start);
     const int rounds = level < levels ? options.iterations : options.final_level_iterations;
+    // The small components relax within their tangent planes (levels < L).
+    const bool tangential = !small.empty() && level < levels;
+    if (tangential) {
+      tangent_only.assign(mesh.vertex_count, 0);
+      for (const std::vector<std::uint32_t>& list : small.vertices)
+        for (const std::uint32_t v : list) tangent_only[v] = 1;
+    }
     scratch.resize(mesh.vertex_count);
     for (int round = 0; round < rounds; ++round) {
       auto phase = Clock::now();
-      relax(mesh, field, options.relaxation_weight, data, scratch);
+      relax_with(mesh, field, options.relaxation_weight, data, scratch, tangential ? tangent_only.data() : nullptr);
       stats.seconds_relaxation += seconds_since(phase);
       phase = Clock::now();
       stats.last_attraction = attract_with(mesh, distance, options.attraction, scratch, data, face_normals);
+      if (!small.empty()) fit_small_components(mesh, small, scalar_grid, box, cell, distance.iso, scratch, data);
       stats.seconds_attraction += seconds_since(phase);
     }
     if (level == levels && (options.final_correction || options.untangle_rounds > 0)) {
@@ -1011,11 +1229,14 @@ ShrinkWrapResult shrink_wrap(const SubdivisionHierarchy& hierarchy, const std::v
       reserve_fresh_on_huge_pages(field_values, field.values.size());
       field_values.assign(field.values.begin(), field.values.end());
       const TrilinearGrid field_grid(field, field_values.data());
-      const Box box(field);
-      const double cell = field.cell_size();
+      const TrilinearGrid distance_grid(distance.distance);
       if (options.final_correction) {
+        for (const std::vector<std::uint32_t>& list : small.vertices)
+          for (const std::uint32_t v : list) scratch[v] = data[v];
         result.correction =
-            correct_with(mesh, field_grid, box, cell, distance.iso, options.correction_max_cells, data);
+            correct_with(mesh, field_grid, box, cell, distance.iso, options.correction_max_cells, data,
+                         options.correction_from_nearest_point ? &distance_grid : nullptr);
+        if (!small.empty()) fit_small_components(mesh, small, field_grid, box, cell, distance.iso, scratch, data);
         stats.seconds_correction = seconds_since(phase);
       }
       phase = Clock::now();

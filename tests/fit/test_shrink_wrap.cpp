@@ -81,9 +81,10 @@ TEST(ShrinkWrap, ViscousFingersMeetsTheTargets) {
 }
 
 // The built-in mixing layer has droplets and filaments a few cells across,
-// finer than a base mesh of 1/16 of the extracted vertices can follow: the
-// issue's targets are not met there (see the fit report), but the fit stays
-// finite, on the isosurface where the correction reaches, and on the box.
+// finer than a base mesh of 1/16 of the extracted vertices can follow. The
+// coverage target is met; the tangles (0.8% against 0.1%, on thin sheets) and
+// the distance to the isosurface (RMS 0.0125 against 0.01 cells, mostly free
+// vertices pressed onto a box face) are not (see the fit report).
 TEST(ShrinkWrap, MixingStaysFiniteAndMostlyOnTheIsosurface) {
   const Pipeline p = prepare(make_builtin_field("mixing", 96), 0.0, 2400);
   const SubdivisionHierarchy hierarchy(p.base, 3);
@@ -94,7 +95,27 @@ TEST(ShrinkWrap, MixingStaysFiniteAndMostlyOnTheIsosurface) {
   const FitQuality q = measure_fit_quality(hierarchy, 3, result.positions, p.extracted, reference, p.field, p.iso, false);
   EXPECT_EQ(q.nonfinite_vertices, 0u);
   EXPECT_LE(q.surface_rms, 0.2);
-  EXPECT_LE(q.coverage_p99, 2.0);
+  // The droplets no longer fold (small_component_vertices): 0.79% tangled and
+  // coverage p99 0.36 cells (1.83% and 0.93 cells with the paper's steps).
+  EXPECT_LE(q.coverage_p99, 0.5);
+  EXPECT_LE(q.tangled_fraction, 0.01);
+  EXPECT_LE(q.isosurface_rms, 0.02);
+}
+
+TEST(ShrinkWrap, TetrahedronDropletDoesNotTurnInsideOut) {
+  // A sphere of radius 2.45 cells simplified to a tetrahedron: with the
+  // paper's steps every fine face ends up inside out (the relaxation shrinks
+  // the tetrahedron, the attraction along its corners' normals flattens it).
+  const Pipeline p = prepare(make_builtin_field("sphere", 8), 0.0, 4);
+  ASSERT_EQ(p.base.vertex_count(), 4u);
+  const SubdivisionHierarchy hierarchy(p.base, 3);
+  const ShrinkWrapResult result = shrink_wrap(hierarchy, p.base.positions, p.distance, p.field);
+  const SurfaceDistance reference(p.extracted);
+  const FitQuality q = measure_fit_quality(hierarchy, 3, result.positions, p.extracted, reference, p.field, p.iso, false);
+  EXPECT_EQ(q.tangled_faces, 0u);
+  EXPECT_LE(q.isosurface_rms, 0.01);
+  EXPECT_LE(q.coverage_p99, 0.5);
+  EXPECT_LE(q.surface_max, 0.5);
 }
 
 TEST(ShrinkWrap, ResultDoesNotDependOnThreadCount) {
