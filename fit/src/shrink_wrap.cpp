@@ -419,6 +419,23 @@ Vec3 vertex_normal(const WrapLevelMesh& mesh, const FaceNormals& face_normals, s
   return normalized(Vec3{x, y, z});
 }
 
+// Where the relaxation pulls vertex v: the centroid of its two neighbours
+// along its boundary curve for a vertex held on one, else of all its
+// neighbours; false for a vertex without neighbours.
+bool relaxation_centroid(const WrapLevelMesh& mesh, std::size_t v, const std::vector<Vec3>& positions, Vec3& centroid) {
+  const std::uint32_t b0 = mesh.boundary_neighbours[2 * v], b1 = mesh.boundary_neighbours[2 * v + 1];
+  if (mesh.role[v] == WrapRole::Boundary && b0 != kNone && b1 != kNone) {
+    centroid = 0.5 * (positions[b0] + positions[b1]);
+    return true;
+  }
+  const std::uint32_t begin = mesh.neighbour_offsets[v], end = mesh.neighbour_offsets[v + 1];
+  if (begin == end) return false;
+  centroid = Vec3{};
+  for (std::uint32_t k = begin; k < end; ++k) centroid += positions[mesh.neighbours[k]];
+  centroid *= 1.0 / double(end - begin);
+  return true;
+}
+
 // relax() with, optionally, a flag per vertex: a flagged free vertex moves
 // only within the plane normal to its vertex normal (the normal part of the
 // move, which on a coarse closed mesh is mostly a shrink, is left to the
@@ -431,20 +448,10 @@ void relax_with(const WrapLevelMesh& mesh, const Volume& box_volume, double weig
   for_vertices(mesh.vertex_count, [&](std::size_t v) {
     const Vec3& p = in[v];
     out[v] = p;
-    if (mesh.role[v] == WrapRole::Fixed) return;
     Vec3 centroid;
-    const std::uint32_t b0 = mesh.boundary_neighbours[2 * v], b1 = mesh.boundary_neighbours[2 * v + 1];
-    const bool on_boundary = mesh.role[v] == WrapRole::Boundary && b0 != kNone && b1 != kNone;
-    if (on_boundary) {
-      centroid = 0.5 * (in[b0] + in[b1]);
-    } else {
-      const std::uint32_t begin = mesh.neighbour_offsets[v], end = mesh.neighbour_offsets[v + 1];
-      if (begin == end) return;
-      for (std::uint32_t k = begin; k < end; ++k) centroid += in[mesh.neighbours[k]];
-      centroid *= 1.0 / double(end - begin);
-    }
+    if (mesh.role[v] == WrapRole::Fixed || !relaxation_centroid(mesh, v, in, centroid)) return;
     Vec3 relaxed = (1.0 - weight) * p + weight * centroid;
-    if (tangent_only && tangent_only[v] && !on_boundary && mesh.role[v] == WrapRole::Free) {
+    if (tangent_only && tangent_only[v] && mesh.role[v] == WrapRole::Free) {
       // The unit average of the normals of its faces (as in the attraction).
       Vec3 sum;
       for (std::uint32_t k = mesh.vertex_face_offsets[v]; k < mesh.vertex_face_offsets[v + 1]; ++k) {
@@ -900,17 +907,8 @@ UntangleStatistics untangle_with(const WrapLevelMesh& mesh, const TrilinearGrid&
       if (i + kPrefetchDistance < count) field.prefetch_at(field.grid_point(positions[list[i + kPrefetchDistance]]));
       const std::size_t v = list[i];
       moved[i] = positions[v];
-      if (mesh.role[v] == WrapRole::Fixed) return;
       Vec3 centroid;
-      const std::uint32_t b0 = mesh.boundary_neighbours[2 * v], b1 = mesh.boundary_neighbours[2 * v + 1];
-      if (mesh.role[v] == WrapRole::Boundary && b0 != kNone && b1 != kNone) {
-        centroid = 0.5 * (positions[b0] + positions[b1]);
-      } else {
-        const std::uint32_t begin = mesh.neighbour_offsets[v], end = mesh.neighbour_offsets[v + 1];
-        if (begin == end) return;
-        for (std::uint32_t k = begin; k < end; ++k) centroid += positions[mesh.neighbours[k]];
-        centroid *= 1.0 / double(end - begin);
-      }
+      if (mesh.role[v] == WrapRole::Fixed || !relaxation_centroid(mesh, v, positions, centroid)) return;
       const Vec3 smoothed = place(mesh, box, v, centroid);
       Vec3 target;
       if (project_onto_isosurface(mesh, box, field, cell, iso, range, v, smoothed, target)) moved[i] = target;
