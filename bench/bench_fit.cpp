@@ -11,7 +11,7 @@
 //                  [--levels L] [--threads T] [--band K] [--no-quality]
 //                  [--distance-only] [--iterations N] [--final-iterations N]
 //                  [--reach R] [--min-reach C] [--weight W] [--no-correction]
-//                  [--correction-cells C] [--untangle N] [--base FILE]
+//                  [--correction-cells C] [--untangle N] [--coarse-untangle N] [--base FILE]
 //                  [--write-base FILE] [--no-peer] [--repeat N] [--final-quality] [--rmse]
 //                  [--small-components N] [--no-nearest-correction]
 //   INPUT is a volume file or builtin:NAME[:N]; --base-vertices 0 simplifies
@@ -96,6 +96,7 @@ int main(int argc, char** argv) {
   std::string base_input, base_output;
   int repeat = 1;
   int untangle_rounds = ShrinkWrapOptions().untangle_rounds;
+  int coarse_untangle_rounds = ShrinkWrapOptions().coarse_untangle_rounds;
   std::size_t small_components = ShrinkWrapOptions().small_component_vertices;
   bool nearest_correction = ShrinkWrapOptions().correction_from_nearest_point;
   double weight = 0.5, correction_cells = ShrinkWrapOptions().correction_max_cells;
@@ -122,6 +123,7 @@ int main(int argc, char** argv) {
     else if (arg == "--weight") weight = std::stod(next());
     else if (arg == "--correction-cells") correction_cells = std::stod(next());
     else if (arg == "--untangle") untangle_rounds = std::stoi(next());
+    else if (arg == "--coarse-untangle") coarse_untangle_rounds = std::stoi(next());
     else if (arg == "--small-components") small_components = std::stoul(next());
     else if (arg == "--no-nearest-correction") nearest_correction = false;
     else if (arg == "--reach") reach = std::stod(next());
@@ -248,6 +250,7 @@ int main(int argc, char** argv) {
     wrap_options.relaxation_weight = weight;
     wrap_options.correction_max_cells = correction_cells;
     wrap_options.untangle_rounds = untangle_rounds;
+    wrap_options.coarse_untangle_rounds = coarse_untangle_rounds;
     wrap_options.small_component_vertices = small_components;
     wrap_options.correction_from_nearest_point = nearest_correction;
     ShrinkWrapResult wrapped;
@@ -271,9 +274,10 @@ int main(int argc, char** argv) {
                   s.last_attraction.attracted,
                   s.last_attraction.mean_move_cells, s.last_attraction.max_move_cells, s.last_attraction.out_of_reach,
                   s.last_attraction.no_direction);
-    std::printf("  correction: %zu corrected (mean %.4f, max %.3f cell; %zu from the nearest point), %zu failed\n",
+    std::printf("  correction: %zu corrected (mean %.4f, max %.3f cell; %zu from the nearest point, %zu along a box "
+                "face), %zu failed\n",
                 wrapped.correction.corrected, wrapped.correction.mean_move_cells, wrapped.correction.max_move_cells,
-                wrapped.correction.from_nearest_point, wrapped.correction.failed);
+                wrapped.correction.from_nearest_point, wrapped.correction.along_box_face, wrapped.correction.failed);
     std::printf("  untangle: %zu tangled faces before, %zu after %d rounds\n", wrapped.untangle.tangled_before,
                 wrapped.untangle.tangled_after, wrapped.untangle.rounds);
     {

@@ -680,11 +680,13 @@ AttractionStatistics attract(const WrapLevelMesh& mesh, const SignedDistanceFiel
 
 namespace {
 
-// Moves p along the field gradient (within the vertex's box face, if held)
-// to where the trilinear field equals iso, at most `range` away. False if
-// there is no gradient or no root within range.
+// Moves p along the field gradient (within the vertex's box face, if held;
+// with `parallel_axis` >= 0 normal to that axis) to where the trilinear field
+// equals iso, at most `range` away. False if there is no gradient or no root
+// within range.
 bool project_onto_isosurface(const WrapLevelMesh& mesh, const Box& box, const TrilinearGrid& field, double cell,
-                             double iso, double range, std::size_t v, const Vec3& p, Vec3& target) {
+                             double iso, double range, std::size_t v, const Vec3& p, Vec3& target,
+                             int parallel_axis = -1) {
   const Vec3 pg = field.grid_point(p);
   const TrilinearSample s = field.sample_at(pg);
   const double h0 = s.value - iso;
@@ -693,7 +695,9 @@ bool project_onto_isosurface(const WrapLevelMesh& mesh, const Box& box, const Tr
     target = p;
     return true;
   }
-  const Vec3 u = allowed_direction(mesh, v, s.gradient);
+  Vec3 u = s.gradient;
+  if (parallel_axis >= 0) set_axis(u, parallel_axis, 0.0);
+  u = allowed_direction(mesh, v, u);
   const double slope = dot(s.gradient, u);
   if (!(slope > 0)) return false;
   double t_low, t_high;
@@ -769,7 +773,7 @@ std::size_t find_tangled_faces(const WrapLevelMesh& mesh, const TrilinearGrid& f
 }
 
 struct CorrectionPartial {
-  std::size_t movable = 0, corrected = 0, failed = 0, nearest = 0;
+  std::size_t movable = 0, corrected = 0, failed = 0, nearest = 0, along_box = 0;
   double move_sum = 0, move_max = 0;
 };
 
@@ -789,9 +793,24 @@ bool nearest_zero(const TrilinearGrid& distance, const Box& box, double cell, do
   return false;
 }
 
+// The axis of the box face within one cell of p (the nearest), or -1.
+int near_box_axis(const Box& box, double cell, const Vec3& p) {
+  int axis = -1;
+  double nearest = cell;
+  for (int a = 0; a < 3; ++a)
+    for (const double plane : {box.low[a], box.high[a]})
+      if (std::abs(p[a] - plane) < nearest) {
+        nearest = std::abs(p[a] - plane);
+        axis = a;
+      }
+  return axis;
+}
+
 // correct_to_isosurface(); with `nearest` (the signed-distance field), a free
 // vertex whose gradient line has no root within range starts again from the
-// nearest point of the distance field's zero set.
+// nearest point of the distance field's zero set. A free vertex still without
+// a root searches within the plane parallel to the nearest box face within a
+// cell (see CorrectionStatistics::along_box_face).
 CorrectionStatistics correct_with(const WrapLevelMesh& mesh, const TrilinearGrid& field, const Box& box, double cell,
                                   double iso, double max_move_cells, std::vector<Vec3>& positions,
                                   const TrilinearGrid* nearest = nullptr) {
@@ -806,13 +825,18 @@ CorrectionStatistics correct_with(const WrapLevelMesh& mesh, const TrilinearGrid
           const Vec3 p = positions[v];
           Vec3 target, start;
           if (!project_onto_isosurface(mesh, box, field, cell, iso, range, v, p, target)) {
-            if (!nearest || mesh.role[v] != WrapRole::Free || mesh.box_face[v] >= 0 ||
-                !nearest_zero(*nearest, box, cell, range, p, start) ||
-                !project_onto_isosurface(mesh, box, field, cell, iso, range, v, start, target)) {
-              ++partial.failed;
-              continue;
+            const bool free = mesh.role[v] == WrapRole::Free && mesh.box_face[v] < 0;
+            if (free && nearest && nearest_zero(*nearest, box, cell, range, p, start) &&
+                project_onto_isosurface(mesh, box, field, cell, iso, range, v, start, target)) {
+              ++partial.nearest;
+            } else {
+              const int axis = free ? near_box_axis(box, cell, p) : -1;
+              if (axis < 0 || !project_onto_isosurface(mesh, box, field, cell, iso, range, v, p, target, axis)) {
+                ++partial.failed;
+                continue;
+              }
+              ++partial.along_box;
             }
-            ++partial.nearest;
           }
           positions[v] = target;
           ++partial.corrected;
@@ -828,6 +852,7 @@ CorrectionStatistics correct_with(const WrapLevelMesh& mesh, const TrilinearGrid
     stats.corrected += partial.corrected;
     stats.failed += partial.failed;
     stats.from_nearest_point += partial.nearest;
+    stats.along_box_face += partial.along_box;
     sum += partial.move_sum;
     stats.max_move_cells = std::max(stats.max_move_cells, partial.move_max);
   }
@@ -869,7 +894,10 @@ void clear_flags(HugePageVector<std::uint8_t>& flags, std::size_t n) {
 // on lists of the selected vertices (about a third of the level on miranda)
 // rather than on whole-level passes: the new positions are computed into
 // `moved` and swapped into place, and only the faces around them are
-// checked again; a dropped round swaps the old positions back.
+// checked again; a vertex around which that check finds more tangled faces
+// than before goes back, and a dropped round swaps the old positions back.
+// face_state per face: bit 0 a moved corner, bit 1 tangled before the round,
+// bit 2 a corner that went back.
 UntangleStatistics untangle_with(const WrapLevelMesh& mesh, const TrilinearGrid& field, const Box& box, double cell,
                                  double iso, bool flip, int rounds, double max_move_cells,
                                  std::vector<Vec3>& positions, std::vector<Vec3>& moved) {
@@ -925,18 +953,41 @@ UntangleStatistics untangle_with(const WrapLevelMesh& mesh, const TrilinearGrid&
     });
     // Only faces with a moved corner can change. `tangled` takes their new
     // flags at once: a dropped round ends the repair, so it is not read again.
+    for_blocks<char>(faces, [&](std::size_t first, std::size_t last, char&) {
+      for (std::size_t f = first; f < last; ++f) {
+        if (f + kPrefetchDistance < last && face_state[f + kPrefetchDistance])
+          prefetch_face(mesh, field, positions, f + kPrefetchDistance);
+        if (!face_state[f]) continue;
+        face_state[f] = static_cast<std::uint8_t>(1 | (tangled[f] << 1));
+        tangled[f] = face_tangled(mesh, field, expected_sign, positions, f);
+      }
+    });
+    // A vertex with more tangled faces around it than before goes back (its
+    // old position is in `moved`, which keeps it for a dropped round).
+    for_vertices(count, [&](std::size_t i) {
+      const std::size_t v = list[i];
+      if (positions[v] == moved[i]) return;
+      int before = 0, after = 0;
+      for (std::uint32_t k = mesh.vertex_face_offsets[v]; k < mesh.vertex_face_offsets[v + 1]; ++k) {
+        const std::uint32_t f = mesh.vertex_faces[k];
+        before += __atomic_load_n(&face_state[f], __ATOMIC_RELAXED) >> 1 & 1;
+        after += tangled[f];
+      }
+      if (after <= before) return;
+      positions[v] = moved[i];
+      for (std::uint32_t k = mesh.vertex_face_offsets[v]; k < mesh.vertex_face_offsets[v + 1]; ++k)
+        __atomic_fetch_or(&face_state[mesh.vertex_faces[k]], std::uint8_t{4}, __ATOMIC_RELAXED);
+    });
     struct Change {
       std::size_t was = 0, now = 0;  // tangled faces among the checked ones, before and after
     };
     const std::vector<Change> changes = for_blocks<Change>(faces, [&](std::size_t first, std::size_t last, Change& change) {
       for (std::size_t f = first; f < last; ++f) {
-        if (f + kPrefetchDistance < last && face_state[f + kPrefetchDistance])
-          prefetch_face(mesh, field, positions, f + kPrefetchDistance);
-        if (!face_state[f]) continue;
-        const std::uint8_t now = face_tangled(mesh, field, expected_sign, positions, f);
-        change.was += tangled[f];
-        change.now += now;
-        tangled[f] = now;
+        const std::uint8_t state = face_state[f];
+        if (!state) continue;
+        if (state & 4) tangled[f] = face_tangled(mesh, field, expected_sign, positions, f);
+        change.was += state >> 1 & 1;
+        change.now += tangled[f];
       }
     });
     Change total;
@@ -1139,7 +1190,8 @@ ShrinkWrapResult shrink_wrap(const SubdivisionHierarchy& hierarchy, const std::v
   if (options.iterations < 0 || options.iterations > 100 || options.final_level_iterations < 0 ||
       options.final_level_iterations > 100)
     throw Error(ErrorKind::InvalidArgument, "shrink-wrap iterations must be in 0..100");
-  if (options.untangle_rounds < 0 || options.untangle_rounds > 100)
+  if (options.untangle_rounds < 0 || options.untangle_rounds > 100 || options.coarse_untangle_rounds < 0 ||
+      options.coarse_untangle_rounds > 100)
     throw Error(ErrorKind::InvalidArgument, "untangle rounds must be in 0..100");
   if (!(options.relaxation_weight > 0 && options.relaxation_weight <= 1))
     throw Error(ErrorKind::InvalidArgument, "relaxation weight must be in (0, 1]");
@@ -1245,6 +1297,14 @@ ShrinkWrapResult shrink_wrap(const SubdivisionHierarchy& hierarchy, const std::v
                                         options.untangle_rounds, options.correction_max_cells, data, scratch);
         stats.seconds_untangle = seconds_since(phase);
       }
+    }
+    if (level < levels && options.coarse_untangle_rounds > 0) {
+      // Against the distance field, whose gradient the vertex normals agree
+      // with (hence flip, iso 0); scratch is free after the rounds.
+      const auto phase = Clock::now();
+      untangle_with(mesh, TrilinearGrid(distance.distance), box, cell, 0.0, true, options.coarse_untangle_rounds,
+                    options.correction_max_cells, data, scratch);
+      stats.seconds_untangle = seconds_since(phase);
     }
     if (options.keep_levels && level < levels)
       result.level_positions.emplace_back(data.begin(), data.begin() + static_cast<std::ptrdiff_t>(mesh.vertex_count));

@@ -32,17 +32,6 @@ using test::fraction_toward_lower;
 
 constexpr double kPi = 3.14159265358979323846;
 
-Volume make_volume(std::array<std::size_t, 3> dims, const std::function<double(double, double, double)>& value) {
-  Volume volume;
-  volume.dims = dims;
-  volume.values.resize(volume.sample_count());
-  for (std::size_t k = 0; k < dims[2]; ++k)
-    for (std::size_t j = 0; j < dims[1]; ++j)
-      for (std::size_t i = 0; i < dims[0]; ++i)
-        volume.values[volume.index(i, j, k)] = static_cast<float>(value(double(i), double(j), double(k)));
-  return volume;
-}
-
 Volume random_volume(std::array<std::size_t, 3> dims, std::uint32_t seed, int levels) {
   std::mt19937 rng(seed);
   std::uniform_int_distribution<int> level(0, levels - 1);
@@ -89,7 +78,7 @@ TEST(Isosurface, TorusAndGenus3HaveTheirGenus) {
 TEST(Isosurface, SphereCutByTheBoxHasItsBoundaryOnTheBox) {
   // A sphere centred near a corner of an anisotropic, shifted grid: cut by
   // three box faces, its boundary curves meet at box edges.
-  Volume volume = make_volume({40, 36, 33}, [](double i, double j, double k) {
+  Volume volume = test::sampled_volume({40, 36, 33}, [](double i, double j, double k) {
     return 20.0 - std::sqrt((i - 30) * (i - 30) + (j - 28) * (j - 28) + (k - 26) * (k - 26));
   });
   volume.spacing = {0.5, 1.25, 2.0};
@@ -165,10 +154,10 @@ TEST(Isosurface, AdversarialFieldsGiveOrientedManifolds) {
   // Checkerboard: every face ambiguous with a saddle exactly at the isovalue.
   cases.push_back(
       {"checkerboard",
-       make_volume({12, 12, 12}, [](double i, double j, double k) { return (int(i + j + k) % 2) ? 1.0 : -1.0; }), 0.0});
+       test::sampled_volume({12, 12, 12}, [](double i, double j, double k) { return (int(i + j + k) % 2) ? 1.0 : -1.0; }), 0.0});
   // Plateaus exactly at the isovalue next to both sides.
   cases.push_back({"terraces",
-                   make_volume({30, 30, 30},
+                   test::sampled_volume({30, 30, 30},
                                [](double i, double j, double k) {
                                  return std::round(std::sin(i * 0.4) + std::cos(j * 0.3) + std::sin(k * 0.5 + i * 0.1));
                                }),
@@ -300,7 +289,7 @@ TEST(Isosurface, SmoothingKeepsASphereAndRemovesNoiseComponents) {
   // A sphere drowned in sample noise: many small components until smoothed.
   std::mt19937 rng(5);
   std::uniform_real_distribution<double> noise(-4, 4);
-  const Volume noisy = make_volume({64, 64, 64}, [&](double i, double j, double k) {
+  const Volume noisy = test::sampled_volume({64, 64, 64}, [&](double i, double j, double k) {
     return 20 - std::sqrt((i - 31.5) * (i - 31.5) + (j - 31.5) * (j - 31.5) + (k - 31.5) * (k - 31.5)) + noise(rng);
   });
   const Isosurface raw = extract_isosurface(noisy, {});

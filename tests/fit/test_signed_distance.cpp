@@ -116,17 +116,10 @@ TEST(SignedDistance, SignFollowsFlip) {
 
 TEST(SignedDistance, DroppedComponentsLeaveNoZeroCrossing) {
   // Two spheres; extraction keeps only the large one.
-  Volume field;
-  field.dims = {48, 48, 48};
-  field.values.resize(field.sample_count());
-  for (std::size_t k = 0; k < 48; ++k)
-    for (std::size_t j = 0; j < 48; ++j)
-      for (std::size_t i = 0; i < 48; ++i) {
-        const Vec3 p{double(i), double(j), double(k)};
-        const double big = 12 - norm(p - Vec3{18, 24, 24});
-        const double small = 3 - norm(p - Vec3{38, 24, 24});
-        field.values[field.index(i, j, k)] = static_cast<float>(std::max(big, small));
-      }
+  const Volume field = test::sampled_volume({48, 48, 48}, [](double x, double y, double z) {
+    const Vec3 p{x, y, z};
+    return std::max(12 - norm(p - Vec3{18, 24, 24}), 3 - norm(p - Vec3{38, 24, 24}));
+  });
   IsosurfaceOptions extract_options;
   extract_options.min_component_vertices = 200;
   const Isosurface surface = extract_isosurface(field, extract_options);

@@ -72,7 +72,9 @@ void expect_valid_base_mesh(const PolygonMesh& input, const SimplifyResult& resu
   std::size_t outside = 0;
   for (std::size_t v = 0; v < base.vertex_count(); ++v)
     if (valence[v] < (boundary[v] ? 2 : 3) || valence[v] > 8) ++outside;
-  if (input_valences_in_range) EXPECT_EQ(outside, 0u);
+  if (input_valences_in_range) {
+    EXPECT_EQ(outside, 0u);
+  }
   EXPECT_EQ(outside, result.report.vertices_outside_valence_range);
   EXPECT_EQ(base.vertex_count(), result.report.output_vertices);
   EXPECT_EQ(base.face_count(), result.report.output_faces);
@@ -405,7 +407,7 @@ void run_isosurface(const Volume& volume, double iso, const std::string& name, d
 }
 
 TEST(SimplifyIsosurfaces, BuiltinFields) {
-  for (const std::string& name : {"sphere", "torus", "genus3", "marschner-lobb"})
+  for (const char* name : {"sphere", "torus", "genus3", "marschner-lobb"})
     run_isosurface(make_builtin_field(name, 48), 0.0, "builtin " + name, 0.05);
 }
 

@@ -158,6 +158,17 @@ void jitter(PolygonMesh& mesh, double amount, std::uint32_t seed) {
   for (Vec3& p : mesh.positions) p += Vec3{offset(rng), offset(rng), offset(rng)};
 }
 
+Volume sampled_volume(std::array<std::size_t, 3> dims, const std::function<double(double, double, double)>& value) {
+  Volume volume;
+  volume.dims = dims;
+  volume.values.resize(volume.sample_count());
+  for (std::size_t k = 0; k < dims[2]; ++k)
+    for (std::size_t j = 0; j < dims[1]; ++j)
+      for (std::size_t i = 0; i < dims[0]; ++i)
+        volume.values[volume.index(i, j, k)] = static_cast<float>(value(double(i), double(j), double(k)));
+  return volume;
+}
+
 std::string shared_data_dir() {
   const std::string dir = ISOWAVE_SHARED_DATA_DIR;
   std::ifstream probe(dir + "/README.md");

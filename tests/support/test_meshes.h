@@ -1,12 +1,16 @@
 #pragma once
 // Generated meshes for tests (always available) and access to the shared real
 // data in ../shared/data (tests that need it skip when it is absent).
+#include <array>
+#include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <random>
 #include <string>
 #include <vector>
 
 #include "isowave/core/mesh.h"
+#include "isowave/core/volume.h"
 
 namespace isowave::test {
 
@@ -32,6 +36,9 @@ std::vector<NamedMesh> generated_corpus();
 void jitter(PolygonMesh& mesh, double amount, std::uint32_t seed);
 
 // ../shared/data relative to the repository, or "" if absent.
+// A volume of unit spacing at the origin whose sample (i, j, k) is value(i, j, k).
+Volume sampled_volume(std::array<std::size_t, 3> dims, const std::function<double(double, double, double)>& value);
+
 std::string shared_data_dir();
 // Full path of a file under shared/data, or "" if absent.
 std::string shared_data_file(const std::string& relative);

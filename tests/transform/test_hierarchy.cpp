@@ -112,7 +112,9 @@ TEST(Hierarchy, ControlMeshTakingThePositionsEqualsTheCopyingOne) {
         EXPECT_EQ(taken.face_vertices, copied.face_vertices);
         EXPECT_EQ(taken.sharp, copied.sharp);
         ASSERT_EQ(copied.vertex_count(), hierarchy.vertex_count(level));
-        if (level > 0) EXPECT_EQ(copied.face_count(), hierarchy.step(level).face_offsets.back());
+        if (level > 0) {
+          EXPECT_EQ(copied.face_count(), hierarchy.step(level).face_offsets.back());
+        }
       }
   }
 }
