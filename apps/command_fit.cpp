@@ -146,9 +146,13 @@ int fit(const Args& raw) {
     std::printf("  level %d: %zu vertices, last attraction %zu attracted, %zu out of reach\n", s.level, s.vertices,
                 s.last_attraction.attracted, s.last_attraction.out_of_reach);
   if (wrap_options.final_correction)
-    std::printf("  correction: %zu vertices onto the isosurface (mean %.4f, max %.4f cell), %zu left in place\n",
+    std::printf("  correction: %zu vertices onto the isosurface (mean %.4f, max %.4f cell; %zu from the nearest zero "
+                "of the distance field, %zu along a box face), %zu left in place\n",
                 result.correction.corrected, result.correction.mean_move_cells, result.correction.max_move_cells,
-                result.correction.failed);
+                result.correction.from_nearest_point, result.correction.along_box_face, result.correction.failed);
+  if (result.untangle.tangled_before > 0)
+    std::printf("  untangle: %zu tangled faces on level %d before, %zu after %d rounds\n", result.untangle.tangled_before,
+                levels, result.untangle.tangled_after, result.untangle.rounds);
   if (report) {
     std::printf("quality:\n");
     const SurfaceDistance reference(surface.mesh);
