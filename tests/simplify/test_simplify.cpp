@@ -408,7 +408,7 @@ void run_isosurface(const Volume& volume, double iso, const std::string& name, d
 
 TEST(SimplifyIsosurfaces, BuiltinFields) {
   for (const char* name : {"sphere", "torus", "genus3", "marschner-lobb"})
-    run_isosurface(make_builtin_field(name, 48), 0.0, "builtin " + name, 0.05);
+    run_isosurface(make_builtin_field(name, 48), 0.0, std::string("builtin ") + name, 0.05);
 }
 
 TEST(SimplifyIsosurfaces, ParallelPhaseKeepsTheRulesAndDoesNotDependOnTiming) {
