@@ -2,11 +2,13 @@
 // progressive truncation, stable re-encoding, statistics that match an
 // independent recomputation, and hostile bytes (every truncation point,
 // random corruption) that never crash or over-allocate.
+#include <cmath>
 #include <cstring>
 #include <random>
 
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
+#include <zlib.h>
 
 #include "codec_test_data.h"
 #include "isowave/codec/importance.h"
@@ -356,6 +358,78 @@ TEST(IswFormat, HostileHeadersAreRejectedBeforeAllocating) {
   const std::uint64_t huge = 1ull << 62;
   std::memcpy(bad.data() + 16 + 4, &huge, 8);
   EXPECT_THROW(decode_isw(bad, "x.isw"), Error);
+}
+
+// CRC-32 of a section's tag followed by `data`, as docs/FORMAT.md defines it.
+std::uint32_t section_crc(const std::string& tag, const std::string& data) {
+  uLong crc = crc32(0L, Z_NULL, 0);
+  crc = crc32(crc, reinterpret_cast<const Bytef*>(tag.data()), 4);
+  crc = crc32(crc, reinterpret_cast<const Bytef*>(data.data()), static_cast<uInt>(data.size()));
+  return static_cast<std::uint32_t>(crc);
+}
+
+// `bytes` with the payload of section `tag` replaced (sizes and CRCs made
+// consistent): tag, u64 size, u32 CRC of tag + size, payload, u32 CRC of tag + payload.
+std::string with_section_payload(const std::string& bytes, const std::string& tag, const std::string& payload) {
+  constexpr std::size_t kFileHeader = 16, kSectionHeader = 16;
+  std::string out = bytes.substr(0, kFileHeader);
+  for (std::size_t position = kFileHeader; position < bytes.size();) {
+    std::uint64_t size = 0;
+    std::memcpy(&size, bytes.data() + position + 4, 8);
+    const std::size_t end = position + kSectionHeader + static_cast<std::size_t>(size) + 4;
+    if (bytes.compare(position, 4, tag) != 0) {
+      out += bytes.substr(position, end - position);
+    } else {
+      std::string size_bytes(8, '\0');
+      const std::uint64_t new_size = payload.size();
+      std::memcpy(size_bytes.data(), &new_size, 8);
+      const std::uint32_t header_crc = section_crc(tag, size_bytes), payload_crc = section_crc(tag, payload);
+      out += tag + size_bytes + std::string(reinterpret_cast<const char*>(&header_crc), 4) + payload +
+             std::string(reinterpret_cast<const char*>(&payload_crc), 4);
+    }
+    position = end;
+  }
+  return out;
+}
+
+TEST(IswFormat, BaseMeshTheHierarchyCannotRefineIsAFormatErrorNamingTheSection) {
+  // A disk of 65,536 triangles around vertex 0: a hierarchy of 0 levels takes
+  // it, but refinement stores a vertex's faces in 16 bits. The encoder cannot
+  // write such a file with levels (it builds the hierarchy first), so the
+  // 0-level file's QUAN section is made to claim one level, with valid CRCs.
+  constexpr std::uint32_t kRing = 65536;
+  PolygonMesh fan;
+  fan.positions.push_back({0, 0, 0});
+  for (std::uint32_t i = 0; i < kRing; ++i) {
+    const double angle = 2 * 3.14159265358979323846 * i / kRing;
+    fan.positions.push_back({std::cos(angle), std::sin(angle), 0});
+  }
+  for (std::uint32_t i = 0; i < kRing; ++i) fan.add_face({0u, 1 + i, 1 + (i + 1) % kRing});
+  IswEncodeOptions options;
+  options.step = 1e-3;
+  const std::string level0 = encode_isw(fan, 0, fan.positions, sample_metadata(), options);
+  ASSERT_EQ(decode_isw(level0, "fan.isw").base.face_count(), kRing);
+  std::string quan;  // step, levels, classes, per-class weights, coefficient count, chunk count
+  const double weights[3] = {1, 1, 1};
+  const std::uint32_t levels = 1, classes = 3, chunks = 0;
+  const std::uint64_t coefficients = 0;
+  quan.append(reinterpret_cast<const char*>(&options.step), 8);
+  quan.append(reinterpret_cast<const char*>(&levels), 4);
+  quan.append(reinterpret_cast<const char*>(&classes), 4);
+  quan.append(reinterpret_cast<const char*>(weights), sizeof weights);
+  quan.append(reinterpret_cast<const char*>(&coefficients), 8);
+  quan.append(reinterpret_cast<const char*>(&chunks), 4);
+  const std::string level1 = with_section_payload(level0, "QUAN", quan);
+  try {
+    decode_isw(level1, "fan.isw");
+    ADD_FAILURE() << "decoded a base mesh that cannot be refined";
+  } catch (const Error& error) {
+    EXPECT_EQ(error.kind(), ErrorKind::Format);
+    const std::string message = error.what();
+    EXPECT_NE(message.find("fan.isw"), std::string::npos) << message;
+    EXPECT_NE(message.find("BASE"), std::string::npos) << message;
+    EXPECT_NE(message.find("65535"), std::string::npos) << message;
+  }
 }
 
 }  // namespace
