@@ -3,11 +3,10 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
-#include <cstring>
 #include <future>
-#include <stdexcept>
 #include <memory>
 #include <sstream>
+#include <stdexcept>
 
 #include <tbb/task_arena.h>
 

@@ -13,6 +13,7 @@
 
 #include "isowave/core/error.h"
 #include "isowave/core/huge_page_vector.h"
+#include "isowave/core/mesh_topology.h"
 #include "isowave/fit/trilinear.h"
 #include "isowave/transform/wavelet_transform.h"
 #include "root_search.h"
@@ -1064,35 +1065,32 @@ SmallComponents find_small_components(const SubdivisionHierarchy& hierarchy, con
                                       const std::vector<Vec3>& positions, std::size_t max_vertices,
                                       double max_radius, bool flip) {
   const PolygonMesh& base = hierarchy.base();
-  const std::size_t n = base.vertex_count();
-  std::vector<std::uint32_t> parent(n);
-  std::iota(parent.begin(), parent.end(), 0u);
-  const auto find = [&](std::uint32_t x) {
-    while (parent[x] != x) x = parent[x] = parent[parent[x]];
-    return x;
-  };
+  std::size_t n = 0;
+  const std::vector<std::uint32_t> face_component = face_components(base, &n);
+  std::vector<std::uint32_t> component(base.vertex_count(), kNone);  // per vertex; kNone if in no face
   for (std::size_t f = 0; f < base.face_count(); ++f)
-    for (std::uint32_t k = 1; k < base.face_size(f); ++k) parent[find(base.face_begin(f)[k])] = find(base.face_begin(f)[0]);
+    for (std::uint32_t k = 0; k < base.face_size(f); ++k) component[base.face_begin(f)[k]] = face_component[f];
   std::vector<std::uint32_t> size(n, 0);
   std::vector<std::uint8_t> open(n, 0);
   std::vector<Vec3> centroid(n);
-  for (std::uint32_t v = 0; v < n; ++v) {
-    const std::uint32_t r = find(v);
+  for (std::uint32_t v = 0; v < base.vertex_count(); ++v) {
+    const std::uint32_t r = component[v];
+    if (r == kNone) continue;
     ++size[r];
     centroid[r] += positions[v];
     if (mesh.role[v] != WrapRole::Free || mesh.box_face[v] >= 0 || mesh.boundary_neighbours[2 * std::size_t{v}] != kNone)
       open[r] = 1;
   }
   std::vector<double> radius(n, 0.0);
-  for (std::uint32_t v = 0; v < n; ++v) {
-    const std::uint32_t r = find(v);
-    radius[r] = std::max(radius[r], norm(positions[v] - centroid[r] * (1.0 / double(size[r]))));
+  for (std::uint32_t v = 0; v < base.vertex_count(); ++v) {
+    const std::uint32_t r = component[v];
+    if (r != kNone) radius[r] = std::max(radius[r], norm(positions[v] - centroid[r] * (1.0 / double(size[r]))));
   }
   std::vector<double> volume(n, 0.0);
   std::vector<std::int32_t> index(n, -1);
   SmallComponents small;
   for (std::size_t f = 0; f < base.face_count(); ++f) {
-    const std::uint32_t r = find(base.face_begin(f)[0]);
+    const std::uint32_t r = face_component[f];
     if (open[r] || size[r] > max_vertices || !(radius[r] <= max_radius)) continue;
     if (index[r] < 0) {
       index[r] = static_cast<std::int32_t>(small.base_faces.size());
