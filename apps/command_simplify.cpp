@@ -15,7 +15,7 @@ namespace isowave::commands {
 int simplify(const Args& raw) {
   const cli::CommandSpec spec{
       "simplify",
-      "MESH (--target-vertices N | --ratio R) [--no-edge-removal] [--normal-threshold D] [--no-flips] [--flip-threshold D] -o BASE.ply|BASE.obj",
+      "MESH (--target-vertices N | --ratio R) [--no-edge-removal] [--normal-threshold D] [--no-flips] [--flip-threshold D] [--eager-stencil] -o BASE.ply|BASE.obj",
       "Builds a base mesh from a 2-manifold triangle mesh (Bertram et al. 2000, Sec. 4.1): edge collapses in\n"
       "bucket-priority order keep genus, components and boundary loops and valences 3..8 (2..8 on the\n"
       "boundary); then edges are removed to form quads and pentagons. Unreferenced vertices are dropped\n"
@@ -25,6 +25,7 @@ int simplify(const Args& raw) {
        {"ratio", true, "target as a fraction of the input vertex count, in (0, 1]", "R"},
        {"no-edge-removal", false, "keep the triangles of the collapse phase", ""},
        {"no-flips", false, "the paper's collapse rules only: no valence-lowering edge flips when they stall", ""},
+       {"eager-stencil", false, "re-evaluate every edge of a collapse's stencil at once, as the paper does (slower)", ""},
        {"flip-threshold", true, "a flip needs the old and new triangles' unit normals to have dot >= D, in [-1, 1] (default 0.7)", "D"},
        {"normal-threshold", true, "edge removal needs unit face normals with dot >= D, in [-1, 1] (default 0.5)",
         "D"},
@@ -48,6 +49,7 @@ int simplify(const Args& raw) {
   const int target = args.get_int("target-vertices", 0, 0, std::numeric_limits<int>::max());
   options.edge_removal = !args.has("no-edge-removal");
   options.valence_flips = !args.has("no-flips");
+  options.lazy_stencil = !args.has("eager-stencil");
   options.flip_min_normal_dot = args.get_double("flip-threshold", options.flip_min_normal_dot);
   if (!(options.flip_min_normal_dot >= -1 && options.flip_min_normal_dot <= 1))
     throw Error(ErrorKind::InvalidArgument, "--flip-threshold must be in [-1, 1], got " + args.get("flip-threshold"));

@@ -5,7 +5,7 @@
 //   bench_simplify [--volume PATH] [--iso X] [--min-component-vertices N]
 //                  [--target-vertices N] [--skip-cgal] [--compare-openmesh]
 //                  [--mesh PATH] [--save-mesh PATH] [--skip-distance]
-//                  [--no-edge-removal] [--serial]
+//                  [--no-edge-removal] [--serial] [--eager-stencil]
 //
 // Prints the isowave report, peak memory during simplify() in bytes per input
 // vertex (Linux VmHWM, reset before the call), CGAL's time and the ratio.
@@ -15,7 +15,8 @@
 // --mesh reads a triangle mesh instead of extracting one; --save-mesh writes
 // the extracted one (to repeat runs without the extraction). --skip-distance
 // leaves out the second, untimed simplify() that measures the surface distance.
-// --serial turns off the two-thread collapse phase (SimplifyOptions::parallel).
+// --serial turns off the two-thread collapse phase (SimplifyOptions::parallel);
+// --eager-stencil re-evaluates whole stencils (SimplifyOptions::lazy_stencil).
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -186,7 +187,7 @@ int main(int argc, char** argv) {
   std::string volume_path = std::string(ISOWAVE_SHARED_DATA_DIR) + "/volumes/miranda_256x256x256.nrrd";
   double iso = 1.5;
   std::size_t min_component_vertices = 0, target_vertices = 0;
-  bool run_cgal = true, openmesh = false, distance = true, edge_removal = true, parallel = true;
+  bool run_cgal = true, openmesh = false, distance = true, edge_removal = true, parallel = true, lazy_stencil = true;
   std::string mesh_path, save_path;
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
@@ -205,6 +206,7 @@ int main(int argc, char** argv) {
     else if (arg == "--skip-distance") distance = false;
     else if (arg == "--no-edge-removal") edge_removal = false;
     else if (arg == "--serial") parallel = false;
+    else if (arg == "--eager-stencil") lazy_stencil = false;
     else if (arg == "--mesh") mesh_path = value();
     else if (arg == "--save-mesh") save_path = value();
     else if (arg == "--compare-openmesh") openmesh = true;
@@ -245,6 +247,7 @@ int main(int argc, char** argv) {
     options.compute_distance = false;  // timed separately below
     options.edge_removal = edge_removal;
     options.parallel = parallel;
+    options.lazy_stencil = lazy_stencil;
     reset_peak();
     const double peak_before = peak_bytes();
     start = Clock::now();

@@ -322,33 +322,44 @@ Evaluation CollapseMesh::evaluate(std::uint32_t e, FanCache& cache) const {
   return evaluate(e, cache, rules_.max_valence);
 }
 
-Evaluation CollapseMesh::evaluate(std::uint32_t e, FanCache& cache, int max_valence) const {
-  assert(max_valence + 8 <= kMaxRing);
-  Evaluation result;
+Legality CollapseMesh::vertex_rules(std::uint32_t e, int max_valence) const {
   const std::uint32_t h = edges_[e].halfedge;
-  if (h == kNone) return result;
+  if (h == kNone) return Legality::DeadEdge;
   const std::uint32_t o = corners_[h].opposite;
   const bool boundary_edge = o == kNone;
   const std::uint32_t vi = corners_[h].vertex, vj = corners_[next(h)].vertex, a = corners_[prev(h)].vertex;
-  const std::uint32_t b = boundary_edge ? kNone : corners_[prev(o)].vertex;
-
-  const auto fail = [&](Legality why) {
-    result.legality = why;
-    return result;
-  };
-  if (is_sharp(vi) && is_sharp(vj)) return fail(Legality::BothEndpointsSharp);
+  if (is_sharp(vi) && is_sharp(vj)) return Legality::BothEndpointsSharp;
   const bool boundary_i = is_boundary(vi), boundary_j = is_boundary(vj);
-  if (!boundary_edge && boundary_i && boundary_j) return fail(Legality::InteriorEdgeOnBoundary);
-  if (boundary_edge && loop_size_[vertices_[vi].boundary_loop] <= 3) return fail(Legality::BoundaryLoopMinimum);
+  if (!boundary_edge && boundary_i && boundary_j) return Legality::InteriorEdgeOnBoundary;
+  if (boundary_edge && loop_size_[vertices_[vi].boundary_loop] <= 3) return Legality::BoundaryLoopMinimum;
 
   // Paper: the new vertex has valence N_i + N_j - 4 (a boundary edge has one
   // shared neighbour fewer: - 3); a and b lose one.
   const bool new_boundary = boundary_i || boundary_j;
   const int new_valence = int(vertices_[vi].valence) + int(vertices_[vj].valence) - (boundary_edge ? 3 : 4);
-  if (new_valence > max_valence || new_valence < (new_boundary ? 2 : 3))
-    return fail(Legality::NewVertexValence);
-  if (int(vertices_[a].valence) - 1 < (is_boundary(a) ? 2 : 3)) return fail(Legality::OppositeVertexValence);
-  if (!boundary_edge && int(vertices_[b].valence) - 1 < (is_boundary(b) ? 2 : 3)) return fail(Legality::OppositeVertexValence);
+  if (new_valence > max_valence || new_valence < (new_boundary ? 2 : 3)) return Legality::NewVertexValence;
+  if (int(vertices_[a].valence) - 1 < (is_boundary(a) ? 2 : 3)) return Legality::OppositeVertexValence;
+  if (!boundary_edge) {
+    const std::uint32_t b = corners_[prev(o)].vertex;
+    if (int(vertices_[b].valence) - 1 < (is_boundary(b) ? 2 : 3)) return Legality::OppositeVertexValence;
+  }
+  return Legality::Legal;
+}
+
+Evaluation CollapseMesh::evaluate(std::uint32_t e, FanCache& cache, int max_valence) const {
+  assert(max_valence + 8 <= kMaxRing);
+  Evaluation result;
+  const auto fail = [&](Legality why) {
+    result.legality = why;
+    return result;
+  };
+  if (const Legality rules = vertex_rules(e, max_valence); rules != Legality::Legal) return fail(rules);
+  const std::uint32_t h = edges_[e].halfedge;
+  const std::uint32_t o = corners_[h].opposite;
+  const bool boundary_edge = o == kNone;
+  const std::uint32_t vi = corners_[h].vertex, vj = corners_[next(h)].vertex, a = corners_[prev(h)].vertex;
+  const std::uint32_t b = boundary_edge ? kNone : corners_[prev(o)].vertex;
+  const bool boundary_i = is_boundary(vi), boundary_j = is_boundary(vj);
 
   // Fans of both endpoints (the valence test bounds their size). Indices
   // first: gathering the second fan may reallocate the cache.

@@ -182,6 +182,11 @@ class CollapseMesh {
   // instead of the rules' (a and b are still checked): the priority an edge
   // would have once flips have lowered its endpoints' valences.
   Evaluation evaluate(std::uint32_t e, FanCache& cache, int max_valence) const;
+  // The rules evaluate() checks first, which read only the endpoints' and
+  // opposite vertices' records (sharp, boundary, loop size, valences): Legal
+  // when they pass. They change only when a collapse or flip touches those
+  // vertices, and so the edge's Fig. 8 stencil. O(1).
+  Legality vertex_rules(std::uint32_t e, int max_valence) const;
 
   // Edge flips (not in the paper; they let the collapse go on where the
   // valence rule alone stalls it, see simplify.h). Edge e = (v_i, v_j) between
