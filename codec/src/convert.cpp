@@ -30,10 +30,7 @@ std::string number(double v) {
   return s.str();
 }
 
-LevelCounts counts_of(const PolygonMesh& base) {
-  return {double(base.vertex_count()), double(base.face_count()), double(summarize_topology(base).edges),
-          double(base.face_vertices.size())};
-}
+LevelCounts counts_of(const PolygonMesh& base) { return level_counts(base, summarize_topology(base).edges); }
 
 }  // namespace
 

@@ -533,9 +533,7 @@ namespace {
 // count make, from the counts alone (see CoefficientClasses). Above 2^53 the
 // counts are inexact (hostile files); the caller rejects such sizes.
 CoefficientClasses classes_from_counts(const PolygonMesh& base, std::size_t base_edges, int levels) {
-  const std::vector<LevelCounts> counts = refinement_counts(
-      {double(base.vertex_count()), double(base.face_count()), double(base_edges), double(base.face_vertices.size())},
-      levels);
+  const std::vector<LevelCounts> counts = refinement_counts(level_counts(base, base_edges), levels);
   const auto exact = [](double v) { return v < 9e15 ? static_cast<std::size_t>(v) : std::size_t{1} << 53; };
   std::array<std::size_t, SubdivisionHierarchy::kMaxLevels + 1> vertex_counts{};
   std::array<std::size_t, SubdivisionHierarchy::kMaxLevels> parent_faces{};

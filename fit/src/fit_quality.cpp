@@ -111,18 +111,13 @@ FitQuality measure_fit_quality(const SubdivisionHierarchy& hierarchy, int level,
   for (std::uint8_t t : tangled) q.tangled_faces += t;
   q.tangled_fraction = q.faces ? double(q.tangled_faces) / double(q.faces) : 0.0;
 
-  // Patch of every face: level-1 faces are numbered by base corner, finer
-  // levels by 4 per parent face.
+  // Patch (base face) of every face.
   const PolygonMesh& base = hierarchy.base();
   std::vector<std::uint32_t> patch(q.faces);
-  for (std::size_t f = 0; f < q.faces; ++f) {
-    if (level == 0) {
-      patch[f] = static_cast<std::uint32_t>(f);
-      continue;
-    }
-    const std::size_t corner = f >> (2 * (level - 1));
-    const auto it = std::upper_bound(base.face_offsets.begin(), base.face_offsets.end(), static_cast<std::uint32_t>(corner));
-    patch[f] = static_cast<std::uint32_t>(it - base.face_offsets.begin() - 1);
+  for (std::size_t b = 0; b < base.face_count(); ++b) {
+    const auto [first, last] = hierarchy.descendant_faces(b, level);
+    std::fill(patch.begin() + static_cast<std::ptrdiff_t>(first), patch.begin() + static_cast<std::ptrdiff_t>(last),
+              static_cast<std::uint32_t>(b));
   }
   std::vector<double> patch_area(base.face_count(), 0.0);
   std::vector<std::uint32_t> patch_faces(base.face_count(), 0);

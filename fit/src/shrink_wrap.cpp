@@ -1035,19 +1035,13 @@ struct SmallComponents {
   bool empty() const { return base_faces.empty(); }
 
   // Vertices of level `level`: the corners of the faces descending from the
-  // components' base faces (on level l >= 1 base face f owns faces
-  // [offset(f), offset(f + 1)) * 4^(l-1)).
+  // components' base faces.
   void set_level(const SubdivisionHierarchy& hierarchy, int level, const WrapLevelMesh& mesh) {
-    const PolygonMesh& base = hierarchy.base();
     vertices.assign(base_faces.size(), {});
     for (std::size_t c = 0; c < base_faces.size(); ++c) {
       std::vector<std::uint32_t>& list = vertices[c];
       for (const std::uint32_t f : base_faces[c]) {
-        std::size_t first = f, last = std::size_t{f} + 1;
-        if (level >= 1) {
-          first = std::size_t{base.face_offsets[f]} << (2 * (level - 1));
-          last = std::size_t{base.face_offsets[f + 1]} << (2 * (level - 1));
-        }
+        const auto [first, last] = hierarchy.descendant_faces(f, level);
         for (std::size_t g = first; g < last; ++g)
           for (std::uint32_t k = mesh.face_offsets[g]; k < mesh.face_offsets[g + 1]; ++k)
             list.push_back(mesh.face_vertices[k]);

@@ -139,19 +139,21 @@ void requeue(BucketQueue& queue, CollapseMesh& mesh, std::uint32_t s, const Eval
   queue.push(s, bucket);
 }
 
-// The lazy stencil update (SimplifyOptions::lazy_stencil) of stencil edge s,
-// which does not touch the new vertex: a queued edge keeps its place; one
-// outside the queue comes back at its last priority if the vertex rules
-// admit it (the rest are evaluated when popped).
-void requeue_lazily(BucketQueue& queue, const CollapseMesh& mesh, std::uint32_t s, std::uint32_t bucket_count,
-                    int max_valence) {
+// The update of stencil edge s after a collapse made vertex v. Eager (the
+// paper): evaluate and requeue. Lazy (SimplifyOptions::lazy_stencil): only
+// an edge at v is evaluated; another keeps its place in the queue, or, if
+// it is not queued, comes back at its last priority when the vertex rules
+// admit it (it is evaluated when popped).
+template <typename Evaluate>
+void update_stencil_edge(BucketQueue& queue, CollapseMesh& mesh, std::uint32_t s, std::uint32_t v, bool lazy,
+                         const Evaluate& evaluate, std::uint32_t bucket_count, int max_valence) {
+  const std::uint32_t h = mesh.edge_halfedge(s);
+  if (!lazy || mesh.origin(h) == v || mesh.target(h) == v) {
+    requeue(queue, mesh, s, evaluate(s), bucket_count);
+    return;
+  }
   if (queue.contains(s) || mesh.vertex_rules(s, max_valence) != Legality::Legal) return;
   queue.push(s, priority_bucket(mesh.error(s), bucket_count));
-}
-
-bool edge_touches(const CollapseMesh& mesh, std::uint32_t e, std::uint32_t v) {
-  const std::uint32_t h = mesh.edge_halfedge(e);
-  return mesh.origin(h) == v || mesh.target(h) == v;
 }
 
 // Parallel phase of the collapse (SimplifyOptions::parallel). The vertices
@@ -251,13 +253,12 @@ void collapse_in_parallel(CollapseMesh& mesh, const std::vector<std::uint32_t>& 
       const std::uint32_t centres[3] = {v, opposite_vertices[0], opposite_vertices[1]};
       stencil.clear();
       mesh.gather_stencil(centres, 3, stencil, lane);
+      const auto evaluate = [&](std::uint32_t s) { return mesh.evaluate(s, cache); };
       for (std::uint32_t s : stencil) {
-        if (!inside(s))
-          requeue(queue, mesh, s, Evaluation{}, bucket_count);
-        else if (!options.lazy_stencil || edge_touches(mesh, s, v))
-          requeue(queue, mesh, s, mesh.evaluate(s, cache), bucket_count);
+        if (inside(s))
+          update_stencil_edge(queue, mesh, s, v, options.lazy_stencil, evaluate, bucket_count, options.max_valence);
         else
-          requeue_lazily(queue, mesh, s, bucket_count, options.max_valence);
+          requeue(queue, mesh, s, Evaluation{}, bucket_count);
       }
     }
   };
@@ -478,12 +479,9 @@ SimplifyResult simplify(const PolygonMesh& input, const SimplifyOptions& options
       mesh.gather_stencil(centres.data(), static_cast<int>(centres.size()), stencil);
       // The flip round stays eager: with stale priorities it made 65% more
       // failed flip attempts (miranda) for no gain in time.
-      for (std::uint32_t s : stencil) {
-        if (!options.lazy_stencil || with_flips || edge_touches(mesh, s, v))
-          requeue(queue, mesh, s, evaluate_for_queue(s), bucket_count);
-        else
-          requeue_lazily(queue, mesh, s, bucket_count, options.max_valence);
-      }
+      for (std::uint32_t s : stencil)
+        update_stencil_edge(queue, mesh, s, v, options.lazy_stencil && !with_flips, evaluate_for_queue, bucket_count,
+                            options.max_valence);
       if (options.validate_every_collapse) {
         const std::string problem = mesh.validate();
         if (!problem.empty())

@@ -3,6 +3,9 @@
 // rejected with a clear error.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <vector>
+
 #include "isowave/core/error.h"
 #include "isowave/core/mesh_topology.h"
 #include "isowave/transform/hierarchy.h"
@@ -72,6 +75,36 @@ TEST(Hierarchy, IndexLevelsFollowTheCoarseToFineLayout) {
   // The f vertex of base face 0 at level 1 sits between the v and e ranges.
   EXPECT_EQ(hierarchy.step(1).first_face_vertex(), 8u);
   EXPECT_EQ(hierarchy.step(1).first_edge_vertex(), 14u);
+}
+
+// The faces descending from a base face tile the level in base-face order,
+// and the only base vertices they touch are that face's corners (base
+// vertices keep their indices on every level).
+TEST(Hierarchy, DescendantFacesOfABaseFaceFormItsPatch) {
+  const PolygonMesh base = test::mixed_disk();
+  const SubdivisionHierarchy hierarchy(base, 3);
+  for (int level = 0; level <= 3; ++level) {
+    const PolygonMesh mesh = hierarchy.control_mesh(level, std::vector<Vec3>(hierarchy.vertex_count(level)));
+    std::size_t next = 0;
+    for (std::size_t b = 0; b < base.face_count(); ++b) {
+      const auto [first, last] = hierarchy.descendant_faces(b, level);
+      ASSERT_EQ(first, next) << "level " << level << " base face " << b;
+      ASSERT_LT(first, last);
+      ASSERT_LE(last, mesh.face_count());
+      next = last;
+      const std::uint32_t* corners = base.face_begin(b);
+      std::vector<std::uint32_t> touched;
+      for (std::size_t g = first; g < last; ++g)
+        for (std::uint32_t k = 0; k < mesh.face_size(g); ++k)
+          if (mesh.face_begin(g)[k] < base.vertex_count()) touched.push_back(mesh.face_begin(g)[k]);
+      std::sort(touched.begin(), touched.end());
+      touched.erase(std::unique(touched.begin(), touched.end()), touched.end());
+      std::vector<std::uint32_t> expected(corners, corners + base.face_size(b));
+      std::sort(expected.begin(), expected.end());
+      EXPECT_EQ(touched, expected) << "level " << level << " base face " << b;
+    }
+    EXPECT_EQ(next, mesh.face_count()) << "level " << level;
+  }
 }
 
 TEST(Hierarchy, SharpFlagsAndRules) {

@@ -1,6 +1,7 @@
 #include "isowave/transform/hierarchy.h"
 
 #include <algorithm>
+#include <cassert>
 #include <utility>
 
 #include <tbb/blocked_range.h>
@@ -30,6 +31,17 @@ std::vector<LevelCounts> refinement_counts(const LevelCounts& base, int levels) 
                       4 * parent.corners});
   }
   return counts;
+}
+
+LevelCounts level_counts(const PolygonMesh& base, std::size_t edges) {
+  return {double(base.vertex_count()), double(base.face_count()), double(edges), double(base.face_vertices.size())};
+}
+
+std::pair<std::size_t, std::size_t> SubdivisionHierarchy::descendant_faces(std::size_t base_face, int level) const {
+  assert(base_face < base_.face_count() && level >= 0 && level <= levels());
+  if (level == 0) return {base_face, base_face + 1};
+  const int shift = 2 * (level - 1);
+  return {std::size_t{base_.face_offsets[base_face]} << shift, std::size_t{base_.face_offsets[base_face + 1]} << shift};
 }
 
 std::size_t RefinementStep::memory_bytes() const {

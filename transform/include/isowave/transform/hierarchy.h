@@ -21,6 +21,7 @@
 // endpoint skips rules 1 and 5. Children of sharp vertices stay sharp.
 #include <cstddef>
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 #include "isowave/core/mesh.h"
@@ -78,6 +79,9 @@ struct LevelCounts {
 // counts[0] = `base`, counts[l] after l refinements: V' = V + F + E,
 // F' = corners, E' = 2 E + corners, corners' = 4 F' (every child face a quad).
 std::vector<LevelCounts> refinement_counts(const LevelCounts& base, int levels);
+// The counts of a base mesh with `edges` edges (all the refinement needs of
+// its topology).
+LevelCounts level_counts(const PolygonMesh& base, std::size_t edges);
 
 class SubdivisionHierarchy {
  public:
@@ -96,6 +100,10 @@ class SubdivisionHierarchy {
   std::size_t fine_vertex_count() const { return vertex_counts_.back(); }
   // Level at which the vertex (or coefficient) with this index first appears.
   int level_of_index(std::size_t index) const;
+  // The faces of level `level` that descend from base face `base_face`: the
+  // range [first, second). Level-1 faces are numbered by base corner, each
+  // finer level by 4 per parent face, so every patch is contiguous.
+  std::pair<std::size_t, std::size_t> descendant_faces(std::size_t base_face, int level) const;
 
   // Refinement from level-1 to level, for level in [1, levels()].
   const RefinementStep& step(int level) const { return steps_[static_cast<std::size_t>(level - 1)]; }
