@@ -5,7 +5,7 @@
 //   bench_simplify [--volume PATH] [--iso X] [--min-component-vertices N]
 //                  [--target-vertices N] [--skip-cgal] [--compare-openmesh]
 //                  [--mesh PATH] [--save-mesh PATH] [--skip-distance]
-//                  [--no-edge-removal] [--serial] [--eager-stencil]
+//                  [--no-edge-removal] [--serial] [--eager-stencil] [--batch-factor F]
 //
 // Prints the isowave report, peak memory during simplify() in bytes per input
 // vertex (Linux VmHWM, reset before the call), CGAL's time and the ratio.
@@ -16,7 +16,8 @@
 // the extracted one (to repeat runs without the extraction). --skip-distance
 // leaves out the second, untimed simplify() that measures the surface distance.
 // --serial turns off the two-thread collapse phase (SimplifyOptions::parallel);
-// --eager-stencil re-evaluates whole stencils (SimplifyOptions::lazy_stencil).
+// --eager-stencil re-evaluates whole stencils (SimplifyOptions::lazy_stencil);
+// --batch-factor sets SimplifyOptions::batch_error_factor (1: the paper's order).
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -188,6 +189,7 @@ int main(int argc, char** argv) {
   double iso = 1.5;
   std::size_t min_component_vertices = 0, target_vertices = 0;
   bool run_cgal = true, openmesh = false, distance = true, edge_removal = true, parallel = true, lazy_stencil = true;
+  double batch_factor = isowave::simplify::SimplifyOptions{}.batch_error_factor;
   std::string mesh_path, save_path;
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
@@ -207,6 +209,7 @@ int main(int argc, char** argv) {
     else if (arg == "--no-edge-removal") edge_removal = false;
     else if (arg == "--serial") parallel = false;
     else if (arg == "--eager-stencil") lazy_stencil = false;
+    else if (arg == "--batch-factor") batch_factor = std::stod(value());
     else if (arg == "--mesh") mesh_path = value();
     else if (arg == "--save-mesh") save_path = value();
     else if (arg == "--compare-openmesh") openmesh = true;
@@ -248,6 +251,7 @@ int main(int argc, char** argv) {
     options.edge_removal = edge_removal;
     options.parallel = parallel;
     options.lazy_stencil = lazy_stencil;
+    options.batch_error_factor = batch_factor;
     reset_peak();
     const double peak_before = peak_bytes();
     start = Clock::now();

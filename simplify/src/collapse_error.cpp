@@ -1,6 +1,7 @@
 #include "isowave/simplify/collapse_error.h"
 
 #include <algorithm>
+#include <cassert>
 #include <cmath>
 #include <vector>
 
@@ -51,9 +52,12 @@ CollapseErrorTerms collapse_error_terms(const Vec3& d, const Vec3* cross_product
   return terms;
 }
 
+namespace {
+const double kLowest = std::log(1e-10);
+const double kRange = std::log(1e10) - std::log(1e-10);
+}  // namespace
+
 std::uint32_t priority_bucket(double error, std::uint32_t bucket_count) {
-  static const double kLowest = std::log(1e-10);
-  static const double kRange = std::log(1e10) - std::log(1e-10);
   if (!(error == error)) return 0;  // NaN: lowest priority
   if (error <= 0) return bucket_count - 1;
   const double priority = -std::log(error);  // log(1/E)
@@ -61,6 +65,12 @@ std::uint32_t priority_bucket(double error, std::uint32_t bucket_count) {
   if (!(position > 0)) return 0;
   if (position >= bucket_count) return bucket_count - 1;
   return static_cast<std::uint32_t>(position);
+}
+
+std::uint32_t priority_bucket_span(double error_factor, std::uint32_t bucket_count) {
+  assert(error_factor >= 1);
+  const double span = std::log(error_factor) / kRange * bucket_count;
+  return span >= bucket_count ? bucket_count : static_cast<std::uint32_t>(span);
 }
 
 }  // namespace isowave::simplify

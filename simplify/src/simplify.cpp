@@ -52,6 +52,8 @@ void check_options(const SimplifyOptions& options) {
   if (options.max_valence < 3 || options.max_valence > 32) fail("maximum valence must be in 3..32");
   if (options.bucket_count < 1) fail("bucket count must be at least 1");
   if (options.max_flip_rounds < 0) fail("flip rounds must not be negative");
+  if (!(options.batch_error_factor >= 1 && options.batch_error_factor <= 1e20))
+    fail("batch error factor must be in [1, 1e20]");
 }
 
 // Fewest vertices the rules allow for one component (see SimplifyReport).
@@ -156,6 +158,57 @@ void update_stencil_edge(BucketQueue& queue, CollapseMesh& mesh, std::uint32_t s
   queue.push(s, priority_bucket(mesh.error(s), bucket_count));
 }
 
+// Hands edges to a collapse loop (SimplifyOptions::batch_error_factor). With
+// a span of 0 buckets, one at a time in priority order, as the paper does.
+// Otherwise in batches: every queued edge within `span` buckets of the top
+// one, in edge order (the corner table numbers edges in the order of their
+// triangles, which follow the Morton order of the vertices: consecutive
+// edges are neighbours that share cache lines). A batch edge that a collapse deleted is skipped; one that went back
+// into the queue meanwhile is taken out again. O(log batch) per edge.
+class EdgePops {
+ public:
+  EdgePops(BucketQueue& queue, std::uint32_t span) : queue_(queue), span_(span) {}
+
+  // The next edge, out of the queue, and the bucket its re-evaluated priority
+  // must reach for it to collapse now (else it goes back); false when the
+  // queue and the batch are empty.
+  bool next(const CollapseMesh& mesh, std::uint32_t& e, std::uint32_t& least_bucket) {
+    if (span_ == 0) {
+      if (queue_.empty()) return false;
+      e = queue_.top();
+      least_bucket = queue_.bucket_of(e);
+      queue_.remove(e);
+      return true;
+    }
+    for (;;) {
+      while (next_ < batch_.size()) {
+        e = batch_[next_++];
+        if (!mesh.edge_alive(e)) continue;
+        if (queue_.contains(e)) queue_.remove(e);
+        least_bucket = threshold_;
+        return true;
+      }
+      if (queue_.empty()) return false;
+      batch_.clear();
+      next_ = 0;
+      const std::uint32_t top = queue_.bucket_of(queue_.top());
+      threshold_ = top > span_ ? top - span_ : 0;
+      while (!queue_.empty() && queue_.bucket_of(queue_.top()) >= threshold_) {
+        batch_.push_back(queue_.top());
+        queue_.remove(batch_.back());
+      }
+      std::sort(batch_.begin(), batch_.end());
+    }
+  }
+
+ private:
+  BucketQueue& queue_;
+  const std::uint32_t span_;
+  std::vector<std::uint32_t> batch_;
+  std::size_t next_ = 0;
+  std::uint32_t threshold_ = 0;
+};
+
 // Parallel phase of the collapse (SimplifyOptions::parallel). The vertices
 // (in Morton order, so each half is a compact part of space) are split in
 // two halves; the vertices within two edges of an edge joining the halves
@@ -209,6 +262,7 @@ void collapse_in_parallel(CollapseMesh& mesh, const std::vector<std::uint32_t>& 
   };
   LaneResult results[CollapseMesh::kLanes];
   const std::uint32_t bucket_count = options.bucket_count;
+  const std::uint32_t batch_span = priority_bucket_span(options.batch_error_factor, bucket_count);
   const auto run_lane = [&](int lane) {
     const auto id = static_cast<std::uint8_t>(lane);
     const auto inside = [&](std::uint32_t e) {
@@ -229,10 +283,9 @@ void collapse_in_parallel(CollapseMesh& mesh, const std::vector<std::uint32_t>& 
     LaneResult& result = results[lane];
     FanCache cache(lane);
     std::vector<std::uint32_t> stencil;
-    while (result.collapses < quota && !queue.empty()) {
-      const std::uint32_t e = queue.top();
-      const std::uint32_t queued_bucket = queue.bucket_of(e);
-      queue.remove(e);
+    EdgePops pops(queue, batch_span);
+    std::uint32_t e, least_bucket;
+    while (result.collapses < quota && pops.next(mesh, e, least_bucket)) {
       const Evaluation evaluation = mesh.evaluate(e, cache);
       if (evaluation.legality != Legality::Legal) {
         ++result.rejected[static_cast<int>(evaluation.legality)];
@@ -241,7 +294,7 @@ void collapse_in_parallel(CollapseMesh& mesh, const std::vector<std::uint32_t>& 
       if (!mesh.collapse_inside(e, id)) continue;  // left to the serial loop
       mesh.set_latest_delta_error(e, evaluation.delta_error);
       const std::uint32_t bucket = priority_bucket(mesh.error(e), bucket_count);
-      if (bucket < queued_bucket) {
+      if (bucket < least_bucket) {
         queue.push(e, bucket);
         continue;
       }
@@ -421,10 +474,9 @@ SimplifyResult simplify(const PolygonMesh& input, const SimplifyOptions& options
     flipped.clear();
   };
   const auto run_queue = [&] {
-    while (mesh.alive_vertices() > target && !queue.empty()) {
-      const std::uint32_t e = queue.top();
-      const std::uint32_t queued_bucket = queue.bucket_of(e);
-      queue.remove(e);
+    EdgePops pops(queue, 0);
+    std::uint32_t e, least_bucket;
+    while (mesh.alive_vertices() > target && pops.next(mesh, e, least_bucket)) {
       Evaluation evaluation = mesh.evaluate(e, cache);
       flipped.clear();
       if (with_flips && evaluation.legality == Legality::NewVertexValence) {
@@ -456,7 +508,7 @@ SimplifyResult simplify(const PolygonMesh& input, const SimplifyOptions& options
       }
       mesh.set_latest_delta_error(e, evaluation.delta_error);
       const std::uint32_t bucket = priority_bucket(mesh.error(e), bucket_count);
-      if (bucket < queued_bucket) {  // its neighbourhood changed outside the stencil
+      if (bucket < least_bucket) {  // its neighbourhood changed outside the stencil
         undo_flips();
         queue.push(e, bucket);
         continue;

@@ -98,6 +98,20 @@ TEST(PriorityBucket, SmallerErrorNeverGetsALowerPriority) {
   }
 }
 
+TEST(PriorityBucket, SpanOfAnErrorFactorIsTheBucketDistanceOfTwoErrorsThatFarApart) {
+  constexpr std::uint32_t kBuckets = 100000;
+  EXPECT_EQ(priority_bucket_span(1.0, kBuckets), 0u);
+  EXPECT_EQ(priority_bucket_span(1e20, kBuckets), kBuckets);  // the whole range
+  EXPECT_EQ(priority_bucket_span(1e30, kBuckets), kBuckets);
+  for (const double factor : {1.5, 10.0, 1000.0})
+    for (double e = 1e-8; e < 1e6; e *= 7.3) {
+      // Buckets are floors of a linear map of log(E): two errors a factor
+      // apart are the span's floor or ceiling apart (within rounding).
+      const double apart = double(priority_bucket(e, kBuckets)) - double(priority_bucket(e * factor, kBuckets));
+      EXPECT_NEAR(apart, double(priority_bucket_span(factor, kBuckets)), 1.0) << factor << " " << e;
+    }
+}
+
 // --- bucket queue ---
 
 TEST(BucketQueue, HighestBucketFirstAndFifoInsideABucket) {

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <map>
 #include <limits>
 #include <string>
@@ -353,6 +354,11 @@ TEST(SimplifyBadInput, OptionsOutOfRange) {
   options = {};
   options.max_flip_rounds = -1;
   EXPECT_EQ(error_kind_of(test::icosphere(1), options), ErrorKind::InvalidArgument);
+  options = {};
+  options.batch_error_factor = 0.5;
+  EXPECT_EQ(error_kind_of(test::icosphere(1), options), ErrorKind::InvalidArgument);
+  options.batch_error_factor = std::nan("");
+  EXPECT_EQ(error_kind_of(test::icosphere(1), options), ErrorKind::InvalidArgument);
 }
 
 TEST(SimplifyBadInput, DegenerateTrianglesAreAcceptedAndNoneIsCreated) {
@@ -463,6 +469,32 @@ TEST(SimplifyIsosurfaces, ParallelPhaseKeepsTheRulesAndDoesNotDependOnTiming) {
   const SimplifyResult serial = simplify(surface.mesh, options);
   EXPECT_EQ(serial.report.parallel_collapses, 0u);
   EXPECT_LE(double(parallel.base.vertex_count()), 1.05 * double(serial.base.vertex_count()));
+}
+
+// The two-thread phase collapses in batches of edges within a factor of ten
+// in error (SimplifyOptions::batch_error_factor); the base mesh stays about
+// as close to the input as one collapse at a time in priority order makes it.
+TEST(SimplifyIsosurfaces, BatchedParallelPhaseIsAsCloseToTheInputAsOneAtATime) {
+  double batched_sum = 0, one_at_a_time_sum = 0;
+  for (const char* name : {"mixing", "genus3", "marschner-lobb"}) {
+    IsosurfaceOptions extraction;
+    const Isosurface surface = extract_isosurface(make_builtin_field(name, 64), extraction);
+    SimplifyOptions options;
+    options.parallel_min_vertices = 0;
+    options.target_vertices = surface.mesh.vertex_count() / 10;
+    const SimplifyResult batched = simplify(surface.mesh, options);
+    options.batch_error_factor = 1;
+    const SimplifyResult one_at_a_time = simplify(surface.mesh, options);
+    ASSERT_GT(batched.report.parallel_collapses, 0u);
+    ASSERT_TRUE(batched.report.distance_computed && one_at_a_time.report.distance_computed);
+    EXPECT_NE(batched.base.positions, one_at_a_time.base.positions) << name << ": the order did not change";
+    EXPECT_LE(batched.report.distance_rms, 1.25 * one_at_a_time.report.distance_rms) << name;
+    batched_sum += batched.report.distance_rms;
+    one_at_a_time_sum += one_at_a_time.report.distance_rms;
+    std::printf("%s: distance RMS batched %.4f, one at a time %.4f\n", name, batched.report.distance_rms,
+                one_at_a_time.report.distance_rms);
+  }
+  EXPECT_LE(batched_sum, 1.1 * one_at_a_time_sum);
 }
 
 TEST(SimplifyIsosurfaces, HydrogenVolume) {

@@ -44,5 +44,8 @@ CollapseErrorTerms collapse_error_terms(const Vec3& d, const Vec3* cross_product
 // the lowest (E >= 1e10); values outside the range are clamped, E <= 0 or NaN
 // go to the highest and lowest bucket respectively. bucket_count >= 1.
 std::uint32_t priority_bucket(double error, std::uint32_t bucket_count);
+// The number of whole buckets spanned by errors within a factor
+// `error_factor` (>= 1) of each other: floor(log(error_factor) / bucket width).
+std::uint32_t priority_bucket_span(double error_factor, std::uint32_t bucket_count);
 
 }  // namespace isowave::simplify
