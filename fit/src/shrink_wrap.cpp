@@ -1030,6 +1030,7 @@ namespace {
 struct SmallComponents {
   std::vector<std::vector<std::uint32_t>> base_faces;  // per component
   std::vector<double> inside_sign;                     // sign of field - iso inside
+  std::vector<double> base_radius;                     // of the base vertices around their centroid
   std::vector<std::vector<std::uint32_t>> vertices;    // on the current level, ascending
 
   bool empty() const { return base_faces.empty(); }
@@ -1102,9 +1103,13 @@ SmallComponents find_small_components(const SubdivisionHierarchy& hierarchy, con
     volume[r] += dot(newell, middle) / (6.0 * double(count));
   }
   small.inside_sign.assign(small.base_faces.size(), 0.0);
-  for (std::uint32_t r = 0; r < n; ++r)
-    if (index[r] >= 0 && volume[r] != 0)  // outward faces (positive volume) have the lower values outside
+  small.base_radius.assign(small.base_faces.size(), 0.0);
+  for (std::uint32_t r = 0; r < n; ++r) {
+    if (index[r] < 0) continue;
+    small.base_radius[static_cast<std::size_t>(index[r])] = radius[r];
+    if (volume[r] != 0)  // outward faces (positive volume) have the lower values outside
       small.inside_sign[static_cast<std::size_t>(index[r])] = (volume[r] > 0) != flip ? 1.0 : -1.0;
+  }
   return small;
 }
 
@@ -1112,8 +1117,12 @@ SmallComponents find_small_components(const SubdivisionHierarchy& hierarchy, con
 // the ray from their component's centroid (of `source`) through the vertex
 // (in `source`) to the first crossing of the trilinear field's isosurface,
 // written to `target`. A component whose centroid is not inside, and a vertex
-// without a crossing within max(3 times the component's radius, 0.02 cells),
-// are left as they are in `target`.
+// without a crossing within max(3 times the base component's radius, 0.02
+// cells), are left as they are in `target`. The base radius, not the current
+// one: with the current one, a component that is no droplet (the inside
+// reaching far) let a vertex go three times as far as the farthest one, on
+// every round and level (miranda: vertices flung up to 167 cells, the base
+// row of Table 1 from 79% to 98% of a cell).
 void fit_small_components(const WrapLevelMesh& mesh, const SmallComponents& small, const TrilinearGrid& field,
                           const Box& box, double cell, double iso, const std::vector<Vec3>& source,
                           std::vector<Vec3>& target) {
@@ -1129,12 +1138,10 @@ void fit_small_components(const WrapLevelMesh& mesh, const SmallComponents& smal
       Vec3 centre;
       for (const std::uint32_t v : list) centre += source[v];
       centre *= 1.0 / double(list.size());
-      double radius = 0;
-      for (const std::uint32_t v : list) radius = std::max(radius, norm(source[v] - centre));
       const double sign = small.inside_sign[c];
       const auto inside = [&](const Vec3& x) { return sign * (field.sample(x).value - iso) > 0; };
       if (!is_finite(centre) || !inside(centre)) continue;
-      const double limit = std::max(3.0 * radius, 0.02 * cell);
+      const double limit = std::max(3.0 * small.base_radius[c], 0.02 * cell);
       for (const std::uint32_t v : list) {
         if (mesh.role[v] != WrapRole::Free) continue;
         const Vec3 offset = source[v] - centre;
