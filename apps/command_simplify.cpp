@@ -26,7 +26,7 @@ int simplify(const Args& raw) {
        {"no-edge-removal", false, "keep the triangles of the collapse phase", ""},
        {"no-flips", false, "the paper's collapse rules only: no valence-lowering edge flips when they stall", ""},
        {"eager-stencil", false, "re-evaluate every edge of a collapse's stencil at once, as the paper does (slower)", ""},
-       {"batch-factor", true, "two-thread phase (large meshes): collapse the edges whose errors lie within a factor F of the best one a batch at a time, in memory order (default 10, faster; 1: one at a time in priority order, as the paper does)", "F"},
+       {"batch-factor", true, "in the two-thread phase (large meshes) and the flip round, collapse the edges whose errors lie within a factor F of the best one a batch at a time, in memory order (default 10, faster; 1: one at a time in priority order, as the paper does)", "F"},
        {"flip-threshold", true, "a flip needs the old and new triangles' unit normals to have dot >= D, in [-1, 1] (default 0.7)", "D"},
        {"normal-threshold", true, "edge removal needs unit face normals with dot >= D, in [-1, 1] (default 0.5)",
         "D"},

@@ -95,19 +95,20 @@ struct SimplifyOptions {
   // 1.685 cells; fitted Table 1 rows 20/10/5% unchanged, base row 78.6 ->
   // 80.1% of a cell.
   bool lazy_stencil = true;
-  // Collapse order in the two-thread phase (see parallel). The paper pops one
-  // edge at a time in priority order (1). Batched (> 1): each thread takes
-  // every queued edge whose error is within this factor of its best queued
-  // one and collapses them in memory order (Morton order of the vertices, so
-  // consecutive collapses are neighbours and share cache lines); each is
-  // evaluated anyway and goes back if its priority fell below the batch. Not
-  // in the paper. The serial loop that follows, with the last and costliest
-  // collapses, keeps the paper's order (batched too, the miranda base mesh
-  // was 5% farther from the input). Miranda, full (2.33 M vertices):
-  // simplify 14.0 -> 11.1 s (two-thread phase 9.0 -> 6.5 s); with components
-  // under 50 vertices removed: base mesh distance RMS 1.685 -> 1.699 cells,
-  // fitted Table 1 rows 12.52 / 24.67 / 43.11 / 80.06 -> 12.47 / 24.61 /
-  // 42.93 / 78.63% of a cell. In [1, 1e20].
+  // Collapse order in the two-thread phase (see parallel) and the flip
+  // rounds. The paper pops one edge at a time in priority order (1). Batched
+  // (> 1): the loop takes every queued edge whose error is within this
+  // factor of the best queued one and collapses them in memory order (Morton
+  // order of the vertices, so consecutive collapses are neighbours and share
+  // cache lines); each is evaluated anyway and goes back if its priority fell
+  // below the batch. Not in the paper. The serial loop of the paper's rules
+  // between them, with the last and costliest plain collapses, keeps the
+  // paper's order (batched too, the miranda base mesh was 5% farther from the
+  // input). Miranda, full (2.33 M vertices): two-thread phase 9.0 -> 6.5 s;
+  // with components under 50 vertices removed: flip round 1.5 -> 1.2 s, base
+  // mesh distance RMS 1.685 -> 1.701 cells, fitted Table 1 rows 12.52 /
+  // 24.67 / 43.11 / 80.06 -> 12.47 / 24.61 / 42.93 / 78.63% of a cell. In
+  // [1, 1e20].
   double batch_error_factor = 10;
   // Collapse on two threads first, each inside one half of the mesh (see
   // collapse_in_parallel in simplify.cpp), then finish serially: about 1.6x
