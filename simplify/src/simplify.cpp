@@ -163,8 +163,9 @@ void update_stencil_edge(BucketQueue& queue, CollapseMesh& mesh, std::uint32_t s
 // Otherwise in batches: every queued edge within `span` buckets of the top
 // one, in edge order (the corner table numbers edges in the order of their
 // triangles, which follow the Morton order of the vertices: consecutive
-// edges are neighbours that share cache lines). A batch edge that a collapse deleted is skipped; one that went back
-// into the queue meanwhile is taken out again. O(log batch) per edge.
+// edges are neighbours that share cache lines). A batch edge that a collapse
+// deleted is skipped; one that went back into the queue meanwhile is taken
+// out again. O(log batch) per edge.
 class EdgePops {
  public:
   EdgePops(BucketQueue& queue, std::uint32_t span) : queue_(queue), span_(span) {}

@@ -106,9 +106,9 @@ struct SimplifyOptions {
   // paper's order (batched too, the miranda base mesh was 5% farther from the
   // input). Miranda, full (2.33 M vertices): two-thread phase 9.0 -> 6.5 s;
   // with components under 50 vertices removed: flip round 1.5 -> 1.2 s, base
-  // mesh distance RMS 1.685 -> 1.701 cells, fitted Table 1 rows 12.52 /
-  // 24.67 / 43.11 / 80.06 -> 12.47 / 24.61 / 42.93 / 78.63% of a cell. In
-  // [1, 1e20].
+  // mesh distance RMS 1.685 -> 1.701 cells, fitted Table 1 rows within 0.12%
+  // of a cell (12.47 / 24.61 / 42.92 / 78.51 -> 12.53 / 24.73 / 42.99 /
+  // 78.60%). In [1, 1e20].
   double batch_error_factor = 10;
   // Collapse on two threads first, each inside one half of the mesh (see
   // collapse_in_parallel in simplify.cpp), then finish serially: about 1.6x
