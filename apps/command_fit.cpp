@@ -154,8 +154,8 @@ int fit(const Args& raw) {
     std::printf("  untangle: %zu tangled faces on level %d before, %zu after %d rounds\n", result.untangle.tangled_before,
                 levels, result.untangle.tangled_after, result.untangle.rounds);
   if (smooth == 0 && result.untangle.tangled_after > fine.face_count() / 1000)
-    std::printf("  note: %.2f%% of the fine faces stay tangled, mostly on necks and tunnels thinner than a cell; "
-                "--smooth 1 removes those (built-in mixing layer: 0.31%% -> 0.06%%)\n",
+    std::printf("  note: %.2f%% of the fine faces stay tangled; folds sit mostly on necks and tunnels thinner than a "
+                "cell, which a one-voxel pre-filter (--smooth 1) removes (built-in mixing layer: 0.31%% -> 0.06%%)\n",
                 100.0 * double(result.untangle.tangled_after) / double(fine.face_count()));
   if (report) {
     std::printf("quality:\n");
