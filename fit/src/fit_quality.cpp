@@ -42,6 +42,32 @@ double percentile(std::vector<double>& values, double fraction) {
   return values[rank];
 }
 
+IsosurfaceDistance isosurface_distance(const std::vector<Vec3>& points, std::size_t count, const Volume& field,
+                                       double iso, double far_cells) {
+  if (points.size() < count) throw Error(ErrorKind::InvalidArgument, "isosurface distance: too few points");
+  const TrilinearGrid grid(field);
+  std::vector<double> first_order(count);
+  for_each_index(count, [&](std::size_t v) {
+    const TrilinearSample s = grid.sample(points[v]);
+    const double g = norm(s.gradient);
+    first_order[v] = g > 0 && std::isfinite(s.value) ? std::abs(s.value - iso) / g : -1.0;
+  });
+  IsosurfaceDistance result;
+  std::vector<double> defined;
+  defined.reserve(count);
+  const double far = far_cells * field.cell_size();
+  for (double d : first_order) {
+    if (!(d >= 0 && std::isfinite(d))) {
+      ++result.undefined;
+      continue;
+    }
+    defined.push_back(d);
+    result.far += d > far ? 1 : 0;
+  }
+  rms_and_max(defined, 1.0 / field.cell_size(), result.rms, result.max);
+  return result;
+}
+
 FitQuality measure_fit_quality(const SubdivisionHierarchy& hierarchy, int level, const std::vector<Vec3>& positions,
                                const PolygonMesh& extracted, const SurfaceDistance& extracted_distance,
                                const Volume& field, double iso, bool flip) {
@@ -59,20 +85,10 @@ FitQuality measure_fit_quality(const SubdivisionHierarchy& hierarchy, int level,
   if (q.nonfinite_vertices) return q;  // nothing else is meaningful
 
   // Vertices against the field and the extracted surface.
-  const TrilinearGrid grid(field);
-  std::vector<double> first_order(q.vertices);
-  for_each_index(q.vertices, [&](std::size_t v) {
-    const TrilinearSample s = grid.sample(mesh.positions[v]);
-    const double g = norm(s.gradient);
-    first_order[v] = g > 0 && std::isfinite(s.value) ? std::abs(s.value - iso) / g : -1.0;
-  });
-  std::vector<double> defined;
-  defined.reserve(q.vertices);
-  for (double d : first_order) {
-    if (d >= 0 && std::isfinite(d)) defined.push_back(d);
-    else ++q.isosurface_undefined;
-  }
-  rms_and_max(defined, inverse_cell, q.isosurface_rms, q.isosurface_max);
+  const IsosurfaceDistance on_isosurface = isosurface_distance(mesh.positions, q.vertices, field, iso, 1.0);
+  q.isosurface_rms = on_isosurface.rms;
+  q.isosurface_max = on_isosurface.max;
+  q.isosurface_undefined = on_isosurface.undefined;
   rms_and_max(extracted_distance.distances(mesh.positions), inverse_cell, q.surface_rms, q.surface_max);
 
   // Coverage of the extracted surface by the fitted one.
@@ -92,6 +108,7 @@ FitQuality measure_fit_quality(const SubdivisionHierarchy& hierarchy, int level,
   }
 
   // Tangles and areas per face.
+  const TrilinearGrid grid(field);
   std::vector<std::uint8_t> tangled(q.faces);
   std::vector<double> area(q.faces);
   const double expected_sign = flip ? 1.0 : -1.0;  // normals toward lower values unless flipped

@@ -11,6 +11,7 @@
 #include "isowave/core/progress.h"
 #include "isowave/core/volume.h"
 #include "isowave/extract/isosurface.h"
+#include "isowave/fit/fit_quality.h"
 #include "isowave/fit/shrink_wrap.h"
 #include "isowave/simplify/simplify.h"
 
@@ -58,6 +59,10 @@ struct ConvertTimings {
 };
 
 
+// Share of the fine control points that may lie more than a cell off the
+// isosurface before convert_volume() warns (see ConvertResult::fit_isosurface).
+inline constexpr double kFarPointsWarning = 0.005;
+
 struct ConvertResult {
   std::string bytes;  // the .isw file
   PolygonMesh extracted_mesh;  // with keep_extracted_mesh
@@ -68,6 +73,10 @@ struct ConvertResult {
   std::size_t extracted_vertices = 0, base_vertices = 0, fine_vertices = 0;
   double cell_size = 1;
   ConvertTimings seconds;
+  // The fitted fine control points against the isosurface of the field they
+  // were fitted to (first order, cells). More than kFarPointsWarning of them
+  // farther than a cell away adds a warning.
+  IsosurfaceDistance fit_isosurface;
   // Against the fitted (unquantized) fine control points; see rate_distortion().
   std::vector<RateDistortionRow> summary;
   std::vector<std::string> warnings;  // e.g. a base mesh kept large by the topology

@@ -45,6 +45,19 @@ struct FitQuality {
   double area_ratio_deviation = 0;  // standard deviation of the ratio
 };
 
+// First-order distance |f(x) - iso| / |grad f(x)| of points to the isosurface
+// of the trilinearly interpolated field (as in the final correction), in
+// cells: RMS and maximum over the points where it is defined (zero or
+// non-finite gradient: `undefined`), and how many lie farther than
+// `far_cells`. Parallel, deterministic, O(points).
+struct IsosurfaceDistance {
+  double rms = 0, max = 0;
+  std::size_t undefined = 0;
+  std::size_t far = 0;
+};
+IsosurfaceDistance isosurface_distance(const std::vector<Vec3>& points, std::size_t count, const Volume& field,
+                                       double iso, double far_cells);
+
 // Measures level `level` of `hierarchy` with control points `positions` (at
 // least vertex_count(level)) against the extracted mesh (`extracted`, and
 // `extracted_distance` built from it) and the scalar field. Parallel (TBB),
