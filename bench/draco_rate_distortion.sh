@@ -4,8 +4,9 @@
 # root) compresses the extracted triangle mesh at several position
 # quantizations; isowave converts the volume and decodes at several
 # coefficient percentages. Both are measured the same way: file bytes, bits
-# per isosurface vertex, and the RMS / max distance of the decoded vertices
-# to the extracted surface in percent of a cell.
+# per isosurface vertex, and in percent of a cell the RMS / max distance of
+# the decoded vertices to the extracted surface and of the extracted vertices
+# to the decoded surface (what the decoded mesh fails to cover).
 #
 # usage: bench/draco_rate_distortion.sh [VOLUME ISO [CELL [convert/extract options...]]]
 #   default: ../shared/data/volumes/miranda_256x256x256.nrrd 1.5 1 --min-component-vertices 50
@@ -37,14 +38,14 @@ trap 'rm -rf "$work"' EXIT
 "$isowave" extract "$volume" --iso "$iso" "${options[@]}" -o "$work/surface.ply" >/dev/null
 vertices=$(head -c 400 "$work/surface.ply" | grep -a "element vertex" | awk '{print $3}')
 echo "isosurface: $vertices vertices ($volume, iso $iso ${options[*]})"
-printf "\n%-22s %12s %14s %16s %16s\n" "method" "bytes" "bits/vertex" "RMS [% cell]" "max [% cell]"
+printf "\n%-22s %12s %12s %14s %14s %14s %14s\n" "method" "bytes" "bits/vertex" "RMS to surf." "max to surf." "RMS coverage" "max coverage"
 
 for qp in 8 10 11 12 14 16; do
   draco_encoder -i "$work/surface.ply" -o "$work/q.drc" -qp "$qp" -cl 7 >/dev/null
   draco_decoder -i "$work/q.drc" -o "$work/q.ply" >/dev/null
   bytes=$(stat -c %s "$work/q.drc")
-  read -r rms max < <("$distance" "$work/q.ply" "$work/surface.ply" "$cell")
-  printf "%-22s %12d %14.3f %16.3f %16.3f\n" "draco -qp $qp" "$bytes" "$(awk -v b="$bytes" -v v="$vertices" 'BEGIN { print 8 * b / v }')" "$rms" "$max"
+  read -r rms max back_rms back_max < <("$distance" "$work/q.ply" "$work/surface.ply" "$cell")
+  printf "%-22s %12d %12.3f %14.3f %14.3f %14.3f %14.3f\n" "draco -qp $qp" "$bytes" "$(awk -v b="$bytes" -v v="$vertices" 'BEGIN { print 8 * b / v }')" "$rms" "$max" "$back_rms" "$back_max"
 done
 
 "$isowave" convert "$volume" --iso "$iso" "${options[@]}" -o "$work/surface.isw" --quiet --force
@@ -55,6 +56,6 @@ while IFS=, read -r coefficients percent rmse max bytes bits_fine bits_iso base;
   label="isowave ${percent}%"
   if [ "$base" = 1 ]; then decode_percent=0; label="isowave base mesh"; fi
   "$isowave" decode "$work/surface.isw" --percent "$decode_percent" -o "$work/d.ply" --quiet
-  read -r rms max < <("$distance" "$work/d.ply" "$work/surface.ply" "$cell")
-  printf "%-22s %12d %14.3f %16.3f %16.3f\n" "$label" "$bytes" "$(awk -v b="$bytes" -v v="$vertices" 'BEGIN { print 8 * b / v }')" "$rms" "$max"
+  read -r rms max back_rms back_max < <("$distance" "$work/d.ply" "$work/surface.ply" "$cell")
+  printf "%-22s %12d %12.3f %14.3f %14.3f %14.3f %14.3f\n" "$label" "$bytes" "$(awk -v b="$bytes" -v v="$vertices" 'BEGIN { print 8 * b / v }')" "$rms" "$max" "$back_rms" "$back_max"
 done < "$work/stats.csv"

@@ -2,9 +2,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <utility>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
 
 #include "isowave/core/error.h"
 #include "isowave/fit/trilinear.h"
@@ -66,6 +69,53 @@ IsosurfaceDistance isosurface_distance(const std::vector<Vec3>& points, std::siz
   }
   rms_and_max(defined, 1.0 / field.cell_size(), result.rms, result.max);
   return result;
+}
+
+double share_farther_than(const std::vector<Vec3>& reference, std::size_t stride, const std::vector<Vec3>& fitted,
+                          std::size_t count, double distance) {
+  if (stride == 0 || !(distance > 0) || fitted.size() < count)
+    throw Error(ErrorKind::InvalidArgument, "share_farther_than: stride >= 1, distance > 0, count <= fitted points");
+  const std::size_t samples = (reference.size() + stride - 1) / stride;
+  if (samples == 0) return 0.0;
+  if (count == 0) return 1.0;
+  // Cubes of side `distance` from the fitted points' lower corner, 21 bits
+  // per axis (a key past that range gets no neighbours: it only overstates).
+  Vec3 low = fitted[0];
+  for (std::size_t i = 1; i < count; ++i)
+    low = Vec3{std::min(low.x, fitted[i].x), std::min(low.y, fitted[i].y), std::min(low.z, fitted[i].z)};
+  constexpr std::int64_t kAxis = std::int64_t{1} << 21;
+  const auto cube = [&](const Vec3& p, int axis) { return static_cast<std::int64_t>(std::floor((p[axis] - low[axis]) / distance)); };
+  const auto key = [](std::int64_t x, std::int64_t y, std::int64_t z) {
+    return static_cast<std::uint64_t>(x) << 42 | static_cast<std::uint64_t>(y) << 21 | static_cast<std::uint64_t>(z);
+  };
+  const auto inside = [](std::int64_t c) { return c >= 0 && c < kAxis; };
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> sorted(count);
+  for_each_index(count, [&](std::size_t i) {
+    const std::int64_t x = cube(fitted[i], 0), y = cube(fitted[i], 1), z = cube(fitted[i], 2);
+    sorted[i] = {inside(x) && inside(y) && inside(z) ? key(x, y, z) : ~std::uint64_t{0}, static_cast<std::uint32_t>(i)};
+  });
+  tbb::parallel_sort(sorted.begin(), sorted.end());
+  const double squared = distance * distance;
+  std::vector<std::uint8_t> farther(samples, 1);
+  for_each_index(samples, [&](std::size_t s) {
+    const Vec3& p = reference[s * stride];
+    const std::int64_t x = cube(p, 0), y = cube(p, 1), z = cube(p, 2);
+    for (std::int64_t dx = -1; dx <= 1; ++dx)
+      for (std::int64_t dy = -1; dy <= 1; ++dy)
+        for (std::int64_t dz = -1; dz <= 1; ++dz) {
+          if (!inside(x + dx) || !inside(y + dy) || !inside(z + dz)) continue;
+          const std::uint64_t k = key(x + dx, y + dy, z + dz);
+          auto it = std::lower_bound(sorted.begin(), sorted.end(), std::pair<std::uint64_t, std::uint32_t>{k, 0});
+          for (; it != sorted.end() && it->first == k; ++it)
+            if (squared_norm(fitted[it->second] - p) <= squared) {
+              farther[s] = 0;
+              return;
+            }
+        }
+  });
+  std::size_t total = 0;
+  for (std::uint8_t f : farther) total += f;
+  return double(total) / double(samples);
 }
 
 FitQuality measure_fit_quality(const SubdivisionHierarchy& hierarchy, int level, const std::vector<Vec3>& positions,

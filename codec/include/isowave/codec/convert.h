@@ -62,6 +62,10 @@ struct ConvertTimings {
 // Share of the fine control points that may lie more than a cell off the
 // isosurface before convert_volume() warns (see ConvertResult::fit_isosurface).
 inline constexpr double kFarPointsWarning = 0.005;
+// Share of the isosurface that may lie more than kUncoveredCells cells from
+// every fine control point before convert_volume() warns.
+inline constexpr double kUncoveredCells = 2.0;
+inline constexpr double kUncoveredWarning = 0.01;
 
 struct ConvertResult {
   std::string bytes;  // the .isw file
@@ -77,6 +81,10 @@ struct ConvertResult {
   // were fitted to (first order, cells). More than kFarPointsWarning of them
   // farther than a cell away adds a warning.
   IsosurfaceDistance fit_isosurface;
+  // The share of the extracted isosurface's vertices (sampled) farther than
+  // kUncoveredCells cells from every fine control point (share_farther_than):
+  // what the fit left out. More than kUncoveredWarning adds a warning.
+  double uncovered_share = 0;
   // Against the fitted (unquantized) fine control points; see rate_distortion().
   std::vector<RateDistortionRow> summary;
   std::vector<std::string> warnings;  // e.g. a base mesh kept large by the topology

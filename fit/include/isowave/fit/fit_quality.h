@@ -58,6 +58,17 @@ struct IsosurfaceDistance {
 IsosurfaceDistance isosurface_distance(const std::vector<Vec3>& points, std::size_t count, const Volume& field,
                                        double iso, double far_cells);
 
+// How much of a surface a fitted mesh leaves out, cheaply: the share of the
+// sampled `reference` points (every `stride`-th, stride >= 1) farther than
+// `distance` from every one of the first `count` `fitted` points. A point
+// test, so it can only overstate the share farther than `distance` from the
+// fitted surface, by up to the distance from a fitted face's points to its
+// nearest corner (a fraction of a cell on a fine level). Parallel and
+// deterministic; O(count log count) to sort the fitted points into cubes of
+// side `distance`, then 27 cube lookups per sample.
+double share_farther_than(const std::vector<Vec3>& reference, std::size_t stride, const std::vector<Vec3>& fitted,
+                          std::size_t count, double distance);
+
 // Measures level `level` of `hierarchy` with control points `positions` (at
 // least vertex_count(level)) against the extracted mesh (`extracted`, and
 // `extracted_distance` built from it) and the scalar field. Parallel (TBB),
