@@ -105,7 +105,11 @@ int convert(const Args& raw) {
       {"iso", true, "isovalue(s), comma separated (default 0 for builtin: inputs)", "V[,V2,...]"},
       {"levels", true, "subdivision levels 1..6, or 'auto' (default): the fine mesh as large as the isosurface", "L|auto"},
       {"base-vertices", true, "base mesh vertex target", "N"},
-      {"base-ratio", true, "base mesh vertex target as a fraction of the isosurface's vertices (default 0.02)", "R"},
+      {"base-ratio", true,
+       "base mesh vertex target as a fraction of the isosurface's vertices (default 0.0625; without --base-vertices "
+       "and --base-ratio the base mesh doubles, up to twice, while the fit leaves more than 1% of the isosurface "
+       "over 2 cells away)",
+       "R"},
       {"no-flips", false, "base mesh by the paper's collapse rules only (no valence-lowering flips)", ""},
       {"verify", false, "decode each encoded file once more before writing it and check it gives exactly the coded coefficients", ""},
       {"step", true, "quantization step in cells (default 0.01: adds about 0.5% of a cell RMSE)", "CELLS"},
@@ -141,7 +145,8 @@ int convert(const Args& raw) {
   const std::string levels_text = args.get("levels", "auto");
   convert_options.levels = levels_text == "auto" ? 0 : args.get_int("levels", 0, 1, 6);
   convert_options.base_vertices = static_cast<std::size_t>(args.get_int("base-vertices", 0, 4, 1 << 30));
-  convert_options.base_ratio = args.get_double("base-ratio", 0.02);
+  convert_options.base_ratio = args.get_double("base-ratio", ConvertOptions().base_ratio);
+  convert_options.grow_base_until_covered = !args.has("base-vertices") && !args.has("base-ratio");
   convert_options.valence_flips = !args.has("no-flips");
   convert_options.verify_file = args.has("verify");
   if (!(convert_options.base_ratio > 0 && convert_options.base_ratio <= 1))
@@ -247,11 +252,12 @@ int convert(const Args& raw) {
                   "\"fine_vertices\": %zu, \"levels\": %d, \"seconds\": {\"load\": %.3f, \"extract\": %.3f, "
                   "\"simplify\": %.3f, \"distance\": %.3f, \"fit\": %.3f, \"analysis\": %.3f, \"encode\": %.3f, "
                   "\"evaluate\": %.3f}, \"fit_isosurface_rms_cells\": %.6g, \"fit_isosurface_max_cells\": %.6g, "
-                  "\"fit_points_beyond_one_cell\": %zu, \"isosurface_uncovered_share\": %.6g, \"rows\": [",
+                  "\"fit_points_beyond_one_cell\": %zu, \"isosurface_uncovered_share\": %.6g, \"base_attempts\": %d, "
+                  "\"rows\": [",
                   r.bytes.size(), r.cell_size, r.extracted_vertices, r.base_vertices, r.fine_vertices, r.levels,
                   o.load_seconds, r.seconds.extract, r.seconds.simplify, r.seconds.distance, r.seconds.fit,
                   r.seconds.analysis, r.seconds.encode, r.seconds.evaluate, r.fit_isosurface.rms, r.fit_isosurface.max,
-                  r.fit_isosurface.far, r.uncovered_share);
+                  r.fit_isosurface.far, r.uncovered_share, r.base_attempts);
       for (std::size_t k = 0; k < r.summary.size(); ++k) {
         const RateDistortionRow& row = r.summary[k];
         std::printf("%s{\"percent\": %.4f, \"coefficients\": %zu, \"rmse_percent_cell\": %.6g, \"max_percent_cell\": "
@@ -290,6 +296,9 @@ int convert(const Args& raw) {
                   "more than a cell; %.3g%% of the isosurface lies more than %g cells from all of them\n",
                   "", r.fit_isosurface.rms, r.fit_isosurface.max, r.fit_isosurface.far, 100.0 * r.uncovered_share,
                   kUncoveredCells);
+      if (r.base_attempts > 1)
+        std::printf("%-28s the base mesh grew from %zu to %zu vertices (%d tries) to cover the isosurface\n", "",
+                    r.first_base_vertices, r.base_vertices, r.base_attempts);
     }
     if (failed) std::printf("\n%zu of %zu conversions failed\n", failed, jobs.size());
   }

@@ -88,8 +88,9 @@ ConvertResult convert_volume(const Volume& volume, const std::string& source, co
     });
   };
 
-  // Base mesh.
-  start = Clock::now();
+  // Base mesh, levels, shrink-wrap and the fit check; with
+  // options.grow_base_until_covered, again from a base mesh twice as large
+  // while more than kUncoveredWarning of the isosurface is left out.
   simplify::SimplifyOptions simplify_options;
   simplify_options.target_vertices = options.base_vertices > 0
                                          ? options.base_vertices
@@ -98,76 +99,90 @@ ConvertResult convert_volume(const Volume& volume, const std::string& source, co
   simplify_options.compute_distance = false;
   simplify_options.valence_flips = options.valence_flips;
   simplify_options.serial_phase_begins = start_distance;
-  simplify::SimplifyResult simplified = simplify::simplify(surface.mesh, simplify_options, progress);
-  result.simplification = simplified.report;
-  PolygonMesh base = std::move(simplified.base);
-  result.base_vertices = base.vertex_count();
-  result.seconds.simplify = seconds_since(start);
-  if (base.vertex_count() > 3 * simplify_options.target_vertices / 2) {
-    std::ostringstream warning;
-    warning << "the base mesh keeps " << base.vertex_count() << " vertices (target " << simplify_options.target_vertices
-            << "): the isosurface has " << surface.report.after.components << " components and genus "
-            << surface.report.after.genus
-            << ", which the base mesh must keep; --min-component-vertices N and --smooth SIGMA remove small bubbles "
-               "and handles";
-    result.warnings.push_back(warning.str());
-  }
-
-  // Levels: the fine mesh about as large as the extracted isosurface.
-  int levels = options.levels;
-  if (levels == 0) {
-    double best = 1e300;
-    const std::vector<LevelCounts> counts = refinement_counts(counts_of(base), 6);
-    for (int l = 1; l <= 6; ++l) {
-      const double fine = std::floor(counts[static_cast<std::size_t>(l)].vertices);
-      const double misfit = std::abs(std::log(fine / static_cast<double>(result.extracted_vertices)));
-      if (misfit < best) {
-        best = misfit;
-        levels = l;
-      }
-      if (fine > 4.0 * static_cast<double>(result.extracted_vertices)) break;
+  std::unique_ptr<SignedDistanceField> distance;
+  std::shared_ptr<const SubdivisionHierarchy> shared_hierarchy;
+  const std::vector<std::string> extraction_warnings = result.warnings;
+  for (result.base_attempts = 1;; ++result.base_attempts) {
+    result.warnings = extraction_warnings;
+    start = Clock::now();
+    simplify::SimplifyResult simplified = simplify::simplify(surface.mesh, simplify_options, progress);
+    simplify_options.serial_phase_begins = nullptr;  // the distance field is on its way
+    result.simplification = simplified.report;
+    PolygonMesh base = std::move(simplified.base);
+    result.base_vertices = base.vertex_count();
+    if (result.base_attempts == 1) result.first_base_vertices = base.vertex_count();
+    result.seconds.simplify += seconds_since(start);
+    if (base.vertex_count() > 3 * simplify_options.target_vertices / 2) {
+      std::ostringstream warning;
+      warning << "the base mesh keeps " << base.vertex_count() << " vertices (target "
+              << simplify_options.target_vertices << "): the isosurface has " << surface.report.after.components
+              << " components and genus " << surface.report.after.genus
+              << ", which the base mesh must keep; --min-component-vertices N and --smooth SIGMA remove small "
+                 "bubbles and handles";
+      result.warnings.push_back(warning.str());
     }
-  }
-  result.levels = levels;
 
-  // Shrink-wrap, once the distance field is there.
-  start = Clock::now();
-  progress.begin_stage("signed distance");
-  std::unique_ptr<SignedDistanceField> distance = distance_pending.get();
-  progress.end_stage();
-  result.seconds.distance = seconds_since(start);
-  start = Clock::now();
-  const auto shared_hierarchy = std::make_shared<const SubdivisionHierarchy>(base, levels);
-  const SubdivisionHierarchy& hierarchy = *shared_hierarchy;
-  result.fine_vertices = hierarchy.fine_vertex_count();
-  result.fit = shrink_wrap(hierarchy, base.positions, *distance, field, options.shrink_wrap, progress);
-  // A base mesh too coarse for the surface leaves parts of it out of the
-  // attraction's reach, and the fine points there off the isosurface; the
-  // error rows, measured against the fit, cannot show it. More than a cell
-  // off: the built-in torus at 48^3 from 9 base vertices 58% of the points
-  // (16 vertices: none); miranda smoothed by one voxel from 7,446 base
-  // vertices 0.66%, up to 109 cells (22,082: 0.09%); the bench's miranda 0.065%.
-  result.fit_isosurface = isosurface_distance(result.fit.positions, result.fine_vertices, field, options.iso, 1.0);
-  if (double(result.fit_isosurface.far) > kFarPointsWarning * double(result.fine_vertices)) {
-    std::ostringstream warning;
-    warning << "the fit leaves " << result.fit_isosurface.far << " of the " << result.fine_vertices
-            << " fine control points (" << std::setprecision(2)
-            << 100.0 * double(result.fit_isosurface.far) / double(result.fine_vertices)
-            << "%) more than a cell off the isosurface, up to " << std::setprecision(3) << result.fit_isosurface.max
-            << " cells: parts of the surface lie beyond the reach of the base mesh; a larger base mesh "
-               "(--base-ratio, --base-vertices) usually fixes it";
-    result.warnings.push_back(warning.str());
-  }
-  result.seconds.fit = seconds_since(start);
-  // What the coding stages no longer need goes before their peak.
-  distance.reset();
-  // The other way round: parts of the isosurface no fine point came near
-  // (thin features the base mesh spans and the shrink-wrap did not reach
-  // into). Every stride-th isosurface vertex, at most 100,000 (0.1 s on miranda).
-  {
+    // Levels: the fine mesh about as large as the extracted isosurface.
+    int levels = options.levels;
+    if (levels == 0) {
+      double best = 1e300;
+      const std::vector<LevelCounts> counts = refinement_counts(counts_of(base), 6);
+      for (int l = 1; l <= 6; ++l) {
+        const double fine = std::floor(counts[static_cast<std::size_t>(l)].vertices);
+        const double misfit = std::abs(std::log(fine / static_cast<double>(result.extracted_vertices)));
+        if (misfit < best) {
+          best = misfit;
+          levels = l;
+        }
+        if (fine > 4.0 * static_cast<double>(result.extracted_vertices)) break;
+      }
+    }
+    result.levels = levels;
+
+    // Shrink-wrap, once the distance field is there.
+    if (!distance) {
+      start = Clock::now();
+      progress.begin_stage("signed distance");
+      distance = distance_pending.get();
+      progress.end_stage();
+      result.seconds.distance = seconds_since(start);
+    }
+    start = Clock::now();
+    result.fit = ShrinkWrapResult{};
+    shared_hierarchy = std::make_shared<const SubdivisionHierarchy>(base, levels);
+    result.fine_vertices = shared_hierarchy->fine_vertex_count();
+    result.fit = shrink_wrap(*shared_hierarchy, base.positions, *distance, field, options.shrink_wrap, progress);
+    // A base mesh too coarse for the surface leaves parts of it out of the
+    // attraction's reach, and the fine points there off the isosurface; the
+    // error rows, measured against the fit, cannot show it. More than a cell
+    // off: the built-in torus at 48^3 from 9 base vertices 58% of the points
+    // (16 vertices: none); miranda smoothed by one voxel from 7,446 base
+    // vertices 0.66%, up to 109 cells (22,082: 0.09%); the bench's miranda 0.065%.
+    result.fit_isosurface = isosurface_distance(result.fit.positions, result.fine_vertices, field, options.iso, 1.0);
+    if (double(result.fit_isosurface.far) > kFarPointsWarning * double(result.fine_vertices)) {
+      std::ostringstream warning;
+      warning << "the fit leaves " << result.fit_isosurface.far << " of the " << result.fine_vertices
+              << " fine control points (" << std::setprecision(2)
+              << 100.0 * double(result.fit_isosurface.far) / double(result.fine_vertices)
+              << "%) more than a cell off the isosurface, up to " << std::setprecision(3) << result.fit_isosurface.max
+              << " cells: parts of the surface lie beyond the reach of the base mesh; a larger base mesh "
+                 "(--base-ratio, --base-vertices) usually fixes it";
+      result.warnings.push_back(warning.str());
+    }
+    // The other way round: parts of the isosurface no fine point came near
+    // (thin features the base mesh spans and the shrink-wrap did not reach
+    // into). Every stride-th isosurface vertex, at most 100,000 (0.1 s on
+    // miranda).
     const std::size_t stride = std::max<std::size_t>(1, surface.mesh.vertex_count() / 100000);
     result.uncovered_share = share_farther_than(surface.mesh.positions, stride, result.fit.positions,
                                                 result.fine_vertices, kUncoveredCells * result.cell_size);
+    result.seconds.fit += seconds_since(start);
+    const std::size_t grown = 2 * base.vertex_count();
+    if (options.grow_base_until_covered && result.uncovered_share > kUncoveredWarning &&
+        result.base_attempts < kBaseAttempts && grown <= result.extracted_vertices / 4) {
+      simplify_options.target_vertices = grown;
+      continue;
+    }
     if (result.uncovered_share > kUncoveredWarning) {
       std::ostringstream warning;
       warning << std::setprecision(2) << 100.0 * result.uncovered_share << "% of the isosurface lies more than "
@@ -176,7 +191,11 @@ ConvertResult convert_volume(const Volume& volume, const std::string& source, co
                  "a larger base mesh (--base-ratio, --base-vertices) covers more";
       result.warnings.push_back(warning.str());
     }
+    break;
   }
+  const SubdivisionHierarchy& hierarchy = *shared_hierarchy;
+  // What the coding stages no longer need goes before their peak.
+  distance.reset();
   if (!options.keep_extracted_mesh) surface.mesh = PolygonMesh{};
 
   // Analysis and coding.
@@ -199,7 +218,7 @@ ConvertResult convert_volume(const Volume& volume, const std::string& source, co
   metadata.values["cell_size"] = number(result.cell_size);
   if (volume.spacing.x != volume.spacing.y || volume.spacing.y != volume.spacing.z)
     metadata.values["cell_size_note"] = "geometric mean of the anisotropic spacing";
-  metadata.values["levels"] = std::to_string(levels);
+  metadata.values["levels"] = std::to_string(result.levels);
   metadata.values["extracted_vertices"] = std::to_string(result.extracted_vertices);
   metadata.values["base_vertices"] = std::to_string(result.base_vertices);
   metadata.values["fine_vertices"] = std::to_string(result.fine_vertices);

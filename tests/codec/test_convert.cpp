@@ -39,7 +39,8 @@ double share_over(const std::vector<double>& values, double limit) {
 
 // The torus at 48^3 (3,240 extracted vertices): from 24 base vertices the fit
 // stays on the isosurface but covers only two thirds of it; from 9 even its
-// points end off the isosurface; from the default base (2%) it is exact.
+// points end off the isosurface; from twice 24, or the default base (1/16),
+// it is exact.
 TEST(Convert, WarnsWhenTheFitLeavesPartsOfTheSurfaceOut) {
   const Volume torus = make_builtin_field("torus", 48);
   ConvertOptions options;
@@ -66,6 +67,19 @@ TEST(Convert, WarnsWhenTheFitLeavesPartsOfTheSurfaceOut) {
   EXPECT_TRUE(warns(coarse, kOffTheIsosurface));
   EXPECT_GT(double(coarse.fit_isosurface.far), kFarPointsWarning * double(coarse.fine_vertices));
   EXPECT_TRUE(warns(coarse, kUncovered));
+
+  // Grown until it covers: 24 -> 48 base vertices.
+  options.base_vertices = 24;
+  options.grow_base_until_covered = true;
+  const ConvertResult grown = convert_volume(torus, "torus", options);
+  EXPECT_GT(grown.base_attempts, 1);
+  EXPECT_EQ(grown.first_base_vertices, 24u);
+  EXPECT_GT(grown.base_vertices, 24u);
+  EXPECT_LE(grown.uncovered_share, kUncoveredWarning);
+  EXPECT_FALSE(warns(grown, kUncovered));
+  distances = coverage(grown);
+  EXPECT_LE(share_over(distances, kUncoveredCells), kUncoveredWarning);
+  options.grow_base_until_covered = false;
 
   options.base_vertices = 0;
   const ConvertResult exact = convert_volume(torus, "torus", options);

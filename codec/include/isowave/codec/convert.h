@@ -29,7 +29,13 @@ struct ConvertOptions {
   // Base mesh size: base_vertices if non-zero, else base_ratio times the
   // extracted vertex count.
   std::size_t base_vertices = 0;
-  double base_ratio = 0.02;
+  double base_ratio = 0.0625;
+  // While more than kUncoveredWarning of the isosurface lies more than
+  // kUncoveredCells cells from every fine control point, simplify again to
+  // twice the base mesh's vertex count and fit again (at most kBaseAttempts
+  // tries in all, and while the base stays under a quarter of the
+  // isosurface's vertices). The CLI turns it on when no base size is given.
+  bool grow_base_until_covered = false;
   // Valence-lowering flips when the paper's collapse rules stall (see
   // SimplifyOptions::valence_flips): a smaller base mesh on high-genus surfaces.
   bool valence_flips = true;
@@ -66,6 +72,7 @@ inline constexpr double kFarPointsWarning = 0.005;
 // every fine control point before convert_volume() warns.
 inline constexpr double kUncoveredCells = 2.0;
 inline constexpr double kUncoveredWarning = 0.01;
+inline constexpr int kBaseAttempts = 3;
 
 struct ConvertResult {
   std::string bytes;  // the .isw file
@@ -85,6 +92,10 @@ struct ConvertResult {
   // kUncoveredCells cells from every fine control point (share_farther_than):
   // what the fit left out. More than kUncoveredWarning adds a warning.
   double uncovered_share = 0;
+  // Tries at the base mesh (ConvertOptions::grow_base_until_covered) and the
+  // first one's vertex count; base_vertices is the last one's.
+  int base_attempts = 1;
+  std::size_t first_base_vertices = 0;
   // Against the fitted (unquantized) fine control points; see rate_distortion().
   std::vector<RateDistortionRow> summary;
   std::vector<std::string> warnings;  // e.g. a base mesh kept large by the topology
