@@ -148,7 +148,8 @@ ConvertResult convert_volume(const Volume& volume, const std::string& source, co
       result.seconds.distance = seconds_since(start);
     }
     start = Clock::now();
-    result.fit = ShrinkWrapResult{};
+    result.fit = ShrinkWrapResult{};  // the previous try's, before the next one's peak
+    shared_hierarchy.reset();
     shared_hierarchy = std::make_shared<const SubdivisionHierarchy>(base, levels);
     result.fine_vertices = shared_hierarchy->fine_vertex_count();
     result.fit = shrink_wrap(*shared_hierarchy, base.positions, *distance, field, options.shrink_wrap, progress);

@@ -62,8 +62,10 @@ IsosurfaceDistance isosurface_distance(const std::vector<Vec3>& points, std::siz
 // sampled `reference` points (every `stride`-th, stride >= 1) farther than
 // `distance` from every one of the first `count` `fitted` points. A point
 // test, so it can only overstate the share farther than `distance` from the
-// fitted surface, by up to the distance from a fitted face's points to its
-// nearest corner (a fraction of a cell on a fine level). Parallel and
+// fitted surface, by the points within a fitted face's reach of its corners
+// (fine faces are mostly a fraction of a cell; where they are stretched over
+// thin features it shows: 42.5% against the exact 36.5% on the aneurism
+// fitted from 2% of its vertices, 12.5% against 12.3% on miranda). Parallel and
 // deterministic; O(count log count) to sort the fitted points into cubes of
 // side `distance`, then 27 cube lookups per sample.
 double share_farther_than(const std::vector<Vec3>& reference, std::size_t stride, const std::vector<Vec3>& fitted,
