@@ -83,10 +83,11 @@ TEST(ShrinkWrap, ViscousFingersMeetsTheTargets) {
 // The built-in mixing layer has droplets and filaments a few cells across,
 // finer than a base mesh of 1/16 of the extracted vertices can follow. The
 // coverage and isosurface targets are met; the tangles (0.31% against 0.1%,
-// on necks and tunnels thinner than a cell: see the next test) are not, nor quite the distance to the
-// extracted mesh (RMS 0.0512 against 0.05, max 0.65 against 0.5: the flat
-// triangles themselves stray 0.040 RMS and up to 0.57 cells from the exact
-// isosurface the fit lies on, first order at four points per triangle).
+// on necks and tunnels thinner than a cell: see the next test) are not, nor
+// quite the distance to the extracted mesh (RMS 0.0512 against 0.05, max 0.65
+// against 0.5: the flat triangles themselves stray 0.040 RMS and up to 0.57
+// cells from the exact isosurface the fit lies on, first order at four points
+// per triangle).
 TEST(ShrinkWrap, MixingStaysFiniteAndMostlyOnTheIsosurface) {
   const Pipeline p = prepare(make_builtin_field("mixing", 96), 0.0, 2400);
   const SubdivisionHierarchy hierarchy(p.base, 3);
