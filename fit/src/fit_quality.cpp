@@ -83,8 +83,11 @@ double share_farther_than(const std::vector<Vec3>& reference, std::size_t stride
   Vec3 low = fitted[0];
   for (std::size_t i = 1; i < count; ++i)
     low = Vec3{std::min(low.x, fitted[i].x), std::min(low.y, fitted[i].y), std::min(low.z, fitted[i].z)};
-  constexpr std::int64_t kAxis = std::int64_t{1} << 21;
-  const auto cube = [&](const Vec3& p, int axis) { return static_cast<std::int64_t>(std::floor((p[axis] - low[axis]) / distance)); };
+  constexpr std::int64_t kAxis = std::int64_t{1} << 21, kOutside = -2;  // kOutside: no neighbour in range
+  const auto cube = [&](const Vec3& p, int axis) {
+    const double c = std::floor((p[axis] - low[axis]) / distance);
+    return c >= -1 && c < double(kAxis) ? static_cast<std::int64_t>(c) : kOutside;  // false for NaN too
+  };
   const auto key = [](std::int64_t x, std::int64_t y, std::int64_t z) {
     return static_cast<std::uint64_t>(x) << 42 | static_cast<std::uint64_t>(y) << 21 | static_cast<std::uint64_t>(z);
   };
