@@ -107,8 +107,8 @@ int convert(const Args& raw) {
       {"base-vertices", true, "base mesh vertex target", "N"},
       {"base-ratio", true,
        "base mesh vertex target as a fraction of the isosurface's vertices (default 0.0625; without --base-vertices "
-       "and --base-ratio the base mesh doubles, up to twice, while the fit leaves more than 1% of the isosurface "
-       "over 2 cells away)",
+       "and --base-ratio, and with --levels auto, the base mesh doubles, up to twice, while the fit leaves more than "
+       "1% of the isosurface over 2 cells away)",
        "R"},
       {"no-flips", false, "base mesh by the paper's collapse rules only (no valence-lowering flips)", ""},
       {"verify", false, "decode each encoded file once more before writing it and check it gives exactly the coded coefficients", ""},

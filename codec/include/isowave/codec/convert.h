@@ -34,7 +34,8 @@ struct ConvertOptions {
   // kUncoveredCells cells from every fine control point, simplify again to
   // twice the base mesh's vertex count and fit again (at most kBaseAttempts
   // tries in all, and while the base stays under a quarter of the
-  // isosurface's vertices). The CLI turns it on when no base size is given.
+  // isosurface's vertices), if the levels are automatic (levels == 0). The CLI
+  // turns it on when no base size is given.
   bool grow_base_until_covered = false;
   // Valence-lowering flips when the paper's collapse rules stall (see
   // SimplifyOptions::valence_flips): a smaller base mesh on high-genus surfaces.
