@@ -34,6 +34,23 @@ std::string number(double v) {
 
 LevelCounts counts_of(const PolygonMesh& base) { return level_counts(base, summarize_topology(base).edges); }
 
+// The level whose fine mesh has about as many vertices as the isosurface.
+int automatic_levels(const PolygonMesh& base, std::size_t isosurface_vertices) {
+  int levels = 1;
+  double best = 1e300;
+  const std::vector<LevelCounts> counts = refinement_counts(counts_of(base), 6);
+  for (int l = 1; l <= 6; ++l) {
+    const double fine = std::floor(counts[static_cast<std::size_t>(l)].vertices);
+    const double misfit = std::abs(std::log(fine / static_cast<double>(isosurface_vertices)));
+    if (misfit < best) {
+      best = misfit;
+      levels = l;
+    }
+    if (fine > 4.0 * static_cast<double>(isosurface_vertices)) break;
+  }
+  return levels;
+}
+
 }  // namespace
 
 std::size_t fine_vertex_count(const PolygonMesh& base, int levels) {
@@ -101,43 +118,16 @@ ConvertResult convert_volume(const Volume& volume, const std::string& source, co
   simplify_options.serial_phase_begins = start_distance;
   std::unique_ptr<SignedDistanceField> distance;
   std::shared_ptr<const SubdivisionHierarchy> shared_hierarchy;
-  const std::vector<std::string> extraction_warnings = result.warnings;
   for (result.base_attempts = 1;; ++result.base_attempts) {
-    result.warnings = extraction_warnings;
     start = Clock::now();
     simplify::SimplifyResult simplified = simplify::simplify(surface.mesh, simplify_options, progress);
     simplify_options.serial_phase_begins = nullptr;  // the distance field is on its way
     result.simplification = simplified.report;
-    PolygonMesh base = std::move(simplified.base);
+    const PolygonMesh base = std::move(simplified.base);
     result.base_vertices = base.vertex_count();
     if (result.base_attempts == 1) result.first_base_vertices = base.vertex_count();
     result.seconds.simplify += seconds_since(start);
-    if (base.vertex_count() > 3 * simplify_options.target_vertices / 2) {
-      std::ostringstream warning;
-      warning << "the base mesh keeps " << base.vertex_count() << " vertices (target "
-              << simplify_options.target_vertices << "): the isosurface has " << surface.report.after.components
-              << " components and genus " << surface.report.after.genus
-              << ", which the base mesh must keep; --min-component-vertices N and --smooth SIGMA remove small "
-                 "bubbles and handles";
-      result.warnings.push_back(warning.str());
-    }
-
-    // Levels: the fine mesh about as large as the extracted isosurface.
-    int levels = options.levels;
-    if (levels == 0) {
-      double best = 1e300;
-      const std::vector<LevelCounts> counts = refinement_counts(counts_of(base), 6);
-      for (int l = 1; l <= 6; ++l) {
-        const double fine = std::floor(counts[static_cast<std::size_t>(l)].vertices);
-        const double misfit = std::abs(std::log(fine / static_cast<double>(result.extracted_vertices)));
-        if (misfit < best) {
-          best = misfit;
-          levels = l;
-        }
-        if (fine > 4.0 * static_cast<double>(result.extracted_vertices)) break;
-      }
-    }
-    result.levels = levels;
+    result.levels = options.levels > 0 ? options.levels : automatic_levels(base, result.extracted_vertices);
 
     // Shrink-wrap, once the distance field is there.
     if (!distance) {
@@ -150,52 +140,58 @@ ConvertResult convert_volume(const Volume& volume, const std::string& source, co
     start = Clock::now();
     result.fit = ShrinkWrapResult{};  // the previous try's, before the next one's peak
     shared_hierarchy.reset();
-    shared_hierarchy = std::make_shared<const SubdivisionHierarchy>(base, levels);
+    shared_hierarchy = std::make_shared<const SubdivisionHierarchy>(base, result.levels);
     result.fine_vertices = shared_hierarchy->fine_vertex_count();
     result.fit = shrink_wrap(*shared_hierarchy, base.positions, *distance, field, options.shrink_wrap, progress);
-    // A base mesh too coarse for the surface leaves parts of it out of the
-    // attraction's reach, and the fine points there off the isosurface; the
-    // error rows, measured against the fit, cannot show it. More than a cell
-    // off: the built-in torus at 48^3 from 9 base vertices 58% of the points
-    // (16 vertices: none); miranda smoothed by one voxel from 7,446 base
-    // vertices 0.66%, up to 109 cells (22,082: 0.09%); the bench's miranda 0.065%.
+    // The fit against the isosurface, both ways; the error rows, measured
+    // against the fit, cannot show what it missed. A base mesh too coarse for
+    // the surface leaves parts of it out of the attraction's reach and the
+    // fine points there off the isosurface (more than a cell off: the
+    // built-in torus at 48^3 from 9 base vertices 58% of the points, from 16
+    // none; miranda smoothed by one voxel from 7,446 base vertices 0.66%, up
+    // to 109 cells; the bench's miranda 0.065%), and parts of the isosurface
+    // no fine point comes near (thin features the base mesh spans; every
+    // stride-th isosurface vertex, at most 100,000, 0.1 s on miranda).
     result.fit_isosurface = isosurface_distance(result.fit.positions, result.fine_vertices, field, options.iso, 1.0);
-    if (double(result.fit_isosurface.far) > kFarPointsWarning * double(result.fine_vertices)) {
-      std::ostringstream warning;
-      warning << "the fit leaves " << result.fit_isosurface.far << " of the " << result.fine_vertices
-              << " fine control points (" << std::setprecision(2)
-              << 100.0 * double(result.fit_isosurface.far) / double(result.fine_vertices)
-              << "%) more than a cell off the isosurface, up to " << std::setprecision(3) << result.fit_isosurface.max
-              << " cells: parts of the surface lie beyond the reach of the base mesh; a larger base mesh "
-                 "(--base-ratio, --base-vertices) usually fixes it";
-      result.warnings.push_back(warning.str());
-    }
-    // The other way round: parts of the isosurface no fine point came near
-    // (thin features the base mesh spans and the shrink-wrap did not reach
-    // into). Every stride-th isosurface vertex, at most 100,000 (0.1 s on
-    // miranda).
     const std::size_t stride = std::max<std::size_t>(1, surface.mesh.vertex_count() / 100000);
     result.uncovered_share = share_farther_than(surface.mesh.positions, stride, result.fit.positions,
                                                 result.fine_vertices, kUncoveredCells * result.cell_size);
     result.seconds.fit += seconds_since(start);
-    const std::size_t grown = 2 * base.vertex_count();
     // With the levels fixed, a larger base multiplies the fine mesh (miranda
     // at L = 3 from 261,000 base vertices: 18 M points): it grows only when
     // the levels follow it.
-    if (options.grow_base_until_covered && options.levels == 0 && result.uncovered_share > kUncoveredWarning &&
-        result.base_attempts < kBaseAttempts && grown <= result.extracted_vertices / 4) {
-      simplify_options.target_vertices = grown;
-      continue;
-    }
-    if (result.uncovered_share > kUncoveredWarning) {
-      std::ostringstream warning;
-      warning << std::setprecision(2) << 100.0 * result.uncovered_share << "% of the isosurface lies more than "
-              << kUncoveredCells
-              << " cells from every fine control point: the fit did not reach into features the base mesh spans; "
-                 "a larger base mesh (--base-ratio, --base-vertices) covers more";
-      result.warnings.push_back(warning.str());
-    }
-    break;
+    const std::size_t grown = 2 * base.vertex_count();
+    if (!options.grow_base_until_covered || options.levels != 0 || result.uncovered_share <= kUncoveredWarning ||
+        result.base_attempts == kBaseAttempts || grown > result.extracted_vertices / 4)
+      break;
+    simplify_options.target_vertices = grown;
+  }
+  if (result.base_vertices > 3 * simplify_options.target_vertices / 2) {
+    std::ostringstream warning;
+    warning << "the base mesh keeps " << result.base_vertices << " vertices (target " << simplify_options.target_vertices
+            << "): the isosurface has " << surface.report.after.components << " components and genus "
+            << surface.report.after.genus
+            << ", which the base mesh must keep; --min-component-vertices N and --smooth SIGMA remove small bubbles "
+               "and handles";
+    result.warnings.push_back(warning.str());
+  }
+  if (double(result.fit_isosurface.far) > kFarPointsWarning * double(result.fine_vertices)) {
+    std::ostringstream warning;
+    warning << "the fit leaves " << result.fit_isosurface.far << " of the " << result.fine_vertices
+            << " fine control points (" << std::setprecision(2)
+            << 100.0 * double(result.fit_isosurface.far) / double(result.fine_vertices)
+            << "%) more than a cell off the isosurface, up to " << std::setprecision(3) << result.fit_isosurface.max
+            << " cells: parts of the surface lie beyond the reach of the base mesh; a larger base mesh "
+               "(--base-ratio, --base-vertices) usually fixes it";
+    result.warnings.push_back(warning.str());
+  }
+  if (result.uncovered_share > kUncoveredWarning) {
+    std::ostringstream warning;
+    warning << std::setprecision(2) << 100.0 * result.uncovered_share << "% of the isosurface lies more than "
+            << kUncoveredCells
+            << " cells from every fine control point: the fit did not reach into features the base mesh spans; "
+               "a larger base mesh (--base-ratio, --base-vertices) covers more";
+    result.warnings.push_back(warning.str());
   }
   const SubdivisionHierarchy& hierarchy = *shared_hierarchy;
   // What the coding stages no longer need goes before their peak.
