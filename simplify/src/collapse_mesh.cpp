@@ -126,7 +126,9 @@ void CollapseMesh::build(const PolygonMesh& mesh, const std::uint32_t* order) {
   struct Outgoing {
     std::uint32_t corner, target;
   };
-  std::vector<Outgoing> outgoing(corner_count);
+  std::vector<Outgoing> outgoing;
+  reserve_fresh_on_huge_pages(outgoing, corner_count);  // faulted in on all threads: the fill below is serial
+  outgoing.resize(corner_count);
   {
     std::vector<std::uint32_t> fill(first.begin(), first.end() - 1);
     for (std::uint32_t c = 0; c < corner_count; ++c)
@@ -147,34 +149,6 @@ void CollapseMesh::build(const PolygonMesh& mesh, const std::uint32_t* order) {
     }
   });
   if (shared_edge) not_manifold("an edge has more than two triangles or two of the same orientation");
-
-  // Edge ids in corner order: one per corner without an opposite or with a
-  // later one. Counted per chunk, then numbered.
-  constexpr std::uint32_t kChunk = 1 << 16;
-  const std::uint32_t chunk_count = (corner_count + kChunk - 1) / kChunk;
-  std::vector<std::uint32_t> chunk_first(chunk_count + 1, 0);
-  const auto owns_edge = [&](std::uint32_t c) {
-    const std::uint32_t o = corners_[c].opposite;
-    return o == kNone || o > c;
-  };
-  tbb::parallel_for(std::uint32_t{0}, chunk_count, [&](std::uint32_t chunk) {
-    std::uint32_t count = 0;
-    for (std::uint32_t c = chunk * kChunk; c < std::min(corner_count, (chunk + 1) * kChunk); ++c) count += owns_edge(c);
-    chunk_first[chunk + 1] = count;
-  });
-  std::partial_sum(chunk_first.begin(), chunk_first.end(), chunk_first.begin());
-  reserve_fresh_on_huge_pages(edges_, chunk_first[chunk_count]);
-  edges_.resize(chunk_first[chunk_count]);
-  tbb::parallel_for(std::uint32_t{0}, chunk_count, [&](std::uint32_t chunk) {
-    std::uint32_t edge = chunk_first[chunk];
-    for (std::uint32_t c = chunk * kChunk; c < std::min(corner_count, (chunk + 1) * kChunk); ++c) {
-      if (!owns_edge(c)) continue;
-      edges_[edge] = EdgeRecord{c, 0.0f, 0.0f, 0, {kNone, kNone, BucketQueue::kNotQueued}, 0};
-      corners_[c].edge = edge;
-      if (corners_[c].opposite != kNone) corners_[corners_[c].opposite].edge = edge;
-      ++edge;
-    }
-  });
 
   // Vertices: half-edge (the boundary one, else the first), valence, and the
   // manifold test of require_manifold(): walking the fan from there reaches
@@ -207,6 +181,41 @@ void CollapseMesh::build(const PolygonMesh& mesh, const std::uint32_t* order) {
   });
   if (unreferenced) not_manifold("a vertex is used by no triangle");
   if (several_fans) not_manifold("a vertex's triangles form more than one fan");
+  // Freed before the edge records are allocated, which then take over their
+  // pages: fresh pages cost more than the arithmetic here (the kernel zeroes
+  // each; on this machine's VM 1-3.5 ms per MB when the host had reclaimed
+  // them). Miranda: peak 886 -> 778 MB.
+  std::vector<Outgoing>().swap(outgoing);
+  std::vector<std::uint32_t>().swap(first);
+
+  // Edge ids in corner order: one per corner without an opposite or with a
+  // later one. Counted per chunk, then numbered.
+  constexpr std::uint32_t kChunk = 1 << 16;
+  const std::uint32_t chunk_count = (corner_count + kChunk - 1) / kChunk;
+  std::vector<std::uint32_t> chunk_first(chunk_count + 1, 0);
+  const auto owns_edge = [&](std::uint32_t c) {
+    const std::uint32_t o = corners_[c].opposite;
+    return o == kNone || o > c;
+  };
+  tbb::parallel_for(std::uint32_t{0}, chunk_count, [&](std::uint32_t chunk) {
+    std::uint32_t count = 0;
+    for (std::uint32_t c = chunk * kChunk; c < std::min(corner_count, (chunk + 1) * kChunk); ++c) count += owns_edge(c);
+    chunk_first[chunk + 1] = count;
+  });
+  std::partial_sum(chunk_first.begin(), chunk_first.end(), chunk_first.begin());
+  reserve_fresh_on_huge_pages(edges_, chunk_first[chunk_count]);
+  edges_.resize(chunk_first[chunk_count]);
+  tbb::parallel_for(std::uint32_t{0}, chunk_count, [&](std::uint32_t chunk) {
+    std::uint32_t edge = chunk_first[chunk];
+    for (std::uint32_t c = chunk * kChunk; c < std::min(corner_count, (chunk + 1) * kChunk); ++c) {
+      if (!owns_edge(c)) continue;
+      edges_[edge] = EdgeRecord{c, 0.0f, 0.0f, 0, {kNone, kNone, BucketQueue::kNotQueued}, 0};
+      corners_[c].edge = edge;
+      if (corners_[c].opposite != kNone) corners_[corners_[c].opposite].edge = edge;
+      ++edge;
+    }
+  });
+
   initial_vertices_ = vertex_count;
   initial_triangles_ = triangle_count;
   for (int l = 0; l < kLanes; ++l) lanes_[l].stamp = static_cast<std::uint32_t>(l);
@@ -231,6 +240,13 @@ void CollapseMesh::for_each_corner(std::uint32_t v, Visit&& visit) const {
     visit(c);
     c = corners_[prev(c)].opposite;
   } while (c != kNone && c != start);
+}
+
+void CollapseMesh::append_neighbours(std::uint32_t v, std::vector<std::uint32_t>& neighbours) const {
+  for_each_corner(v, [&](std::uint32_t c) {
+    neighbours.push_back(target(c));
+    neighbours.push_back(corners_[prev(c)].vertex);
+  });
 }
 
 std::uint32_t CollapseMesh::find_edge(std::uint32_t a, std::uint32_t b) const {
@@ -357,8 +373,7 @@ Evaluation CollapseMesh::evaluate(std::uint32_t e, FanCache& cache, int max_vale
   const std::uint32_t h = edges_[e].halfedge;
   const std::uint32_t o = corners_[h].opposite;
   const bool boundary_edge = o == kNone;
-  const std::uint32_t vi = corners_[h].vertex, vj = corners_[next(h)].vertex, a = corners_[prev(h)].vertex;
-  const std::uint32_t b = boundary_edge ? kNone : corners_[prev(o)].vertex;
+  const std::uint32_t vi = corners_[h].vertex, vj = corners_[next(h)].vertex;
   const bool boundary_i = is_boundary(vi), boundary_j = is_boundary(vj);
 
   // Fans of both endpoints (the valence test bounds their size). Indices
@@ -589,14 +604,6 @@ bool CollapseMesh::collapse_inside(std::uint32_t e, std::uint8_t id) const {
   return inside;
 }
 
-void CollapseMesh::reset_queue_links() {
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, edges_.size(), 1 << 16),
-                    [&](const tbb::blocked_range<std::size_t>& range) {
-                      for (std::size_t e = range.begin(); e != range.end(); ++e)
-                        edges_[e].queue = BucketQueue::Links{kNone, kNone, BucketQueue::kNotQueued};
-                    });
-}
-
 std::array<std::uint32_t, 4> CollapseMesh::edge_vertices(std::uint32_t e) const {
   const std::uint32_t h = edges_[e].halfedge;
   assert(h != kNone);
@@ -631,8 +638,8 @@ bool CollapseMesh::can_flip(std::uint32_t e) const {
   return find_edge(a, b) == kNone;
 }
 
-void CollapseMesh::flip(std::uint32_t e) {
-  ++lanes_[0].version;
+void CollapseMesh::flip(std::uint32_t e, int lane) {
+  ++lanes_[lane].version;
   // Triangle slots: t0 = (h, n0, p0) holds (v_i, v_j, a) and becomes
   // (v_i, b, a); t1 = (o, n1, p1) holds (v_j, v_i, b) and becomes (v_j, a, b).
   // The half-edges a -> v_i (p0) and b -> v_j (p1) keep their corners.
@@ -662,7 +669,7 @@ void CollapseMesh::flip(std::uint32_t e) {
 }
 
 int CollapseMesh::lower_valence(std::uint32_t v, int count, const std::uint32_t* keep, int keep_count,
-                                std::vector<std::uint32_t>& flipped) {
+                                std::vector<std::uint32_t>& flipped, int lane) {
   // Candidates: the edges at v, ordered by the valence the flip would add to
   // their two opposite vertices.
   std::array<std::pair<std::uint32_t, std::uint32_t>, kMaxRing> candidates;
@@ -680,7 +687,7 @@ int CollapseMesh::lower_valence(std::uint32_t v, int count, const std::uint32_t*
   for (int k = 0; k < candidate_count && done < count; ++k) {
     const std::uint32_t edge = candidates[k].second;
     if (!can_flip(edge)) continue;  // an earlier flip may have changed it
-    flip(edge);
+    flip(edge, lane);
     flipped.push_back(edge);
     ++done;
   }

@@ -1,16 +1,18 @@
 #pragma once
-// Edge-removal pass of paper Sec. 4.1 on OpenMesh's polygon halfedge mesh
-// (private: keeps OpenMesh out of the public headers). Rules and priority are
-// documented in isowave/simplify/simplify.h.
+// Edge-removal pass of paper Sec. 4.1 on the corner table of the collapsed
+// triangles (private). Rules and priority are documented in
+// isowave/simplify/simplify.h.
 #include <cstddef>
 
 #include "isowave/core/mesh.h"
 
 namespace isowave::simplify {
 
-// Merges faces of `mesh` (a consistently oriented 2-manifold) in place;
-// returns the number of edges removed. Vertex indices are unchanged; faces
-// are renumbered. O(n log n) in the number of edges.
+// Merges faces of `mesh` (a consistently oriented 2-manifold of triangles
+// without unreferenced vertices) in place; returns the number of edges
+// removed. Vertex indices are unchanged; faces are renumbered. The paper's
+// bucket queue (kBucketCount buckets over the priority range, first in first
+// out inside one): O(1) per queue update, O(n) in all.
 std::size_t remove_edges(PolygonMesh& mesh, double min_normal_dot);
 
 }  // namespace isowave::simplify

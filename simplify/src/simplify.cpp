@@ -6,13 +6,17 @@
 #include <cstdio>
 #include <stdexcept>
 
+#include <atomic>
+
 #include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_invoke.h>
 #include <tbb/parallel_sort.h>
 
 #include "edge_removal.h"
 #include "isowave/core/error.h"
+#include "isowave/core/huge_page_vector.h"
 #include "isowave/core/mesh_topology.h"
 #include "isowave/simplify/bucket_queue.h"
 #include "isowave/simplify/collapse_error.h"
@@ -27,6 +31,7 @@ namespace {
 constexpr int kMaxFlipsPerCollapse = 4;
 constexpr double kHuge = 1e300;
 constexpr double kParallelShare = 0.9;  // see collapse_in_parallel
+constexpr std::uint8_t kBand = 255;     // region of the vertices no thread collapses
 
 using Clock = std::chrono::steady_clock;
 
@@ -141,23 +146,6 @@ void requeue(BucketQueue& queue, CollapseMesh& mesh, std::uint32_t s, const Eval
   queue.push(s, bucket);
 }
 
-// The update of stencil edge s after a collapse made vertex v. Eager (the
-// paper): evaluate and requeue. Lazy (SimplifyOptions::lazy_stencil): only
-// an edge at v is evaluated; another keeps its place in the queue, or, if
-// it is not queued, comes back at its last priority when the vertex rules
-// admit it (it is evaluated when popped).
-template <typename Evaluate>
-void update_stencil_edge(BucketQueue& queue, CollapseMesh& mesh, std::uint32_t s, std::uint32_t v, bool lazy,
-                         const Evaluate& evaluate, std::uint32_t bucket_count, int max_valence) {
-  const std::uint32_t h = mesh.edge_halfedge(s);
-  if (!lazy || mesh.origin(h) == v || mesh.target(h) == v) {
-    requeue(queue, mesh, s, evaluate(s), bucket_count);
-    return;
-  }
-  if (queue.contains(s) || mesh.vertex_rules(s, max_valence) != Legality::Legal) return;
-  queue.push(s, priority_bucket(mesh.error(s), bucket_count));
-}
-
 // Hands edges to a collapse loop (SimplifyOptions::batch_error_factor). With
 // a span of 0 buckets, one at a time in priority order, as the paper does.
 // Otherwise in batches: every queued edge within `span` buckets of the top
@@ -210,119 +198,328 @@ class EdgePops {
   std::uint32_t threshold_ = 0;
 };
 
-// Parallel phase of the collapse (SimplifyOptions::parallel). The vertices
-// (in Morton order, so each half is a compact part of space) are split in
-// two halves; the vertices within two edges of an edge joining the halves
-// form a band that nobody collapses. Each half runs the paper's loop on its
-// own queue, in its own CollapseMesh lane, and collapses only edges whose
-// endpoints and all their neighbours lie in its half (collapse_inside), so
-// the two threads never write what the other reads: collapses never join
-// band vertices, so the band keeps the halves two edges apart throughout.
-// Boundary edges, and edges that reach the band, wait for the serial loop
-// that follows. Each half's sequence depends only on its own half and the
-// unchanging band, so the result does not depend on thread timing.
-void collapse_in_parallel(CollapseMesh& mesh, const std::vector<std::uint32_t>& initial_buckets, std::size_t target,
-                          const SimplifyOptions& options, SimplifyReport& report) {
-  constexpr std::uint8_t kBand = 255;
-  const std::uint32_t vertex_slots = mesh.vertex_slots(), half = vertex_slots / 2;
-  std::vector<std::uint8_t> distance(vertex_slots, kBand);  // edges to the nearest cut vertex, up to 2
+
+// What a collapse loop did, added to the report once it ends.
+struct LoopCounters {
+  std::size_t collapses = 0, collapses_after_flips = 0, flips = 0, flips_undone = 0, flip_attempts_failed = 0;
+  std::array<std::size_t, kLegalityCount> rejected{};
+
+  void add_to(SimplifyReport& report) const {
+    report.collapses += collapses;
+    report.collapses_after_flips += collapses_after_flips;
+    report.flips += flips;
+    report.flips_undone += flips_undone;
+    report.flip_attempts_failed += flip_attempts_failed;
+    for (int k = 0; k < kLegalityCount; ++k) report.rejected_at_pop[k] += rejected[k];
+  }
+};
+
+// One thread's collapse loop (paper Sec. 4.1): pop the best edge, evaluate
+// it again, collapse it if it is still legal and still as good, update the
+// Fig. 8 stencil. Optionally (with_flips, the flip round) an edge blocked
+// only by its new vertex's valence first flips edges at its endpoints.
+// Confined to a region (the two-thread phases), the loop collapses only
+// edges inside it (CollapseMesh::collapse_inside, checked before any flip:
+// then the flips, whose quads lie around the endpoints, stay inside too) and
+// drops every other edge from its queue, for the serial loop that follows.
+class CollapseLoop {
+ public:
+  static constexpr int kAnyRegion = -1;
+
+  CollapseLoop(CollapseMesh& mesh, BucketQueue& queue, const SimplifyOptions& options, bool with_flips, int lane,
+               int region)
+      : mesh_(mesh),
+        queue_(queue),
+        options_(options),
+        with_flips_(with_flips),
+        lane_(lane),
+        region_(region),
+        cache_(lane),
+        // The flip round stays eager: with stale priorities it made 65% more
+        // failed flip attempts (miranda) for no gain in time.
+        lazy_(options.lazy_stencil && !with_flips) {
+    stencil_.reserve(128);
+  }
+
+  // Collapses until keep_going() is false or the queue is empty; calls
+  // after_collapse() after each collapse. Batched by `batch_span` buckets
+  // (EdgePops).
+  template <typename KeepGoing, typename AfterCollapse>
+  void run(std::uint32_t batch_span, const KeepGoing& keep_going, const AfterCollapse& after_collapse) {
+    const std::uint32_t bucket_count = options_.bucket_count;
+    EdgePops pops(queue_, batch_span);
+    std::uint32_t e, least_bucket;
+    while (keep_going() && pops.next(mesh_, e, least_bucket)) {
+      Evaluation evaluation = mesh_.evaluate(e, cache_);
+      flipped_.clear();
+      if (with_flips_ && evaluation.legality == Legality::NewVertexValence) {
+        if (!collapses_here(e)) continue;
+        evaluation = flip_for(e);
+        if (evaluation.legality != Legality::Legal) continue;
+      }
+      if (evaluation.legality != Legality::Legal) {
+        ++counters.rejected[static_cast<int>(evaluation.legality)];
+        continue;
+      }
+      if (flipped_.empty() && !collapses_here(e)) continue;
+      mesh_.set_latest_delta_error(e, evaluation.delta_error);
+      const std::uint32_t bucket = priority_bucket(mesh_.error(e), bucket_count);
+      if (bucket < least_bucket) {  // its neighbourhood changed outside the stencil
+        undo_flips();
+        queue_.push(e, bucket);
+        continue;
+      }
+      // The flipped edges' quads join the stencil centres.
+      centres_.clear();
+      for (std::uint32_t f : flipped_)
+        for (std::uint32_t w : mesh_.edge_vertices(f)) centres_.push_back(w);
+      counters.flips += flipped_.size();
+      if (!flipped_.empty()) ++counters.collapses_after_flips;
+      std::uint32_t removed[3], opposite_vertices[2];
+      const std::uint32_t v = mesh_.collapse(e, evaluation.position, removed, opposite_vertices, lane_);
+      ++counters.collapses;
+      for (std::uint32_t dead : removed)
+        if (dead != CollapseMesh::kNone && queue_.contains(dead)) queue_.remove(dead);
+      centres_.insert(centres_.end(), {v, opposite_vertices[0], opposite_vertices[1]});
+      stencil_.clear();
+      mesh_.gather_stencil(centres_.data(), static_cast<int>(centres_.size()), stencil_, lane_);
+      for (std::uint32_t s : stencil_) update_stencil_edge(s, v);
+      after_collapse();
+    }
+  }
+
+  LoopCounters counters;
+
+ private:
+  bool confined() const { return region_ != kAnyRegion; }
+  // Whether this loop may collapse e (with flips around its endpoints).
+  bool collapses_here(std::uint32_t e) const {
+    return !confined() || mesh_.collapse_inside(e, static_cast<std::uint8_t>(region_));
+  }
+  bool inside(std::uint32_t s) const {
+    if (!confined()) return true;
+    const std::uint32_t h = mesh_.edge_halfedge(s);
+    return mesh_.region(mesh_.origin(h)) == region_ && mesh_.region(mesh_.target(h)) == region_;
+  }
+
+  // Evaluation of a stencil edge: in the flip round, an edge blocked by the
+  // new vertex's valence gets the priority it would have after flips.
+  Evaluation evaluate_for_queue(std::uint32_t e) {
+    Evaluation evaluation = mesh_.evaluate(e, cache_);
+    if (with_flips_ && evaluation.legality == Legality::NewVertexValence)
+      evaluation = mesh_.evaluate(e, cache_, options_.max_valence + kMaxFlipsPerCollapse);
+    return evaluation;
+  }
+
+  // Lowers the endpoints' valences until the new vertex fits, then evaluates
+  // e again; undoes the flips and counts a failed attempt if it is still
+  // not legal.
+  Evaluation flip_for(std::uint32_t e) {
+    const auto [vi, vj, a, b] = mesh_.edge_vertices(e);
+    const std::uint32_t keep[4] = {vi, vj, a, b};
+    int excess = int(mesh_.valence(vi)) + int(mesh_.valence(vj)) - (b == CollapseMesh::kNone ? 3 : 4) -
+                 options_.max_valence;
+    // Most attempts cannot flip enough: a bound on the flips available skips
+    // them before flipping (flip round on miranda 2.0 -> 1.65 s). Not exact
+    // (a flip can free a neighbouring edge), so now and then it skips an
+    // attempt that would have worked: 51 of 14,016 collapses.
+    if (mesh_.flip_capacity(vi, keep, 4) + mesh_.flip_capacity(vj, keep, 4) < excess) {
+      ++counters.flip_attempts_failed;
+      return Evaluation{};
+    }
+    for (std::uint32_t endpoint : {vi, vj})
+      if (excess > 0) excess -= mesh_.lower_valence(endpoint, excess, keep, 4, flipped_, lane_);
+    const Evaluation evaluation = excess > 0 ? Evaluation{} : mesh_.evaluate(e, cache_);
+    if (evaluation.legality != Legality::Legal) {
+      ++counters.flip_attempts_failed;
+      undo_flips();
+    }
+    return evaluation;
+  }
+
+  void undo_flips() {
+    for (std::size_t k = flipped_.size(); k-- > 0;) mesh_.flip(flipped_[k], lane_);
+    counters.flips_undone += flipped_.size();
+    flipped_.clear();
+  }
+
+  // The update of stencil edge s after a collapse made vertex v. Outside the
+  // region: out of this loop's queue. Eager (the paper): evaluate and
+  // requeue. Lazy (SimplifyOptions::lazy_stencil): only an edge at v is
+  // evaluated; another keeps its place in the queue, or, if it is not
+  // queued, comes back at its last priority when the vertex rules admit it;
+  // it is evaluated when popped.
+  void update_stencil_edge(std::uint32_t s, std::uint32_t v) {
+    const std::uint32_t bucket_count = options_.bucket_count;
+    if (!inside(s)) {
+      if (queue_.contains(s)) queue_.remove(s);
+      return;
+    }
+    // An edge at v: its E_acc rose and its ring changed, so it is evaluated
+    // at once even when lazy. Waiting until popped (at the bound E_acc + 1e-8
+    // on its E) saved 0.45 s of the miranda two-thread phase but left the
+    // mixing field's fit with 0.44% of its faces tangled instead of 0.33%
+    // (bases of 2,200-2,600 vertices), its surface max 0.9-1.7 cells instead
+    // of 0.65, and miranda's Table 1 rows 0.1-0.5% of a cell higher.
+    const std::uint32_t h = mesh_.edge_halfedge(s);
+    if (!lazy_ || mesh_.origin(h) == v || mesh_.target(h) == v)
+      requeue(queue_, mesh_, s, evaluate_for_queue(s), bucket_count);
+    else if (!queue_.contains(s) && mesh_.vertex_rules(s, options_.max_valence) == Legality::Legal)
+      queue_.push(s, priority_bucket(mesh_.error(s), bucket_count));
+  }
+
+  CollapseMesh& mesh_;
+  BucketQueue& queue_;
+  const SimplifyOptions& options_;
+  const bool with_flips_;
+  const int lane_, region_;
+  FanCache cache_;
+  const bool lazy_;
+  std::vector<std::uint32_t> stencil_, flipped_, centres_;
+};
+
+// The edges a pass looks at, in id order: every slot at first; once the
+// first two-thread phase has deleted most edges, the ones then alive (later
+// deletions are skipped: no collapse or flip makes a new edge id), so that
+// later passes do not scan a few million dead slots each.
+class EdgeList {
+ public:
+  explicit EdgeList(std::uint32_t slots) : slots_(slots) {}
+  std::uint32_t size() const { return listed_ ? static_cast<std::uint32_t>(ids_.size()) : slots_; }
+  std::uint32_t operator[](std::uint32_t k) const { return listed_ ? ids_[k] : k; }
+  void keep_alive(const CollapseMesh& mesh) {
+    std::vector<std::uint32_t> alive;
+    for (std::uint32_t k = 0; k < size(); ++k)
+      if (mesh.edge_alive((*this)[k])) alive.push_back((*this)[k]);
+    ids_.swap(alive);
+    listed_ = true;
+  }
+
+ private:
+  std::uint32_t slots_;
+  bool listed_ = false;
+  std::vector<std::uint32_t> ids_;
+};
+
+// Two-thread phases of the collapse (SimplifyOptions::parallel): the paper's
+// rules first, later the flip round (with_flips). The vertices (in Morton
+// order, so each half is a compact part of space) are split in two halves;
+// the vertices within two edges of an edge joining the halves form a band
+// that nobody collapses. Each half runs a CollapseLoop on its own queue, in
+// its own CollapseMesh lane, confined to its half, so the two threads never
+// write what the other reads: collapses and flips never join band vertices,
+// so the band keeps the halves two edges apart throughout. Boundary edges,
+// and edges that reach the band, wait for the serial loop that follows.
+// Each half's sequence depends only on its own half and the unchanging band,
+// so the result does not depend on thread timing. `initial_buckets[k]`: the
+// priority bucket of edges[k] (kNotQueued if not legal). Returns whether
+// both loops emptied their queues (rather than stopping at their quota).
+bool collapse_in_parallel(CollapseMesh& mesh, const EdgeList& edges, const std::vector<std::uint32_t>& initial_buckets,
+                          std::size_t target, const SimplifyOptions& options, bool with_flips,
+                          SimplifyReport& report) {
+  using Range = tbb::blocked_range<std::uint32_t>;
+  const std::uint32_t vertex_slots = mesh.vertex_slots();
   const auto endpoints = [&](std::uint32_t e) {
     const std::uint32_t h = mesh.edge_halfedge(e);
     return std::pair<std::uint32_t, std::uint32_t>{mesh.origin(h), mesh.target(h)};
   };
-  for (std::uint32_t e = 0; e < mesh.edge_slots(); ++e) {
-    const auto [u, w] = endpoints(e);
-    if ((u < half) != (w < half)) distance[u] = distance[w] = 0;
-  }
-  for (std::uint8_t ring = 1; ring <= 2; ++ring)
-    for (std::uint32_t e = 0; e < mesh.edge_slots(); ++e) {
+  const std::uint32_t half = vertex_slots / 2;
+  // The band: breadth-first from the cut vertices (the endpoints of the edges
+  // joining the halves), two rings out.
+  tbb::enumerable_thread_specific<std::vector<std::uint32_t>> cut_parts;
+  const std::uint32_t edge_count = edges.size();
+  tbb::parallel_for(Range(0, edge_count, 1 << 16), [&](const Range& range) {
+    std::vector<std::uint32_t>& part = cut_parts.local();
+    for (std::uint32_t k = range.begin(); k != range.end(); ++k) {
+      const std::uint32_t e = edges[k];
+      if (!mesh.edge_alive(e)) continue;
       const auto [u, w] = endpoints(e);
-      if (distance[u] == ring - 1 && distance[w] > ring) distance[w] = ring;
-      if (distance[w] == ring - 1 && distance[u] > ring) distance[u] = ring;
+      if ((u < half) != (w < half)) part.insert(part.end(), {u, w});
     }
-  std::size_t region_vertices[CollapseMesh::kLanes] = {0, 0};
-  for (std::uint32_t v = 0; v < vertex_slots; ++v) {
-    const std::uint8_t region = distance[v] <= 2 ? kBand : (v < half ? 0 : 1);
-    mesh.set_region(v, region);
-    if (region != kBand && mesh.vertex_alive(v)) ++region_vertices[region];
+  });
+  std::vector<std::uint8_t> distance(vertex_slots, kBand);  // edges to the nearest cut vertex, up to 2
+  std::vector<std::uint32_t> frontier, next_frontier, neighbours;
+  for (const std::vector<std::uint32_t>& part : cut_parts)
+    for (std::uint32_t v : part)
+      if (distance[v] != 0) {
+        distance[v] = 0;
+        frontier.push_back(v);
+      }
+  for (std::uint8_t ring = 1; ring <= 2; ++ring) {
+    next_frontier.clear();
+    for (std::uint32_t v : frontier) {
+      neighbours.clear();
+      mesh.append_neighbours(v, neighbours);
+      for (std::uint32_t w : neighbours)
+        if (distance[w] > ring) {
+          distance[w] = ring;
+          next_frontier.push_back(w);
+        }
+    }
+    frontier.swap(next_frontier);
   }
+  std::array<std::atomic<std::size_t>, CollapseMesh::kLanes> region_vertices{};
+  tbb::parallel_for(Range(0, vertex_slots, 1 << 16), [&](const Range& range) {
+    std::size_t counts[CollapseMesh::kLanes] = {0, 0};
+    for (std::uint32_t v = range.begin(); v != range.end(); ++v) {
+      const std::uint8_t region = distance[v] <= 2 ? kBand : (v < half ? 0 : 1);
+      mesh.set_region(v, region);
+      if (region != kBand && mesh.vertex_alive(v)) ++counts[region];
+    }
+    for (int lane = 0; lane < CollapseMesh::kLanes; ++lane) region_vertices[lane] += counts[lane];
+  });
   // Each half's initial edges, chosen before the threads start: once one
   // collapses, the other must not look at its edges.
-  std::vector<std::uint8_t> edge_region(mesh.edge_slots(), kBand);
-  for (std::uint32_t e = 0; e < mesh.edge_slots(); ++e) {
-    const auto [u, w] = endpoints(e);
-    if (initial_buckets[e] != BucketQueue::kNotQueued && mesh.region(u) == mesh.region(w))
-      edge_region[e] = mesh.region(u);
-  }
+  std::vector<std::uint8_t> edge_region(edge_count, kBand);
+  tbb::parallel_for(Range(0, edge_count, 1 << 16), [&](const Range& range) {
+    for (std::uint32_t k = range.begin(); k != range.end(); ++k) {
+      if (initial_buckets[k] == BucketQueue::kNotQueued) continue;
+      const auto [u, w] = endpoints(edges[k]);
+      if (mesh.region(u) == mesh.region(w)) edge_region[k] = mesh.region(u);
+    }
+  });
   const std::size_t alive = mesh.alive_vertices();
   const std::size_t planned = alive > target ? alive - target : 0;
 
-  struct LaneResult {
-    std::size_t collapses = 0;
-    std::array<std::size_t, kLegalityCount> rejected{};
-  };
-  LaneResult results[CollapseMesh::kLanes];
   const std::uint32_t bucket_count = options.bucket_count;
   const std::uint32_t batch_span = priority_bucket_span(options.batch_error_factor, bucket_count);
+  std::array<LoopCounters, CollapseMesh::kLanes> counters;
+  std::array<bool, CollapseMesh::kLanes> emptied{};
   const auto run_lane = [&](int lane) {
-    const auto id = static_cast<std::uint8_t>(lane);
-    const auto inside = [&](std::uint32_t e) {
-      const auto [u, w] = endpoints(e);
-      return mesh.region(u) == id && mesh.region(w) == id;
-    };
     // 90% of its share of the planned collapses, so that where it stops does
     // not depend on the other thread, and the last, costliest collapses go to
     // the serial loop in global priority order: with the whole share, a half
     // short of cheap edges was forced into expensive ones (engine CT at 1.7%:
     // base-mesh RMSE 103% of a cell; 43% with 90%, as serially).
-    const std::size_t quota = static_cast<std::size_t>(kParallelShare * double(planned) * double(region_vertices[lane]) /
+    const std::size_t quota = static_cast<std::size_t>(kParallelShare * double(planned) *
+                                                       double(region_vertices[lane].load()) /
                                                        double(std::max<std::size_t>(alive, 1)));
-    // The two queues hold disjoint edges: they share the links in the edge records.
+    // The two queues hold disjoint edges: they share the links in the edge
+    // records, which an emptied queue leaves as it found them.
     BucketQueue queue(mesh.queue_links(), CollapseMesh::queue_link_stride(), mesh.edge_slots(), bucket_count);
-    for (std::uint32_t e = 0; e < mesh.edge_slots(); ++e)
-      if (edge_region[e] == id) queue.push(e, initial_buckets[e]);
-    LaneResult& result = results[lane];
-    FanCache cache(lane);
-    std::vector<std::uint32_t> stencil;
-    EdgePops pops(queue, batch_span);
-    std::uint32_t e, least_bucket;
-    while (result.collapses < quota && pops.next(mesh, e, least_bucket)) {
-      const Evaluation evaluation = mesh.evaluate(e, cache);
-      if (evaluation.legality != Legality::Legal) {
-        ++result.rejected[static_cast<int>(evaluation.legality)];
-        continue;
-      }
-      if (!mesh.collapse_inside(e, id)) continue;  // left to the serial loop
-      mesh.set_latest_delta_error(e, evaluation.delta_error);
-      const std::uint32_t bucket = priority_bucket(mesh.error(e), bucket_count);
-      if (bucket < least_bucket) {
-        queue.push(e, bucket);
-        continue;
-      }
-      std::uint32_t removed[3], opposite_vertices[2];
-      const std::uint32_t v = mesh.collapse(e, evaluation.position, removed, opposite_vertices, lane);
-      ++result.collapses;
-      for (std::uint32_t dead : removed)
-        if (dead != CollapseMesh::kNone && queue.contains(dead)) queue.remove(dead);
-      const std::uint32_t centres[3] = {v, opposite_vertices[0], opposite_vertices[1]};
-      stencil.clear();
-      mesh.gather_stencil(centres, 3, stencil, lane);
-      const auto evaluate = [&](std::uint32_t s) { return mesh.evaluate(s, cache); };
-      for (std::uint32_t s : stencil) {
-        if (inside(s))
-          update_stencil_edge(queue, mesh, s, v, options.lazy_stencil, evaluate, bucket_count, options.max_valence);
-        else
-          requeue(queue, mesh, s, Evaluation{}, bucket_count);
-      }
-    }
+    for (std::uint32_t k = 0; k < edge_count; ++k)
+      if (edge_region[k] == lane) queue.push(edges[k], initial_buckets[k]);
+    CollapseLoop loop(mesh, queue, options, with_flips, lane, lane);
+    loop.run(batch_span, [&] { return loop.counters.collapses < quota; }, [] {});
+    counters[lane] = loop.counters;
+    emptied[lane] = queue.empty() && loop.counters.collapses < quota;
+    while (!queue.empty()) queue.pop();  // for the serial queue
   };
   tbb::parallel_invoke([&] { run_lane(0); }, [&] { run_lane(1); });
-  mesh.reset_queue_links();  // for the serial queue
-  for (const LaneResult& result : results) {
-    report.collapses += result.collapses;
-    report.parallel_collapses += result.collapses;
-    for (int k = 0; k < kLegalityCount; ++k) report.rejected_at_pop[k] += result.rejected[k];
+  for (const LoopCounters& lane : counters) {
+    lane.add_to(report);
+    report.parallel_collapses += lane.collapses;
+    if (with_flips) report.parallel_flip_round_collapses += lane.collapses;
   }
+  return emptied[0] && emptied[1];
+}
+
+// After collapse_in_parallel: whether its loops had to leave edge e to the
+// serial loop (an edge inside a half is, when its loop emptied its queue,
+// either collapsed or as illegal as a serial loop would find it).
+bool left_by_two_threads(const CollapseMesh& mesh, std::uint32_t e) {
+  const std::uint8_t region = mesh.region(mesh.origin(mesh.edge_halfedge(e)));
+  return region == kBand || !mesh.collapse_inside(e, region);
 }
 
 // Face-size and valence histograms of the output.
@@ -417,161 +614,109 @@ SimplifyResult simplify(const PolygonMesh& input, const SimplifyOptions& options
   progress.end_stage();
   report.seconds_build = seconds_since(clock);
 
-  // Priorities of every edge, evaluated in parallel (evaluate() only reads);
-  // callers queue them in edge order so that the FIFO order is deterministic.
+  // Priorities of the listed edges, evaluated in parallel (evaluate() only
+  // reads): bucket k for edges[k]. Callers queue them in edge order so that
+  // the FIFO order is deterministic.
   const std::uint32_t bucket_count = options.bucket_count;
-  const auto evaluate_all_edges = [&](int max_valence) {
-    std::vector<std::uint32_t> buckets(mesh.edge_slots(), BucketQueue::kNotQueued);
-    tbb::parallel_for(tbb::blocked_range<std::uint32_t>(0, mesh.edge_slots(), 8192),
+  EdgeList edges(mesh.edge_slots());
+  const auto every_edge = [](std::uint32_t) { return true; };
+  const auto evaluate_edges = [&](int max_valence, const auto& selected) {
+    std::vector<std::uint32_t> buckets;
+    reserve_fresh_on_huge_pages(buckets, edges.size());
+    buckets.resize(edges.size(), BucketQueue::kNotQueued);
+    tbb::parallel_for(tbb::blocked_range<std::uint32_t>(0, edges.size(), 8192),
                       [&](const tbb::blocked_range<std::uint32_t>& range) {
                         FanCache cache;
-                        for (std::uint32_t e = range.begin(); e != range.end(); ++e) {
+                        for (std::uint32_t k = range.begin(); k != range.end(); ++k) {
+                          const std::uint32_t e = edges[k];
+                          if (!mesh.edge_alive(e) || !selected(e)) continue;
                           const Evaluation evaluation = mesh.evaluate(e, cache, max_valence);
                           if (evaluation.legality != Legality::Legal) continue;
                           mesh.set_latest_delta_error(e, evaluation.delta_error);
-                          buckets[e] = priority_bucket(mesh.error(e), bucket_count);
+                          buckets[k] = priority_bucket(mesh.error(e), bucket_count);
                         }
                       });
     return buckets;
   };
   BucketQueue queue(mesh.queue_links(), CollapseMesh::queue_link_stride(), mesh.edge_slots(), bucket_count);
-  const auto queue_all_edges = [&](int max_valence) {
-    const std::vector<std::uint32_t> buckets = evaluate_all_edges(max_valence);
-    for (std::uint32_t e = 0; e < mesh.edge_slots(); ++e)
-      if (buckets[e] != BucketQueue::kNotQueued) queue.push(e, buckets[e]);
+  const auto queue_edges = [&](int max_valence, const auto& selected) {
+    const std::vector<std::uint32_t> buckets = evaluate_edges(max_valence, selected);
+    for (std::uint32_t k = 0; k < edges.size(); ++k)
+      if (buckets[k] != BucketQueue::kNotQueued) queue.push(edges[k], buckets[k]);
   };
   report.target_vertices = std::min(options.target_vertices, input.vertex_count());
   const bool collapse_wanted = options.target_vertices < input.vertex_count();
   const bool in_parallel = collapse_wanted && options.parallel && input.vertex_count() >= options.parallel_min_vertices;
   progress.begin_stage("simplify: queue");
   std::vector<std::uint32_t> initial_buckets;
-  if (in_parallel) initial_buckets = evaluate_all_edges(options.max_valence);
-  else if (collapse_wanted) queue_all_edges(options.max_valence);
+  if (in_parallel) initial_buckets = evaluate_edges(options.max_valence, every_edge);
+  else if (collapse_wanted) queue_edges(options.max_valence, every_edge);
   progress.end_stage();
   report.seconds_queue = seconds_since(clock);
 
   // Collapse loop. First the paper's rules alone; when they stall, a second
   // round in which an edge blocked only by the valence of its new vertex may
   // first flip edges at its endpoints (see SimplifyOptions::valence_flips).
+  // Each on two threads first, when in_parallel, then serially.
   progress.begin_stage("simplify: collapse");
   const std::size_t target = report.target_vertices;
   const std::size_t planned = input.vertex_count() - target;
   const int relaxed_valence = options.max_valence + kMaxFlipsPerCollapse;
-  std::vector<std::uint32_t> stencil, flipped, centres;
-  stencil.reserve(128);
-  FanCache cache;
-  bool with_flips = false;
-  // Evaluation of a stencil or popped edge: in the flip round, an edge blocked
-  // by the new vertex's valence gets the priority it would have after flips.
-  const auto evaluate_for_queue = [&](std::uint32_t e) {
-    Evaluation evaluation = mesh.evaluate(e, cache);
-    if (with_flips && evaluation.legality == Legality::NewVertexValence)
-      evaluation = mesh.evaluate(e, cache, relaxed_valence);
-    return evaluation;
-  };
-  const auto undo_flips = [&] {
-    for (std::size_t k = flipped.size(); k-- > 0;) mesh.flip(flipped[k]);
-    report.flips_undone += flipped.size();
-    flipped.clear();
-  };
   // The paper's rules in its order (batched, the miranda base mesh came out
   // 5% farther from the input); the flip round in batches (SimplifyOptions::
   // batch_error_factor).
-  const std::uint32_t flip_round_batch_span = priority_bucket_span(options.batch_error_factor, bucket_count);
-  const auto run_queue = [&] {
-    EdgePops pops(queue, with_flips ? flip_round_batch_span : 0);
-    std::uint32_t e, least_bucket;
-    while (mesh.alive_vertices() > target && pops.next(mesh, e, least_bucket)) {
-      Evaluation evaluation = mesh.evaluate(e, cache);
-      flipped.clear();
-      if (with_flips && evaluation.legality == Legality::NewVertexValence) {
-        // Lower the endpoints' valences until the new vertex fits, then look again.
-        const auto [vi, vj, a, b] = mesh.edge_vertices(e);
-        const std::uint32_t keep[4] = {vi, vj, a, b};
-        int excess = int(mesh.valence(vi)) + int(mesh.valence(vj)) - (b == CollapseMesh::kNone ? 3 : 4) -
-                     options.max_valence;
-        // Most attempts cannot flip enough: a bound on the flips available
-        // skips them before flipping (flip round on miranda 2.0 -> 1.65 s).
-        // Not exact (a flip can free a neighbouring edge), so now and then it
-        // skips an attempt that would have worked: 51 of 14,016 collapses.
-        if (mesh.flip_capacity(vi, keep, 4) + mesh.flip_capacity(vj, keep, 4) < excess) {
-          ++report.flip_attempts_failed;
-          continue;
-        }
-        for (std::uint32_t endpoint : {vi, vj})
-          if (excess > 0) excess -= mesh.lower_valence(endpoint, excess, keep, 4, flipped);
-        evaluation = excess > 0 ? Evaluation{} : mesh.evaluate(e, cache);
-        if (evaluation.legality != Legality::Legal) {
-          ++report.flip_attempts_failed;
-          undo_flips();
-          continue;
-        }
-      }
-      if (evaluation.legality != Legality::Legal) {
-        ++report.rejected_at_pop[static_cast<int>(evaluation.legality)];
-        continue;
-      }
-      mesh.set_latest_delta_error(e, evaluation.delta_error);
-      const std::uint32_t bucket = priority_bucket(mesh.error(e), bucket_count);
-      if (bucket < least_bucket) {  // its neighbourhood changed outside the stencil
-        undo_flips();
-        queue.push(e, bucket);
-        continue;
-      }
-      // The flipped edges' quads join the stencil centres.
-      centres.clear();
-      for (std::uint32_t f : flipped)
-        for (std::uint32_t w : mesh.edge_vertices(f)) centres.push_back(w);
-      report.flips += flipped.size();
-      if (!flipped.empty()) ++report.collapses_after_flips;
-      std::uint32_t removed[3], opposite_vertices[2];
-      const std::uint32_t v = mesh.collapse(e, evaluation.position, removed, opposite_vertices);
-      ++report.collapses;
-      for (std::uint32_t dead : removed)
-        if (dead != CollapseMesh::kNone && queue.contains(dead)) queue.remove(dead);
-
-      // Fig. 8 stencil: new legality and priority.
-      centres.insert(centres.end(), {v, opposite_vertices[0], opposite_vertices[1]});
-      stencil.clear();
-      mesh.gather_stencil(centres.data(), static_cast<int>(centres.size()), stencil);
-      // The flip round stays eager: with stale priorities it made 65% more
-      // failed flip attempts (miranda) for no gain in time.
-      for (std::uint32_t s : stencil)
-        update_stencil_edge(queue, mesh, s, v, options.lazy_stencil && !with_flips, evaluate_for_queue, bucket_count,
-                            options.max_valence);
-      if (options.validate_every_collapse) {
-        const std::string problem = mesh.validate();
-        if (!problem.empty())
-          throw std::logic_error("simplify: invariant broken after collapse " + std::to_string(report.collapses) +
-                                 ": " + problem);
-      }
-      if ((report.collapses & 0xFFFF) == 0) progress.update(double(report.collapses) / double(planned));
-    }
+  const auto run_serial_loop = [&](bool with_flips) {
+    CollapseLoop loop(mesh, queue, options, with_flips, 0, CollapseLoop::kAnyRegion);
+    std::size_t collapses = report.collapses;
+    loop.run(
+        with_flips ? priority_bucket_span(options.batch_error_factor, bucket_count) : 0,
+        [&] { return mesh.alive_vertices() > target; },
+        [&] {
+          ++collapses;
+          if (options.validate_every_collapse) {
+            const std::string problem = mesh.validate();
+            if (!problem.empty())
+              throw std::logic_error("simplify: invariant broken after collapse " + std::to_string(collapses) + ": " +
+                                     problem);
+          }
+          if ((collapses & 0xFFFF) == 0) progress.update(double(collapses) / double(planned));
+        });
+    loop.counters.add_to(report);
   };
-  if (in_parallel) {
-    collapse_in_parallel(mesh, initial_buckets, report.target_vertices, options, report);
-    std::vector<std::uint32_t>().swap(initial_buckets);
+  const auto collapse_on_two_threads = [&](std::vector<std::uint32_t> buckets, bool with_flips) {
+    const bool emptied =
+        collapse_in_parallel(mesh, edges, buckets, report.target_vertices, options, with_flips, report);
     if (options.validate_every_collapse && !mesh.validate().empty())
       throw std::logic_error("simplify: invariant broken by the parallel collapses: " + mesh.validate());
-    queue_all_edges(options.max_valence);
+    return emptied;
+  };
+  if (in_parallel) {
+    collapse_on_two_threads(std::move(initial_buckets), false);
+    edges.keep_alive(mesh);
+    queue_edges(options.max_valence, every_edge);
     report.seconds_parallel = seconds_since_start(clock);
   }
   if (options.serial_phase_begins) options.serial_phase_begins();
   if (collapse_wanted) {
-    run_queue();
+    run_serial_loop(false);
     report.vertices_after_paper_collapse = mesh.alive_vertices();
     report.seconds_flip_rounds = -seconds_since_start(clock);
     // Flip rounds: queue every edge the relaxed valence rule admits, in edge
     // order; an edge whose flips failed waits for the next round unless a
     // later collapse re-evaluates it. Stop when a round gains under 1%.
-    with_flips = options.valence_flips;
     bool gained = true;
-    while (with_flips && gained && report.flip_rounds < std::size_t(options.max_flip_rounds) &&
+    while (options.valence_flips && gained && report.flip_rounds < std::size_t(options.max_flip_rounds) &&
            mesh.alive_vertices() > target) {
       const std::size_t before = mesh.alive_vertices();
       ++report.flip_rounds;
-      queue_all_edges(relaxed_valence);
-      run_queue();
+      // Both threads' loops emptied their queues: the serial loop takes the
+      // edges they had to leave.
+      const bool emptied = in_parallel && collapse_on_two_threads(evaluate_edges(relaxed_valence, every_edge), true);
+      if (emptied)
+        queue_edges(relaxed_valence, [&](std::uint32_t e) { return left_by_two_threads(mesh, e); });
+      else
+        queue_edges(relaxed_valence, every_edge);
+      run_serial_loop(true);
       gained = before - mesh.alive_vertices() > before / 100;
     }
     report.seconds_flip_rounds += seconds_since_start(clock);
@@ -638,8 +783,9 @@ std::string format_report(const SimplifyReport& r) {
   add("collapse: %zu collapses -> %zu vertices, %zu triangles; %s\n", r.collapses, r.vertices_after_collapse,
       r.triangles_after_collapse, r.stop_reason.c_str());
   if (r.parallel_collapses)
-    add("parallel: %zu collapses on two threads inside two halves of the mesh in %.3f s, the rest serial\n",
-        r.parallel_collapses, r.seconds_parallel);
+    add("parallel: %zu collapses on two threads inside two halves of the mesh (%zu of them in the flip rounds), "
+        "the rest serial; %.3f s before the first serial loop\n",
+        r.parallel_collapses, r.parallel_flip_round_collapses, r.seconds_parallel);
   if (r.collapses_after_flips)
     add("valence flips: the paper's rules stalled at %zu vertices; %zu rounds, %zu more collapses after %zu flips "
         "(%zu flips undone in %zu failed attempts)\n",

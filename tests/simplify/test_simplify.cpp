@@ -471,6 +471,49 @@ TEST(SimplifyIsosurfaces, ParallelPhaseKeepsTheRulesAndDoesNotDependOnTiming) {
   EXPECT_LE(double(parallel.base.vertex_count()), 1.05 * double(serial.base.vertex_count()));
 }
 
+// A gyroid, sin x cos y + sin y cos z + sin z cos x = 0, over `periods`
+// periods per axis on an n^3 grid: one sheet of high genus (955 for 64^3
+// and 6.4 periods), cut by the box.
+Volume gyroid_volume(std::size_t n, double periods) {
+  Volume volume;
+  volume.dims = {n, n, n};
+  volume.values.resize(n * n * n);
+  const double scale = 2 * M_PI * periods / double(n);
+  for (std::size_t k = 0; k < n; ++k)
+    for (std::size_t j = 0; j < n; ++j)
+      for (std::size_t i = 0; i < n; ++i) {
+        const double x = scale * double(i), y = scale * double(j), z = scale * double(k);
+        volume.values[volume.index(i, j, k)] =
+            float(std::sin(x) * std::cos(y) + std::sin(y) * std::cos(z) + std::sin(z) * std::cos(x));
+      }
+  return volume;
+}
+
+// The flip round runs on two threads too, each confined to its half, then
+// serially on the edges they had to leave: a valid base mesh, the same on
+// every run, about as small as the serial flip round makes it. Needs a
+// surface of high genus, where the paper's rules stall early.
+TEST(SimplifyIsosurfaces, FlipRoundOnTwoThreadsKeepsTheRulesAndDoesNotDependOnTiming) {
+  IsosurfaceOptions extraction;
+  const Isosurface surface = extract_isosurface(gyroid_volume(64, 6.4), extraction);
+  SimplifyOptions options;
+  options.parallel_min_vertices = 0;
+  options.compute_distance = false;
+  const SimplifyResult parallel = simplify(surface.mesh, options);
+  expect_valid_base_mesh(surface.mesh, parallel, "gyroid, parallel", max_valence_of(surface.mesh) <= 8);
+  ASSERT_GT(parallel.report.collapses_after_flips, 0u);
+  EXPECT_GT(parallel.report.parallel_flip_round_collapses, parallel.report.collapses_after_flips / 4);
+  const SimplifyResult again = simplify(surface.mesh, options);
+  EXPECT_EQ(again.base.face_vertices, parallel.base.face_vertices);
+  EXPECT_EQ(again.base.positions, parallel.base.positions);
+  options.parallel = false;
+  const SimplifyResult serial = simplify(surface.mesh, options);
+  EXPECT_LE(double(parallel.report.vertices_after_collapse), 1.02 * double(serial.report.vertices_after_collapse));
+  std::printf("vertices after collapse: parallel %zu (%zu collapses after flips, %zu on two threads), serial %zu\n",
+              parallel.report.vertices_after_collapse, parallel.report.collapses_after_flips,
+              parallel.report.parallel_flip_round_collapses, serial.report.vertices_after_collapse);
+}
+
 // The two-thread phase (and the flip round) collapse in batches of edges
 // within a factor of ten in error (SimplifyOptions::batch_error_factor); the
 // base mesh stays about as close to the input as one collapse at a time in

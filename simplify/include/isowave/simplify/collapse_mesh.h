@@ -145,6 +145,9 @@ class CollapseMesh {
   std::size_t alive_triangles() const;
 
   bool vertex_alive(std::uint32_t v) const { return vertices_[v].halfedge != kNone; }
+  // An outgoing half-edge of v, the boundary one if v is on the boundary:
+  // h, opposite(prev(h)), ... walks v's corners until kNone or h again.
+  std::uint32_t vertex_halfedge(std::uint32_t v) const { return vertices_[v].halfedge; }
   bool edge_alive(std::uint32_t e) const { return edges_[e].halfedge != kNone; }
   std::uint32_t edge_halfedge(std::uint32_t e) const { return edges_[e].halfedge; }
   std::uint32_t origin(std::uint32_t h) const { return corners_[h].vertex; }
@@ -157,6 +160,8 @@ class CollapseMesh {
   std::uint32_t valence(std::uint32_t v) const { return vertices_[v].valence; }
   bool is_sharp(std::uint32_t v) const { return (vertices_[v].flags & kSharp) != 0; }
   bool is_boundary(std::uint32_t v) const { return (vertices_[v].flags & kBoundary) != 0; }
+  // Appends the vertices joined to v by an edge (some twice). O(valence).
+  void append_neighbours(std::uint32_t v, std::vector<std::uint32_t>& neighbours) const;
   // Finds the edge between two vertices, or kNone. O(valence).
   std::uint32_t find_edge(std::uint32_t a, std::uint32_t b) const;
 
@@ -197,14 +202,15 @@ class CollapseMesh {
   // (rules.flip_min_normal_dot). O(valence).
   bool can_flip(std::uint32_t e) const;
   // Precondition: can_flip(e), or e was flipped last (flipping it again
-  // restores the old diagonal). Keeps the edge id and its E_acc.
-  void flip(std::uint32_t e);
+  // restores the old diagonal). Keeps the edge id and its E_acc. `lane` as
+  // for collapse().
+  void flip(std::uint32_t e, int lane = 0);
   // Flips edges at v (never one to a vertex in `keep`) until its valence
   // has dropped by `count` or no legal flip is left; appends the flipped edge
   // ids to `flipped` (undo: flip them again in reverse order) and returns how
   // many it flipped. Prefers flips whose raised vertices have low valence.
   int lower_valence(std::uint32_t v, int count, const std::uint32_t* keep, int keep_count,
-                    std::vector<std::uint32_t>& flipped);
+                    std::vector<std::uint32_t>& flipped, int lane = 0);
   // About the most lower_valence(v, ..., keep, keep_count) can achieve: the
   // edges at v that can_flip() might accept now (interior, to a non-sharp
   // vertex outside `keep`, both opposite vertices below the valence limit),
@@ -235,11 +241,11 @@ class CollapseMesh {
 
   // Per-edge links for BucketQueue's caller-kept constructor, in the edge
   // records: requeueing a stencil edge then touches the cache line its
-  // evaluation loaded. All "not queued" after construction and
-  // reset_queue_links(); queues sharing them must hold disjoint edges.
+  // evaluation loaded. All "not queued" after construction, and again once
+  // every queue using them is empty; queues sharing them must hold disjoint
+  // edges.
   BucketQueue::Links* queue_links() { return &edges_.data()->queue; }
   static constexpr std::size_t queue_link_stride() { return sizeof(EdgeRecord); }
-  void reset_queue_links();
 
   // Appends to `edges` (no duplicates) the update stencil of Fig. 8 around
   // the vertices `centres`: every edge of every triangle incident to one of
