@@ -1,12 +1,11 @@
 #include "isowave/simplify/simplify.h"
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <stdexcept>
-
-#include <atomic>
 
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
