@@ -197,7 +197,6 @@ class EdgePops {
   std::uint32_t threshold_ = 0;
 };
 
-
 // What a collapse loop did, added to the report once it ends.
 struct LoopCounters {
   std::size_t collapses = 0, collapses_after_flips = 0, flips = 0, flips_undone = 0, flip_attempts_failed = 0;
