@@ -111,6 +111,7 @@ int convert(const Args& raw) {
        "1% of the isosurface over 2 cells away)",
        "R"},
       {"no-flips", false, "base mesh by the paper's collapse rules only (no valence-lowering flips)", ""},
+      {"no-coverage-pull", false, "fit without pulling the fine levels toward isosurface parts they leave out", ""},
       {"verify", false, "decode each encoded file once more before writing it and check it gives exactly the coded coefficients", ""},
       {"step", true, "quantization step in cells (default 0.01: adds about 0.5% of a cell RMSE)", "CELLS"},
       {"output", true, "output file (one input and one isovalue)", "OUT.isw"},
@@ -148,6 +149,7 @@ int convert(const Args& raw) {
   convert_options.base_ratio = args.get_double("base-ratio", ConvertOptions().base_ratio);
   convert_options.grow_base_until_covered = !args.has("base-vertices") && !args.has("base-ratio");
   convert_options.valence_flips = !args.has("no-flips");
+  convert_options.coverage_pull = !args.has("no-coverage-pull");
   convert_options.verify_file = args.has("verify");
   if (!(convert_options.base_ratio > 0 && convert_options.base_ratio <= 1))
     throw Error(ErrorKind::InvalidArgument, "--base-ratio must be in (0, 1]");

@@ -67,6 +67,8 @@ int fit(const Args& raw) {
                           "closed base components of at most N vertices, within 3 cells of their centre, are fitted "
                           "along rays from it; 0 = the paper's steps everywhere (default 8)", "N"});
   spec.options.push_back({"no-correction", false, "skip the final move onto the exact isosurface", ""});
+  spec.options.push_back({"no-coverage-pull", false,
+                          "skip the pull of the fine levels toward isosurface parts the fit leaves out", ""});
   spec.options.push_back({"no-report", false, "skip the quality report (it needs distance trees)", ""});
   spec.options.push_back({"ascii", false, "write ASCII PLY instead of binary", ""});
   spec.options.push_back({"quiet", false, "print nothing on success", ""});
@@ -124,6 +126,7 @@ int fit(const Args& raw) {
   const double distance_seconds = seconds_since(start);
 
   start = Clock::now();
+  if (!args.has("no-coverage-pull")) wrap_options.surface = &surface.mesh;
   const ShrinkWrapResult result = shrink_wrap(hierarchy, base.positions, distance, field, wrap_options);
   const double wrap_seconds = seconds_since(start);
 
@@ -142,9 +145,13 @@ int fit(const Args& raw) {
               distance.statistics.seed_nodes, band > 0 ? (std::to_string(band) + " cells").c_str() : "none",
               distance_seconds);
   std::printf("shrink-wrap: %zu fine vertices (%.2f s)\n", hierarchy.fine_vertex_count(), wrap_seconds);
-  for (const WrapLevelStatistics& s : result.levels)
-    std::printf("  level %d: %zu vertices, last attraction %zu attracted, %zu out of reach\n", s.level, s.vertices,
+  for (const WrapLevelStatistics& s : result.levels) {
+    std::printf("  level %d: %zu vertices, last attraction %zu attracted, %zu out of reach", s.level, s.vertices,
                 s.last_attraction.attracted, s.last_attraction.out_of_reach);
+    if (s.pulled_vertices > 0)
+      std::printf("; %zu pulled toward %zu isosurface vertices the fit left out", s.pulled_vertices, s.uncovered_samples);
+    std::printf("\n");
+  }
   if (wrap_options.final_correction)
     std::printf("  correction: %zu vertices onto the isosurface (mean %.4f, max %.4f cell; %zu from the nearest zero "
                 "of the distance field, %zu along a box face), %zu left in place\n",

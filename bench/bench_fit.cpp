@@ -10,7 +10,7 @@
 // usage: bench_fit [INPUT ISO] [--min-component N] [--base-vertices N]
 //                  [--levels L] [--threads T] [--band K] [--no-quality]
 //                  [--distance-only] [--iterations N] [--final-iterations N]
-//                  [--reach R] [--min-reach C] [--weight W] [--no-correction]
+//                  [--reach R] [--min-reach C] [--weight W] [--no-correction] [--no-coverage-pull]
 //                  [--correction-cells C] [--untangle N] [--coarse-untangle N] [--base FILE]
 //                  [--write-base FILE] [--no-peer] [--repeat N] [--final-quality] [--rmse]
 //                  [--small-components N] [--no-nearest-correction]
@@ -93,6 +93,7 @@ int main(int argc, char** argv) {
   int levels = 3, threads = 2;
   double band = 3;
   bool quality = true, sdf_only = false, correction = true, peer = true, final_quality_only = false, rmse = false;
+  bool coverage_pull = true;
   std::string base_input, base_output;
   int repeat = 1;
   int untangle_rounds = ShrinkWrapOptions().untangle_rounds;
@@ -120,6 +121,7 @@ int main(int argc, char** argv) {
     else if (arg == "--no-quality") quality = false;
     else if (arg == "--distance-only") sdf_only = true;
     else if (arg == "--no-correction") correction = false;
+    else if (arg == "--no-coverage-pull") coverage_pull = false;
     else if (arg == "--weight") weight = std::stod(next());
     else if (arg == "--correction-cells") correction_cells = std::stod(next());
     else if (arg == "--untangle") untangle_rounds = std::stoi(next());
@@ -253,6 +255,7 @@ int main(int argc, char** argv) {
     wrap_options.coarse_untangle_rounds = coarse_untangle_rounds;
     wrap_options.small_component_vertices = small_components;
     wrap_options.correction_from_nearest_point = nearest_correction;
+    if (coverage_pull) wrap_options.surface = &extracted;
     ShrinkWrapResult wrapped;
     double wrap_seconds = 0;
     for (int run = 0; run < repeat; ++run) {
@@ -267,10 +270,12 @@ int main(int argc, char** argv) {
                 hierarchy_seconds, hierarchy.fine_vertex_count(), wrap_seconds, repeat > 1 ? " best" : "");
     for (const WrapLevelStatistics& s : wrapped.levels)
       std::printf("  level %d: %zu vertices (%zu on the box, %zu fixed) %.3f s (setup %.3f, relax %.3f, attract %.3f, "
-                  "correct %.3f, untangle %.3f); last attraction: %zu attracted "
+                  "correct %.3f, untangle %.3f, pull %.3f); mean edge %.2f cell; pulled %zu toward %zu uncovered "
+                  "isosurface vertices; last attraction: %zu attracted "
                   "(mean %.3f, max %.2f cell), %zu out of reach, %zu without direction\n",
                   s.level, s.vertices, s.boundary_vertices, s.fixed_vertices, s.seconds, s.seconds_setup,
-                  s.seconds_relaxation, s.seconds_attraction, s.seconds_correction, s.seconds_untangle,
+                  s.seconds_relaxation, s.seconds_attraction, s.seconds_correction, s.seconds_untangle, s.seconds_pull,
+                  s.mean_edge_cells, s.pulled_vertices, s.uncovered_samples,
                   s.last_attraction.attracted,
                   s.last_attraction.mean_move_cells, s.last_attraction.max_move_cells, s.last_attraction.out_of_reach,
                   s.last_attraction.no_direction);

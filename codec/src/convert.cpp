@@ -142,7 +142,9 @@ ConvertResult convert_volume(const Volume& volume, const std::string& source, co
     shared_hierarchy.reset();
     shared_hierarchy = std::make_shared<const SubdivisionHierarchy>(base, result.levels);
     result.fine_vertices = shared_hierarchy->fine_vertex_count();
-    result.fit = shrink_wrap(*shared_hierarchy, base.positions, *distance, field, options.shrink_wrap, progress);
+    ShrinkWrapOptions wrap_options = options.shrink_wrap;
+    if (options.coverage_pull) wrap_options.surface = &surface.mesh;
+    result.fit = shrink_wrap(*shared_hierarchy, base.positions, *distance, field, wrap_options, progress);
     // The fit against the isosurface, both ways; the error rows, measured
     // against the fit, cannot show what it missed. A base mesh too coarse for
     // the surface leaves parts of it out of the attraction's reach and the

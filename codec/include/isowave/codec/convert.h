@@ -46,6 +46,9 @@ struct ConvertOptions {
   // Narrow band of the signed-distance field in cells (0: the whole grid).
   double distance_band_cells = 3.0;
   ShrinkWrapOptions shrink_wrap;
+  // Give the shrink-wrap the extracted surface for its coverage pull
+  // (ShrinkWrapOptions::surface).
+  bool coverage_pull = true;
   // Percentages for the error summary (the base-mesh row is added).
   std::vector<double> summary_percents{100, 20, 10, 5};
   // Keep the extracted triangle mesh in the result (for comparisons).

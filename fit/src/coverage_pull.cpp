@@ -1,0 +1,207 @@
+#include "coverage_pull.h"
+
+#include <algorithm>
+#include <cassert>
+#include <cmath>
+#include <utility>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
+
+namespace isowave {
+namespace {
+
+constexpr std::uint32_t kNone = WrapLevelMesh::kNone;
+// Bins of 2 x 2 x 2 volume cells: a search to the default reach of 4 cells
+// then scans at most 125 bins (729 of single cells took 1 s per pull on
+// miranda's level 2, most of it waiting for the bins' offsets).
+constexpr int kBinCells = 2;
+
+// Closest point of triangle abc to p (Ericson, Real-Time Collision Detection, 5.1.5).
+Vec3 closest_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
+  const Vec3 ab = b - a, ac = c - a, ap = p - a;
+  const double d1 = dot(ab, ap), d2 = dot(ac, ap);
+  if (d1 <= 0 && d2 <= 0) return a;
+  const Vec3 bp = p - b;
+  const double d3 = dot(ab, bp), d4 = dot(ac, bp);
+  if (d3 >= 0 && d4 <= d3) return b;
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0 && d1 >= 0 && d3 <= 0) return a + (d1 / (d1 - d3)) * ab;
+  const Vec3 cp = p - c;
+  const double d5 = dot(ab, cp), d6 = dot(ac, cp);
+  if (d6 >= 0 && d5 <= d6) return c;
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0 && d2 >= 0 && d6 <= 0) return a + (d2 / (d2 - d6)) * ac;
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0 && d4 - d3 >= 0 && d5 - d6 >= 0) return b + ((d4 - d3) / ((d4 - d3) + (d5 - d6))) * (c - b);
+  const double denominator = va + vb + vc;
+  if (!(denominator > 0)) return a;  // degenerate triangle
+  return a + (vb / denominator) * ab + (vc / denominator) * ac;
+}
+
+// Whether p lies within sqrt(squared) of a face around control point v or
+// around one of its neighbours (polygons as fans). The neighbours' faces
+// matter where faces are stretched: a point can lie next to a long face and
+// still far from that face's corners.
+bool near_faces(const WrapLevelMesh& mesh, const std::vector<Vec3>& positions, std::uint32_t v, const Vec3& p,
+                double squared) {
+  const auto near_fan = [&](std::uint32_t u) {
+    for (std::uint32_t k = mesh.vertex_face_offsets[u]; k < mesh.vertex_face_offsets[u + 1]; ++k) {
+      const std::uint32_t f = mesh.vertex_faces[k];
+      const std::uint32_t* face = mesh.face_vertices.data() + mesh.face_offsets[f];
+      const std::uint32_t size = mesh.face_offsets[f + 1] - mesh.face_offsets[f];
+      for (std::uint32_t j = 1; j + 1 < size; ++j)
+        if (squared_norm(p - closest_on_triangle(p, positions[face[0]], positions[face[j]], positions[face[j + 1]])) <=
+            squared)
+          return true;
+    }
+    return false;
+  };
+  if (near_fan(v)) return true;
+  for (std::uint32_t k = mesh.neighbour_offsets[v]; k < mesh.neighbour_offsets[v + 1]; ++k)
+    if (near_fan(mesh.neighbours[k])) return true;
+  return false;
+}
+
+}  // namespace
+
+CoveragePull::CoveragePull(const std::vector<Vec3>& samples, const Volume& grid, double covered, double reach)
+    : samples_(samples),
+      origin_(grid.origin),
+      spacing_(kBinCells * grid.spacing),
+      covered_squared_(covered * covered),
+      reach_(reach),
+      min_spacing_(std::min({spacing_.x, spacing_.y, spacing_.z})) {
+  assert(covered > 0 && covered <= reach && min_spacing_ > 0);
+  for (int a = 0; a < 3; ++a) {
+    const std::int64_t grid_cells = std::max<std::int64_t>(1, static_cast<std::int64_t>(grid.dims[a]) - 1);
+    cells_[a] = (grid_cells + kBinCells - 1) / kBinCells;
+  }
+}
+
+std::size_t CoveragePull::cell_of(const Vec3& p, std::int64_t cell[3]) const {
+  for (int a = 0; a < 3; ++a) {
+    const double c = std::floor((p[a] - origin_[a]) / spacing_[a]);
+    cell[a] = c >= 0 ? std::min<std::int64_t>(cells_[a] - 1, static_cast<std::int64_t>(std::min(c, 1e15))) : 0;
+  }
+  return static_cast<std::size_t>(cell[0] + cells_[0] * (cell[1] + cells_[1] * cell[2]));
+}
+
+CoveragePullStatistics CoveragePull::apply(const WrapLevelMesh& mesh, std::vector<Vec3>& positions) {
+  const std::size_t n = mesh.vertex_count;
+  assert(positions.size() >= n);
+  CoveragePullStatistics stats;
+  // Counting sort of the control points by cell (serial, so the order in a
+  // cell, and with it every tie, does not depend on the threads).
+  const std::size_t cell_count = static_cast<std::size_t>(cells_[0] * cells_[1] * cells_[2]);
+  vertex_cell_.resize(n);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
+    std::int64_t cell[3];
+    for (std::size_t v = r.begin(); v < r.end(); ++v) vertex_cell_[v] = static_cast<std::uint32_t>(cell_of(positions[v], cell));
+  });
+  first_.assign(cell_count + 1, 0);
+  for (std::size_t v = 0; v < n; ++v) ++first_[vertex_cell_[v] + 1];
+  for (std::size_t c = 0; c < cell_count; ++c) first_[c + 1] += first_[c];
+  order_.resize(n);
+  for (std::size_t v = 0; v < n; ++v) order_[first_[vertex_cell_[v]]++] = static_cast<std::uint32_t>(v);
+  // Their positions in that order, in single precision: the scans below
+  // then read each cell's points from one place instead of n random ones.
+  sorted_.resize(n);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t i = r.begin(); i < r.end(); ++i) {
+      const Vec3& p = positions[order_[i]];
+      sorted_[i] = {float(p.x), float(p.y), float(p.z)};
+    }
+  });
+  for (std::size_t c = cell_count; c > 0; --c) first_[c] = first_[c - 1];
+  first_[0] = 0;
+
+  // Each sample's nearest control point when the sample is uncovered.
+  const std::int64_t shells = static_cast<std::int64_t>(std::ceil(reach_ / min_spacing_));
+  const double covered_distance = std::sqrt(covered_squared_);
+  std::vector<std::uint32_t> nearest(samples_.size(), kNone);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, samples_.size(), 1024), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t s = r.begin(); s < r.end(); ++s) {
+      const Vec3& p = samples_[s];
+      const auto bin_index = [&](std::int64_t x, std::int64_t y, std::int64_t z) {
+        return static_cast<std::size_t>(x + cells_[0] * (y + cells_[1] * z));
+      };
+      const auto squared_distance = [&](std::uint32_t i) {
+        const FloatPoint& q = sorted_[i];
+        const double dx = q.x - p.x, dy = q.y - p.y, dz = q.z - p.z;
+        return dx * dx + dy * dy + dz * dz;
+      };
+      // Covered: a control point within `covered`, in the (at most 8) bins
+      // that the ball around p overlaps.
+      std::int64_t low[3], high[3], centre[3];
+      cell_of(p - Vec3{covered_distance, covered_distance, covered_distance}, low);
+      cell_of(p + Vec3{covered_distance, covered_distance, covered_distance}, high);
+      bool covered = false;
+      for (std::int64_t z = low[2]; z <= high[2] && !covered; ++z)
+        for (std::int64_t y = low[1]; y <= high[1] && !covered; ++y)
+          for (std::int64_t x = low[0]; x <= high[0] && !covered; ++x) {
+            const std::size_t c = bin_index(x, y, z);
+            for (std::uint32_t i = first_[c]; i < first_[c + 1]; ++i)
+              if (squared_distance(i) <= covered_squared_) {
+                covered = true;
+                break;
+              }
+          }
+      if (covered) continue;
+      // Uncovered: the nearest control point within reach, shell by shell of
+      // bins around p's, skipping bins farther than the best so far.
+      cell_of(p, centre);
+      double best = reach_ * reach_;
+      std::uint32_t best_vertex = kNone;
+      for (std::int64_t k = 0; k <= shells; ++k) {
+        for (std::int64_t z = std::max<std::int64_t>(0, centre[2] - k); z <= std::min(cells_[2] - 1, centre[2] + k); ++z)
+          for (std::int64_t y = std::max<std::int64_t>(0, centre[1] - k); y <= std::min(cells_[1] - 1, centre[1] + k); ++y) {
+            const bool inner = std::abs(z - centre[2]) < k && std::abs(y - centre[1]) < k;
+            for (std::int64_t x = std::max<std::int64_t>(0, centre[0] - k); x <= std::min(cells_[0] - 1, centre[0] + k);
+                 x += (inner && x == centre[0] - k) ? 2 * k : 1) {
+              const std::int64_t bin[3] = {x, y, z};
+              double box = 0;
+              for (int a = 0; a < 3; ++a) {
+                const double lo = origin_[a] + double(bin[a]) * spacing_[a], gap = std::max({0.0, lo - p[a], p[a] - lo - spacing_[a]});
+                box += gap * gap;
+              }
+              if (box >= best) continue;
+              const std::size_t c = bin_index(x, y, z);
+              for (std::uint32_t i = first_[c]; i < first_[c + 1]; ++i) {
+                const double d = squared_distance(i);
+                if (d < best) best = d, best_vertex = order_[i];
+              }
+              if (k == 0) break;
+            }
+          }
+        // A control point in a farther shell lies at least k bins away.
+        const double bound = double(k) * min_spacing_;
+        if (best <= bound * bound) break;
+      }
+      if (best_vertex != kNone && !near_faces(mesh, positions, best_vertex, p, covered_squared_))
+        nearest[s] = best_vertex;
+    }
+  });
+
+  // Each picked control point moves to the mean of its samples.
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> picks;
+  for (std::size_t s = 0; s < samples_.size(); ++s)
+    if (nearest[s] != kNone) picks.emplace_back(nearest[s], static_cast<std::uint32_t>(s));
+  stats.uncovered_samples = picks.size();
+  tbb::parallel_sort(picks.begin(), picks.end());
+  for (std::size_t i = 0; i < picks.size();) {
+    const std::uint32_t v = picks[i].first;
+    Vec3 sum;
+    std::size_t j = i;
+    for (; j < picks.size() && picks[j].first == v; ++j) sum += samples_[picks[j].second];
+    if (mesh.role[v] == WrapRole::Free && mesh.box_face[v] < 0) {
+      positions[v] = (1.0 / double(j - i)) * sum;
+      ++stats.pulled_vertices;
+    }
+    i = j;
+  }
+  return stats;
+}
+
+}  // namespace isowave
