@@ -76,45 +76,46 @@ CoveragePull::CoveragePull(const std::vector<Vec3>& samples, const Volume& grid,
   assert(covered > 0 && covered <= reach && min_spacing_ > 0);
   for (int a = 0; a < 3; ++a) {
     const std::int64_t grid_cells = std::max<std::int64_t>(1, static_cast<std::int64_t>(grid.dims[a]) - 1);
-    cells_[a] = (grid_cells + kBinCells - 1) / kBinCells;
+    bins_[a] = (grid_cells + kBinCells - 1) / kBinCells;
   }
 }
 
-std::size_t CoveragePull::cell_of(const Vec3& p, std::int64_t cell[3]) const {
+std::size_t CoveragePull::bin_of(const Vec3& p, std::int64_t bin[3]) const {
   for (int a = 0; a < 3; ++a) {
     const double c = std::floor((p[a] - origin_[a]) / spacing_[a]);
-    cell[a] = c >= 0 ? std::min<std::int64_t>(cells_[a] - 1, static_cast<std::int64_t>(std::min(c, 1e15))) : 0;
+    bin[a] = c >= 0 ? std::min<std::int64_t>(bins_[a] - 1, static_cast<std::int64_t>(std::min(c, 1e15))) : 0;
   }
-  return static_cast<std::size_t>(cell[0] + cells_[0] * (cell[1] + cells_[1] * cell[2]));
+  return static_cast<std::size_t>(bin[0] + bins_[0] * (bin[1] + bins_[1] * bin[2]));
 }
 
 CoveragePullStatistics CoveragePull::apply(const WrapLevelMesh& mesh, std::vector<Vec3>& positions) {
   const std::size_t n = mesh.vertex_count;
   assert(positions.size() >= n);
   CoveragePullStatistics stats;
-  // Counting sort of the control points by cell (serial, so the order in a
-  // cell, and with it every tie, does not depend on the threads).
-  const std::size_t cell_count = static_cast<std::size_t>(cells_[0] * cells_[1] * cells_[2]);
-  vertex_cell_.resize(n);
+  // Counting sort of the control points by bin (serial, so the order in a
+  // bin, and with it every tie, does not depend on the threads).
+  const std::size_t bin_count = static_cast<std::size_t>(bins_[0] * bins_[1] * bins_[2]);
+  vertex_bin_.resize(n);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
-    std::int64_t cell[3];
-    for (std::size_t v = r.begin(); v < r.end(); ++v) vertex_cell_[v] = static_cast<std::uint32_t>(cell_of(positions[v], cell));
+    std::int64_t bin[3];
+    for (std::size_t v = r.begin(); v < r.end(); ++v) vertex_bin_[v] = static_cast<std::uint32_t>(bin_of(positions[v], bin));
   });
-  first_.assign(cell_count + 1, 0);
-  for (std::size_t v = 0; v < n; ++v) ++first_[vertex_cell_[v] + 1];
-  for (std::size_t c = 0; c < cell_count; ++c) first_[c + 1] += first_[c];
+  first_.assign(bin_count + 1, 0);
+  for (std::size_t v = 0; v < n; ++v) ++first_[vertex_bin_[v] + 1];
+  for (std::size_t c = 0; c < bin_count; ++c) first_[c + 1] += first_[c];
   order_.resize(n);
-  for (std::size_t v = 0; v < n; ++v) order_[first_[vertex_cell_[v]]++] = static_cast<std::uint32_t>(v);
-  // Their positions in that order, in single precision: the scans below
-  // then read each cell's points from one place instead of n random ones.
+  for (std::size_t v = 0; v < n; ++v) order_[first_[vertex_bin_[v]]++] = static_cast<std::uint32_t>(v);
+  // Their positions in that order, relative to the grid's origin in single
+  // precision: the scans below then read each bin's points from one place
+  // instead of from n random ones.
   sorted_.resize(n);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
     for (std::size_t i = r.begin(); i < r.end(); ++i) {
       const Vec3& p = positions[order_[i]];
-      sorted_[i] = {float(p.x), float(p.y), float(p.z)};
+      sorted_[i] = {float(p.x - origin_.x), float(p.y - origin_.y), float(p.z - origin_.z)};
     }
   });
-  for (std::size_t c = cell_count; c > 0; --c) first_[c] = first_[c - 1];
+  for (std::size_t c = bin_count; c > 0; --c) first_[c] = first_[c - 1];
   first_[0] = 0;
 
   // Each sample's nearest control point when the sample is uncovered.
@@ -124,19 +125,20 @@ CoveragePullStatistics CoveragePull::apply(const WrapLevelMesh& mesh, std::vecto
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, samples_.size(), 1024), [&](const tbb::blocked_range<std::size_t>& r) {
     for (std::size_t s = r.begin(); s < r.end(); ++s) {
       const Vec3& p = samples_[s];
+      const Vec3 local = p - origin_;
       const auto bin_index = [&](std::int64_t x, std::int64_t y, std::int64_t z) {
-        return static_cast<std::size_t>(x + cells_[0] * (y + cells_[1] * z));
+        return static_cast<std::size_t>(x + bins_[0] * (y + bins_[1] * z));
       };
       const auto squared_distance = [&](std::uint32_t i) {
         const FloatPoint& q = sorted_[i];
-        const double dx = q.x - p.x, dy = q.y - p.y, dz = q.z - p.z;
+        const double dx = q.x - local.x, dy = q.y - local.y, dz = q.z - local.z;
         return dx * dx + dy * dy + dz * dz;
       };
       // Covered: a control point within `covered`, in the (at most 8) bins
       // that the ball around p overlaps.
       std::int64_t low[3], high[3], centre[3];
-      cell_of(p - Vec3{covered_distance, covered_distance, covered_distance}, low);
-      cell_of(p + Vec3{covered_distance, covered_distance, covered_distance}, high);
+      bin_of(p - Vec3{covered_distance, covered_distance, covered_distance}, low);
+      bin_of(p + Vec3{covered_distance, covered_distance, covered_distance}, high);
       bool covered = false;
       for (std::int64_t z = low[2]; z <= high[2] && !covered; ++z)
         for (std::int64_t y = low[1]; y <= high[1] && !covered; ++y)
@@ -151,14 +153,14 @@ CoveragePullStatistics CoveragePull::apply(const WrapLevelMesh& mesh, std::vecto
       if (covered) continue;
       // Uncovered: the nearest control point within reach, shell by shell of
       // bins around p's, skipping bins farther than the best so far.
-      cell_of(p, centre);
+      bin_of(p, centre);
       double best = reach_ * reach_;
       std::uint32_t best_vertex = kNone;
       for (std::int64_t k = 0; k <= shells; ++k) {
-        for (std::int64_t z = std::max<std::int64_t>(0, centre[2] - k); z <= std::min(cells_[2] - 1, centre[2] + k); ++z)
-          for (std::int64_t y = std::max<std::int64_t>(0, centre[1] - k); y <= std::min(cells_[1] - 1, centre[1] + k); ++y) {
+        for (std::int64_t z = std::max<std::int64_t>(0, centre[2] - k); z <= std::min(bins_[2] - 1, centre[2] + k); ++z)
+          for (std::int64_t y = std::max<std::int64_t>(0, centre[1] - k); y <= std::min(bins_[1] - 1, centre[1] + k); ++y) {
             const bool inner = std::abs(z - centre[2]) < k && std::abs(y - centre[1]) < k;
-            for (std::int64_t x = std::max<std::int64_t>(0, centre[0] - k); x <= std::min(cells_[0] - 1, centre[0] + k);
+            for (std::int64_t x = std::max<std::int64_t>(0, centre[0] - k); x <= std::min(bins_[0] - 1, centre[0] + k);
                  x += (inner && x == centre[0] - k) ? 2 * k : 1) {
               const std::int64_t bin[3] = {x, y, z};
               double box = 0;

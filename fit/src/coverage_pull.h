@@ -6,13 +6,15 @@
 // cut off stay left out (miranda: 12.2% of the extracted vertices over 2
 // cells from the fit). The pull goes the other way, from the surface: every
 // extracted vertex farther than `covered` from the mesh (nearest control
-// point, then that point's faces) picks its nearest control point within
-// `reach`, and each picked point moves to the mean of the vertices that
-// picked it; the attraction that follows puts it on the isosurface.
+// point, then the faces around it and its neighbours) picks its nearest
+// control point within `reach`, and each picked point moves to the mean of
+// the vertices that picked it; the attraction that follows puts it on the
+// isosurface.
 //
-// Control points are binned by the volume's cells (a counting sort, reused
-// for every level), so a vertex that is covered costs a scan of its 27
-// neighbouring cells; only uncovered ones search farther, shell by shell.
+// Control points are binned by 2 x 2 x 2 volume cells (a counting sort,
+// arrays reused for every level), so a covered extracted vertex costs a scan
+// of the at most 8 bins its `covered` ball overlaps; only uncovered ones
+// search farther, shell by shell.
 #include <cstddef>
 #include <cstdint>
 #include <vector>
@@ -41,19 +43,20 @@ class CoveragePull {
   CoveragePullStatistics apply(const WrapLevelMesh& mesh, std::vector<Vec3>& positions);
 
  private:
-  std::size_t cell_of(const Vec3& p, std::int64_t cell[3]) const;
+  // The bin holding p (clamped into the grid), its coordinates into `bin`.
+  std::size_t bin_of(const Vec3& p, std::int64_t bin[3]) const;
 
   const std::vector<Vec3>& samples_;
   Vec3 origin_, spacing_;
-  std::int64_t cells_[3];
+  std::int64_t bins_[3];
   double covered_squared_, reach_, min_spacing_;
-  // Control points by bin (2 x 2 x 2 volume cells; cells_ counts bins): those
+  // Control points by bin (2 x 2 x 2 volume cells): those
   // of bin c are order_[first_[c] .. first_[c + 1]).
-  std::vector<std::uint32_t> first_, order_, vertex_cell_;
+  std::vector<std::uint32_t> first_, order_, vertex_bin_;
   struct FloatPoint {
     float x, y, z;
   };
-  std::vector<FloatPoint> sorted_;  // positions[order_[i]]
+  std::vector<FloatPoint> sorted_;  // positions[order_[i]] - origin_
 };
 
 }  // namespace isowave
