@@ -158,11 +158,11 @@ CoveragePullStatistics CoveragePull::apply(const WrapLevelMesh& mesh, std::vecto
       std::uint32_t best_vertex = kNone;
       for (std::int64_t k = 0; k <= shells; ++k) {
         for (std::int64_t z = std::max<std::int64_t>(0, centre[2] - k); z <= std::min(bins_[2] - 1, centre[2] + k); ++z)
-          for (std::int64_t y = std::max<std::int64_t>(0, centre[1] - k); y <= std::min(bins_[1] - 1, centre[1] + k); ++y) {
-            const bool inner = std::abs(z - centre[2]) < k && std::abs(y - centre[1]) < k;
-            for (std::int64_t x = std::max<std::int64_t>(0, centre[0] - k); x <= std::min(bins_[0] - 1, centre[0] + k);
-                 x += (inner && x == centre[0] - k) ? 2 * k : 1) {
+          for (std::int64_t y = std::max<std::int64_t>(0, centre[1] - k); y <= std::min(bins_[1] - 1, centre[1] + k); ++y)
+            for (std::int64_t x = std::max<std::int64_t>(0, centre[0] - k); x <= std::min(bins_[0] - 1, centre[0] + k); ++x) {
               const std::int64_t bin[3] = {x, y, z};
+              if (std::max({std::abs(x - centre[0]), std::abs(y - centre[1]), std::abs(z - centre[2])}) != k)
+                continue;  // an inner shell's bin, already scanned
               double box = 0;
               for (int a = 0; a < 3; ++a) {
                 const double lo = origin_[a] + double(bin[a]) * spacing_[a], gap = std::max({0.0, lo - p[a], p[a] - lo - spacing_[a]});
@@ -174,9 +174,7 @@ CoveragePullStatistics CoveragePull::apply(const WrapLevelMesh& mesh, std::vecto
                 const double d = squared_distance(i);
                 if (d < best) best = d, best_vertex = order_[i];
               }
-              if (k == 0) break;
             }
-          }
         // A control point in a farther shell lies at least k bins away.
         const double bound = double(k) * min_spacing_;
         if (best <= bound * bound) break;

@@ -1171,10 +1171,6 @@ void fit_small_components(const WrapLevelMesh& mesh, const SmallComponents& smal
   });
 }
 
-}  // namespace
-
-namespace {
-
 // Mean length of the level's edges (each counted from both ends), world units.
 double mean_edge_length(const WrapLevelMesh& mesh, const std::vector<Vec3>& positions) {
   struct Sum {
