@@ -25,6 +25,9 @@
 #include <fstream>
 #include <string>
 
+#include <sys/resource.h>
+#include <unistd.h>
+
 #include <CGAL/Simple_cartesian.h>
 #include <CGAL/Surface_mesh.h>
 #include <CGAL/Surface_mesh_simplification/edge_collapse.h>
@@ -56,6 +59,25 @@ double peak_bytes() {
   while (std::getline(status, line))
     if (line.rfind("VmHWM:", 0) == 0) return std::stod(line.substr(6)) * 1024.0;
   return 0;
+}
+
+// CPU seconds this process has used (all threads, user + system).
+double cpu_seconds() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return double(usage.ru_utime.tv_sec + usage.ru_stime.tv_sec) +
+         1e-6 * double(usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
+}
+// CPU seconds the hypervisor has taken from this virtual machine (the
+// "steal" column of /proc/stat, all CPUs; 0 where the kernel does not say):
+// on this machine the main cause of run-to-run spread in wall time.
+double steal_seconds() {
+  std::ifstream stat("/proc/stat");
+  std::string cpu;
+  double ticks[8] = {};
+  stat >> cpu;
+  for (double& t : ticks) stat >> t;
+  return cpu == "cpu" ? ticks[7] / double(sysconf(_SC_CLK_TCK)) : 0.0;
 }
 
 using Kernel = CGAL::Simple_cartesian<double>;
@@ -254,15 +276,17 @@ int main(int argc, char** argv) {
     options.batch_error_factor = batch_factor;
     reset_peak();
     const double peak_before = peak_bytes();
+    const double cpu_before = cpu_seconds(), steal_before = steal_seconds();
     start = Clock::now();
     isowave::simplify::SimplifyResult result = isowave::simplify::simplify(triangles, options);
     const double isowave_seconds = seconds(start);
+    const double cpu = cpu_seconds() - cpu_before, steal = steal_seconds() - steal_before;
     const double peak = peak_bytes();
     std::printf("%s", isowave::simplify::format_report(result.report).c_str());
     const double vertices = double(triangles.vertex_count());
-    std::printf("isowave simplify: %.3f s; peak memory %.0f MB = %.0f bytes per input vertex "
-                "(input mesh included; %.0f MB resident before the call)\n",
-                isowave_seconds, peak / 1e6, peak / vertices, peak_before / 1e6);
+    std::printf("isowave simplify: %.3f s; CPU %.2f s; %.2f CPU s stolen by the hypervisor meanwhile; peak memory "
+                "%.0f MB = %.0f bytes per input vertex (input mesh included; %.0f MB resident before the call)\n",
+                isowave_seconds, cpu, steal, peak / 1e6, peak / vertices, peak_before / 1e6);
     std::printf("base mesh fingerprint: %016llx\n", static_cast<unsigned long long>(fingerprint(result.base)));
     const isowave::TopologySummary before = isowave::summarize_topology(triangles);
     const isowave::TopologySummary after = isowave::summarize_topology(result.base);
