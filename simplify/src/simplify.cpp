@@ -170,6 +170,9 @@ class EdgePops {
     }
     for (;;) {
       while (next_ < batch_.size()) {
+        if (next_ + 8 < batch_.size()) mesh.prefetch_edge_record(batch_[next_ + 8]);
+        if (next_ + 4 < batch_.size()) mesh.prefetch_edge_corners(batch_[next_ + 4]);
+        if (next_ + 2 < batch_.size()) mesh.prefetch_edge_vertices(batch_[next_ + 2]);
         e = batch_[next_++];
         if (!mesh.edge_alive(e)) continue;
         if (queue_.contains(e)) queue_.remove(e);
@@ -281,6 +284,7 @@ class CollapseLoop {
       centres_.insert(centres_.end(), {v, opposite_vertices[0], opposite_vertices[1]});
       stencil_.clear();
       mesh_.gather_stencil(centres_.data(), static_cast<int>(centres_.size()), stencil_, lane_);
+      for (std::uint32_t s : stencil_) mesh_.prefetch_edge_vertices(s);
       for (std::uint32_t s : stencil_) update_stencil_edge(s, v);
       after_collapse();
     }
@@ -684,10 +688,16 @@ SimplifyResult simplify(const PolygonMesh& input, const SimplifyOptions& options
       throw std::logic_error("simplify: invariant broken by the parallel collapses: " + mesh.validate());
     return emptied;
   };
+  // When both threads' loops emptied their queues, the serial loop takes the
+  // edges they had to leave.
+  const auto left_edges = [&](std::uint32_t e) { return left_by_two_threads(mesh, e); };
   if (in_parallel) {
-    collapse_on_two_threads(std::move(initial_buckets), false);
+    const bool emptied = collapse_on_two_threads(std::move(initial_buckets), false);
     edges.keep_alive(mesh);
-    queue_edges(options.max_valence, every_edge);
+    if (emptied)
+      queue_edges(options.max_valence, left_edges);
+    else
+      queue_edges(options.max_valence, every_edge);
     report.seconds_parallel = seconds_since_start(clock);
   }
   if (options.serial_phase_begins) options.serial_phase_begins();
@@ -703,11 +713,9 @@ SimplifyResult simplify(const PolygonMesh& input, const SimplifyOptions& options
            mesh.alive_vertices() > target) {
       const std::size_t before = mesh.alive_vertices();
       ++report.flip_rounds;
-      // Both threads' loops emptied their queues: the serial loop takes the
-      // edges they had to leave.
       const bool emptied = in_parallel && collapse_on_two_threads(evaluate_edges(relaxed_valence, every_edge), true);
       if (emptied)
-        queue_edges(relaxed_valence, [&](std::uint32_t e) { return left_by_two_threads(mesh, e); });
+        queue_edges(relaxed_valence, left_edges);
       else
         queue_edges(relaxed_valence, every_edge);
       run_serial_loop(true);

@@ -254,6 +254,28 @@ class CollapseMesh {
   // thread per lane.
   void gather_stencil(const std::uint32_t* centres, int count, std::vector<std::uint32_t>& edges, int lane = 0);
 
+  // Cache hints, no effect on results. The collapse loop waits on memory
+  // (see the top of this file); fetching what it will read soon overlaps
+  // those waits. For edges evaluated in a known order (a batch), three
+  // steps at decreasing distance ahead, each reading only what the one
+  // before fetched: the edge record, its corners, its vertices (and the
+  // opposite triangle). Miranda's collapse phase: about 3% faster.
+  void prefetch_edge_record(std::uint32_t e) const { __builtin_prefetch(&edges_[e]); }
+  void prefetch_edge_corners(std::uint32_t e) const {
+    const std::uint32_t h = edges_[e].halfedge;
+    if (h == kNone) return;
+    __builtin_prefetch(&corners_[h]);
+    __builtin_prefetch(&corners_[h] + 2);  // a triangle may straddle two cache lines
+  }
+  void prefetch_edge_vertices(std::uint32_t e) const {
+    const std::uint32_t h = edges_[e].halfedge;
+    if (h == kNone) return;
+    __builtin_prefetch(&vertices_[corners_[h].vertex]);
+    __builtin_prefetch(&vertices_[corners_[next(h)].vertex]);
+    __builtin_prefetch(&vertices_[corners_[prev(h)].vertex]);
+    if (const std::uint32_t o = corners_[h].opposite; o != kNone) __builtin_prefetch(&corners_[o]);
+  }
+
   // Checks every invariant of the corner table (opposite symmetry, edge ids,
   // valences, boundary flags and loop sizes, manifold fans, vertex
   // half-edges); returns "" or the first problem found. O(n).
