@@ -51,6 +51,17 @@ bool near_faces(const WrapLevelMesh& mesh, const std::vector<Vec3>& positions, s
       const std::uint32_t f = mesh.vertex_faces[k];
       const std::uint32_t* face = mesh.face_vertices.data() + mesh.face_offsets[f];
       const std::uint32_t size = mesh.face_offsets[f + 1] - mesh.face_offsets[f];
+      // Most faces are far: their bounding box, no nearer than the face,
+      // rules them out with no closest-point computation.
+      Vec3 low = positions[face[0]], high = low;
+      for (std::uint32_t j = 1; j < size; ++j) {
+        const Vec3& q = positions[face[j]];
+        low = Vec3{std::min(low.x, q.x), std::min(low.y, q.y), std::min(low.z, q.z)};
+        high = Vec3{std::max(high.x, q.x), std::max(high.y, q.y), std::max(high.z, q.z)};
+      }
+      const Vec3 gap{std::max({0.0, low.x - p.x, p.x - high.x}), std::max({0.0, low.y - p.y, p.y - high.y}),
+                     std::max({0.0, low.z - p.z, p.z - high.z})};
+      if (squared_norm(gap) > squared) continue;
       for (std::uint32_t j = 1; j + 1 < size; ++j)
         if (squared_norm(p - closest_on_triangle(p, positions[face[0]], positions[face[j]], positions[face[j + 1]])) <=
             squared)
