@@ -282,7 +282,11 @@ int convert(const Args& raw) {
       const ConvertResult& r = o.result;
       std::string errors;
       char cell[64];
+      const RateDistortionRow* previous = nullptr;
       for (const RateDistortionRow& row : r.summary) {
+        // Percentages below the base mesh's share all give the base mesh: one entry.
+        if (previous && previous->kept == row.kept) continue;
+        previous = &row;
         std::snprintf(cell, sizeof cell, "%s%.4g%%: %.3g", errors.empty() ? "" : "  ", row.percent, rmse_percent(r, row.rms));
         errors += cell;
       }

@@ -4,6 +4,9 @@
 #include <csignal>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -120,6 +123,19 @@ TEST_F(CliTest, BatchSkipsAFailingInputAndExitsNonZero) {
   EXPECT_TRUE(fs::exists(path("out/b.isw")));
   EXPECT_FALSE(fs::exists(path("out/broken.isw")));
   EXPECT_NE(r.out.find("FAILED"), std::string::npos);
+  // The summary line lists each distinct reconstruction once, in decreasing
+  // percent: the requested 5% lies below this base mesh's share and gives
+  // the base mesh, which is listed only as the last entry.
+  const std::size_t line_begin = r.out.find(path("out/a.isw"));
+  ASSERT_NE(line_begin, std::string::npos) << r.out;
+  std::istringstream line(r.out.substr(line_begin, r.out.find('\n', line_begin) - line_begin));
+  std::vector<double> percents;
+  for (std::string token; line >> token;)
+    if (token.size() > 2 && token.compare(token.size() - 2, 2, "%:") == 0) percents.push_back(std::stod(token));
+  ASSERT_GE(percents.size(), 2u) << r.out;
+  EXPECT_EQ(percents.front(), 100.0);
+  for (std::size_t k = 1; k < percents.size(); ++k) EXPECT_LT(percents[k], percents[k - 1]) << r.out;
+  EXPECT_GT(percents.back(), 5.0) << "the base mesh of this sphere holds more than 5% of the fine points";
 
   // Existing outputs are not overwritten without --force.
   const auto before = fs::last_write_time(path("out/a.isw"));
