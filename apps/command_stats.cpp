@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <string>
 
 #include "cli.h"
 #include "commands.h"
@@ -135,12 +136,27 @@ int stats(const Args& raw) {
                            : " (not recorded in the file: errors are in world units x 100)");
     std::printf("%12s %8s %14s %13s %12s %10s %12s\n", "coefficients", "percent", "RMSE [% cell]", "max [% cell]", "bytes",
                 "bits/fine", "bits/isovtx");
-    for (const auto& r : rows) {
+    // A percentage at or below the base mesh's share gives the base mesh:
+    // listed once, in its row, rather than as copies of it.
+    std::string below_base;
+    for (std::size_t i = 0; i + 1 < rows.size(); ++i)
+      if (rows[i].kept == rows.back().kept) {
+        char requested[32];
+        std::snprintf(requested, sizeof requested, "%s%g%%", below_base.empty() ? "" : ", ", percents[i]);
+        below_base += requested;
+      }
+    std::size_t previous_kept = 0;
+    for (std::size_t i = 0; i < rows.size(); ++i) {
+      const RateDistortionRow& r = rows[i];
+      if (!r.is_base && (r.kept == rows.back().kept || (i > 0 && r.kept == previous_kept))) continue;
+      previous_kept = r.kept;
       std::printf("%12zu %8.2f %14.3f %13.3f %12llu %10.3f", r.kept, r.percent, pct(r.rms), pct(r.max),
                   static_cast<unsigned long long>(r.bytes), 8.0 * static_cast<double>(r.bytes) / fine);
       if (extracted > 0) std::printf(" %12.3f", 8.0 * static_cast<double>(r.bytes) / extracted);
       else std::printf(" %12s", "-");
-      std::printf("%s\n", r.is_base ? "  (base mesh)" : "");
+      if (!r.is_base) std::printf("\n");
+      else if (below_base.empty()) std::printf("  (base mesh)\n");
+      else std::printf("  (base mesh, also for %s: at or below its share)\n", below_base.c_str());
     }
   }
   if (args.has("plot")) {

@@ -136,6 +136,16 @@ TEST_F(CliTest, BatchSkipsAFailingInputAndExitsNonZero) {
   EXPECT_EQ(percents.front(), 100.0);
   for (std::size_t k = 1; k < percents.size(); ++k) EXPECT_LT(percents[k], percents[k - 1]) << r.out;
   EXPECT_GT(percents.back(), 5.0) << "the base mesh of this sphere holds more than 5% of the fine points";
+  // So does the stats table, naming the percentages the base mesh stands for.
+  const RunResult stats = run({"stats", path("out/a.isw")}, dir_);
+  ASSERT_EQ(stats.exit_code, 0) << stats.err;
+  std::istringstream table(stats.out.substr(stats.out.find("coefficients")));
+  std::vector<std::size_t> kept;
+  for (std::string row; std::getline(table, row);)
+    if (!row.empty() && row.find("coefficients") == std::string::npos) kept.push_back(std::stoul(row));
+  ASSERT_EQ(kept.size(), percents.size()) << stats.out;
+  for (std::size_t k = 1; k < kept.size(); ++k) EXPECT_LT(kept[k], kept[k - 1]) << stats.out;
+  EXPECT_NE(stats.out.find("(base mesh, also for 5%"), std::string::npos) << stats.out;
 
   // Existing outputs are not overwritten without --force.
   const auto before = fs::last_write_time(path("out/a.isw"));
