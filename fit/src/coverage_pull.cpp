@@ -56,11 +56,10 @@ bool near_faces(const WrapLevelMesh& mesh, const std::vector<Vec3>& positions, s
       Vec3 low = positions[face[0]], high = low;
       for (std::uint32_t j = 1; j < size; ++j) {
         const Vec3& q = positions[face[j]];
-        low = Vec3{std::min(low.x, q.x), std::min(low.y, q.y), std::min(low.z, q.z)};
-        high = Vec3{std::max(high.x, q.x), std::max(high.y, q.y), std::max(high.z, q.z)};
+        low = component_min(low, q);
+        high = component_max(high, q);
       }
-      const Vec3 gap{std::max({0.0, low.x - p.x, p.x - high.x}), std::max({0.0, low.y - p.y, p.y - high.y}),
-                     std::max({0.0, low.z - p.z, p.z - high.z})};
+      const Vec3 gap = component_max(Vec3{}, component_max(low - p, p - high));
       if (squared_norm(gap) > squared) continue;
       for (std::uint32_t j = 1; j + 1 < size; ++j)
         if (squared_norm(p - closest_on_triangle(p, positions[face[0]], positions[face[j]], positions[face[j + 1]])) <=

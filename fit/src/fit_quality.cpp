@@ -82,7 +82,7 @@ double share_farther_than(const std::vector<Vec3>& reference, std::size_t stride
   // per axis (a key past that range gets no neighbours: it only overstates).
   Vec3 low = fitted[0];
   for (std::size_t i = 1; i < count; ++i)
-    low = Vec3{std::min(low.x, fitted[i].x), std::min(low.y, fitted[i].y), std::min(low.z, fitted[i].z)};
+    low = component_min(low, fitted[i]);
   constexpr std::int64_t kAxis = std::int64_t{1} << 21, kOutside = -2;  // kOutside: no neighbour in range
   const auto cube = [&](const Vec3& p, int axis) {
     const double c = std::floor((p[axis] - low[axis]) / distance);

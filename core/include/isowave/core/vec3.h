@@ -28,6 +28,15 @@ constexpr Vec3 cross(const Vec3& a, const Vec3& b) {
 }
 inline double norm(const Vec3& a) { return std::sqrt(dot(a, a)); }
 constexpr double squared_norm(const Vec3& a) { return dot(a, a); }
+// Component-wise std::min and std::max (bounding boxes); like them, a
+// returns a's component unless b's compares smaller (larger), so a NaN in b
+// is ignored.
+constexpr Vec3 component_min(const Vec3& a, const Vec3& b) {
+  return {b.x < a.x ? b.x : a.x, b.y < a.y ? b.y : a.y, b.z < a.z ? b.z : a.z};
+}
+constexpr Vec3 component_max(const Vec3& a, const Vec3& b) {
+  return {a.x < b.x ? b.x : a.x, a.y < b.y ? b.y : a.y, a.z < b.z ? b.z : a.z};
+}
 inline bool is_finite(const Vec3& a) { return std::isfinite(a.x) && std::isfinite(a.y) && std::isfinite(a.z); }
 inline Vec3 normalized(const Vec3& a) {
   const double n = norm(a);
