@@ -137,18 +137,18 @@ int stats(const Args& raw) {
     std::printf("%12s %8s %14s %13s %12s %10s %12s\n", "coefficients", "percent", "RMSE [% cell]", "max [% cell]", "bytes",
                 "bits/fine", "bits/isovtx");
     // A percentage at or below the base mesh's share gives the base mesh:
-    // listed once, in its row, rather than as copies of it.
+    // named in its row (the last) rather than printed as copies of it.
     std::string below_base;
-    for (std::size_t i = 0; i + 1 < rows.size(); ++i)
-      if (rows[i].kept == rows.back().kept) {
-        char requested[32];
-        std::snprintf(requested, sizeof requested, "%s%g%%", below_base.empty() ? "" : ", ", percents[i]);
-        below_base += requested;
-      }
     std::size_t previous_kept = 0;
     for (std::size_t i = 0; i < rows.size(); ++i) {
       const RateDistortionRow& r = rows[i];
-      if (!r.is_base && (r.kept == rows.back().kept || (i > 0 && r.kept == previous_kept))) continue;
+      if (!r.is_base && r.kept == rows.back().kept) {
+        char requested[32];
+        std::snprintf(requested, sizeof requested, "%s%g%%", below_base.empty() ? "" : ", ", percents[i]);
+        below_base += requested;
+        continue;
+      }
+      if (!r.is_base && r.kept == previous_kept) continue;
       previous_kept = r.kept;
       std::printf("%12zu %8.2f %14.3f %13.3f %12llu %10.3f", r.kept, r.percent, pct(r.rms), pct(r.max),
                   static_cast<unsigned long long>(r.bytes), 8.0 * static_cast<double>(r.bytes) / fine);
