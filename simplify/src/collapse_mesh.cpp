@@ -11,7 +11,6 @@
 #include <tuple>
 
 #include <tbb/blocked_range.h>
-#include <tbb/info.h>
 #include <tbb/parallel_for.h>
 
 #include "isowave/core/error.h"
@@ -119,43 +118,22 @@ void CollapseMesh::build(const PolygonMesh& mesh, const std::uint32_t* order) {
   std::vector<std::uint32_t>().swap(new_index);
 
   // Outgoing corners per vertex (compressed rows, ascending) to pair
-  // half-edges in O(n): a counting sort of the corners, in `parts` corner
-  // ranges counted and filled in parallel, each with its own counts (the
-  // serial sort took a quarter of a second on miranda).
-  const std::uint32_t parts = std::clamp(static_cast<std::uint32_t>(tbb::info::default_concurrency()), 1u, 8u);
-  const auto part_begin = [&](std::uint32_t part) {
-    return static_cast<std::uint32_t>(std::uint64_t{corner_count} * part / parts);
-  };
-  // part_slot[part][v]: first counts part's corners at v, then becomes where they go.
-  std::vector<std::vector<std::uint32_t>> part_slot(parts);
-  tbb::parallel_for(0u, parts, [&](std::uint32_t part) {
-    part_slot[part].assign(vertex_count, 0);
-    for (std::uint32_t c = part_begin(part); c < part_begin(part + 1); ++c) ++part_slot[part][corners_[c].vertex];
-  });
-  std::vector<std::uint32_t> first(vertex_count + 1);
-  std::uint32_t corners_before = 0;
-  for (std::uint32_t v = 0; v < vertex_count; ++v) {
-    first[v] = corners_before;
-    for (std::vector<std::uint32_t>& slot : part_slot) {
-      const std::uint32_t count = slot[v];
-      slot[v] = corners_before;
-      corners_before += count;
-    }
-  }
-  first[vertex_count] = corners_before;
+  // half-edges in O(n).
+  std::vector<std::uint32_t> first(vertex_count + 1, 0);
+  for (std::uint32_t c = 0; c < corner_count; ++c) ++first[corners_[c].vertex + 1];
+  std::partial_sum(first.begin(), first.end(), first.begin());
   // Each entry with the corner's target, so that pairing reads the rows only.
   struct Outgoing {
     std::uint32_t corner, target;
   };
   std::vector<Outgoing> outgoing;
-  reserve_fresh_on_huge_pages(outgoing, corner_count);
+  reserve_fresh_on_huge_pages(outgoing, corner_count);  // faulted in on all threads: the fill below is serial
   outgoing.resize(corner_count);
-  tbb::parallel_for(0u, parts, [&](std::uint32_t part) {
-    std::vector<std::uint32_t>& slot = part_slot[part];
-    for (std::uint32_t c = part_begin(part); c < part_begin(part + 1); ++c)
-      outgoing[slot[corners_[c].vertex]++] = Outgoing{c, corners_[next(c)].vertex};
-  });
-  std::vector<std::vector<std::uint32_t>>().swap(part_slot);
+  {
+    std::vector<std::uint32_t> fill(first.begin(), first.end() - 1);
+    for (std::uint32_t c = 0; c < corner_count; ++c)
+      outgoing[fill[corners_[c].vertex]++] = Outgoing{c, corners_[next(c)].vertex};
+  }
   // Opposites. A corner u -> w with two candidates w -> u lies on an edge of
   // more than two triangles or traversed twice in one direction; the case
   // without any w -> u shows up below as a vertex with two boundary corners.
