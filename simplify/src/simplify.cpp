@@ -688,16 +688,18 @@ SimplifyResult simplify(const PolygonMesh& input, const SimplifyOptions& options
       throw std::logic_error("simplify: invariant broken by the parallel collapses: " + mesh.validate());
     return emptied;
   };
-  // When both threads' loops emptied their queues, the serial loop takes the
-  // edges they had to leave.
-  const auto left_edges = [&](std::uint32_t e) { return left_by_two_threads(mesh, e); };
+  // After a two-thread phase: when both loops emptied their queues, the
+  // serial loop takes only the edges they had to leave, else every edge.
+  const auto queue_after_two_threads = [&](int max_valence, bool emptied) {
+    if (emptied)
+      queue_edges(max_valence, [&](std::uint32_t e) { return left_by_two_threads(mesh, e); });
+    else
+      queue_edges(max_valence, every_edge);
+  };
   if (in_parallel) {
     const bool emptied = collapse_on_two_threads(std::move(initial_buckets), false);
     edges.keep_alive(mesh);
-    if (emptied)
-      queue_edges(options.max_valence, left_edges);
-    else
-      queue_edges(options.max_valence, every_edge);
+    queue_after_two_threads(options.max_valence, emptied);
     report.seconds_parallel = seconds_since_start(clock);
   }
   if (options.serial_phase_begins) options.serial_phase_begins();
@@ -713,11 +715,8 @@ SimplifyResult simplify(const PolygonMesh& input, const SimplifyOptions& options
            mesh.alive_vertices() > target) {
       const std::size_t before = mesh.alive_vertices();
       ++report.flip_rounds;
-      const bool emptied = in_parallel && collapse_on_two_threads(evaluate_edges(relaxed_valence, every_edge), true);
-      if (emptied)
-        queue_edges(relaxed_valence, left_edges);
-      else
-        queue_edges(relaxed_valence, every_edge);
+      queue_after_two_threads(relaxed_valence,
+                              in_parallel && collapse_on_two_threads(evaluate_edges(relaxed_valence, every_edge), true));
       run_serial_loop(true);
       gained = before - mesh.alive_vertices() > before / 100;
     }
