@@ -223,8 +223,11 @@ int convert(const Args& raw) {
         }
       } catch (const std::exception& error) {
         outcome.error = error.what();
+        // Most errors from reading name the input already.
+        const bool named = outcome.error.rfind(job.input + ":", 0) == 0;
         std::lock_guard<std::mutex> lock(print_mutex);
-        std::fprintf(stderr, "isowave convert: %s: %s (skipped)\n", job.input.c_str(), error.what());
+        std::fprintf(stderr, "isowave convert: %s%s%s (skipped)\n", named ? "" : job.input.c_str(), named ? "" : ": ",
+                     error.what());
       }
       release_freed_memory();  // what this input left must not stay under the next one
     }

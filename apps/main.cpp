@@ -41,7 +41,7 @@ extern "C" void remove_temporaries_and_exit(int signal_number) {
 void print_overview() {
   std::printf("usage: isowave COMMAND [ARGS...]\n\ncommands:\n");
   for (const Subcommand& command : kSubcommands) std::printf("  %-12s %s\n", command.name, command.summary);
-  std::printf("\n'isowave COMMAND --help' describes a command.\n");
+  std::printf("\n'isowave COMMAND --help' describes a command; 'isowave --version' prints the version.\n");
 }
 
 }  // namespace
@@ -57,6 +57,10 @@ int main(int argc, char** argv) {
   const std::string name = argv[1];
   if (name == "-h" || name == "--help" || name == "help") {
     print_overview();
+    return 0;
+  }
+  if (name == "--version") {
+    std::printf("isowave %s\n", ISOWAVE_VERSION);
     return 0;
   }
   for (const Subcommand& command : kSubcommands) {

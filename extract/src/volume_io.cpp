@@ -414,6 +414,9 @@ Volume read_volume(const std::string& path, const VolumeReadOptions& options) {
     } else if (ext == ".vdb") {
       volume = detail::read_vdb(path, options);
     } else {
+      // A missing file says so, rather than that its name has no known ending.
+      struct stat info {};
+      if (::stat(path.c_str(), &info) != 0) detail::io_error(path, std::string("cannot open: ") + std::strerror(errno));
       throw Error(ErrorKind::InvalidArgument,
                   path + ": unknown volume format '" + ext +
                       "' (use .raw, .nrrd, .nhdr, .vtk, .vti, .vdb or builtin:NAME[:N])");

@@ -210,5 +210,24 @@ TEST_F(CliTest, BadInputGivesOneLineAndANonZeroExitCode) {
   EXPECT_FALSE(fs::exists(path("x.isw")));
 }
 
+// A missing input names its real cause (not its file name's ending), with
+// the path said once.
+TEST_F(CliTest, AMissingInputSaysSoOnce) {
+  const std::string missing = path("no_such_volume");
+  const RunResult r = run({"convert", missing, "--iso", "0", "-o", path("x.isw")}, dir_);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("cannot open: No such file or directory"), std::string::npos) << r.err;
+  const std::size_t first = r.err.find(missing);
+  ASSERT_NE(first, std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find(missing, first + missing.size()), std::string::npos) << "path repeated: " << r.err;
+  EXPECT_FALSE(fs::exists(path("x.isw")));
+}
+
+TEST_F(CliTest, VersionPrintsTheProjectVersion) {
+  const RunResult r = run({"--version"}, dir_);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.out, std::string("isowave ") + ISOWAVE_VERSION + "\n");
+}
+
 }  // namespace
 }  // namespace isowave
