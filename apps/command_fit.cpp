@@ -141,15 +141,19 @@ int fit(const Args& raw) {
               unreferenced ? (" (" + std::to_string(unreferenced) + " unreferenced vertices dropped)").c_str() : "");
   std::printf("%s: isosurface %zu vertices, %zu triangles (%.2f s)\n", input.c_str(), surface.mesh.vertex_count(),
               surface.mesh.face_count(), extract_seconds);
-  std::printf("signed distance: %zu nodes, %zu seeds, band %s (%.2f s)\n", distance.statistics.nodes,
-              distance.statistics.seed_nodes, band > 0 ? (std::to_string(band) + " cells").c_str() : "none",
-              distance_seconds);
+  if (band > 0)
+    std::printf("signed distance: %zu nodes, %zu seeds, band %g cells (%.2f s)\n", distance.statistics.nodes,
+                distance.statistics.seed_nodes, band, distance_seconds);
+  else
+    std::printf("signed distance: %zu nodes, %zu seeds, no band (%.2f s)\n", distance.statistics.nodes,
+                distance.statistics.seed_nodes, distance_seconds);
   std::printf("shrink-wrap: %zu fine vertices (%.2f s)\n", hierarchy.fine_vertex_count(), wrap_seconds);
   for (const WrapLevelStatistics& s : result.levels) {
     std::printf("  level %d: %zu vertices, last attraction %zu attracted, %zu out of reach", s.level, s.vertices,
                 s.last_attraction.attracted, s.last_attraction.out_of_reach);
     if (s.pulled_vertices > 0)
       std::printf("; %zu pulled toward %zu isosurface vertices the fit left out", s.pulled_vertices, s.uncovered_samples);
+    if (s.pulled_back > 0) std::printf(" (%zu of them returned: no root on the isosurface, or folding)", s.pulled_back);
     std::printf("\n");
   }
   if (wrap_options.final_correction)

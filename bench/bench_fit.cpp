@@ -11,6 +11,7 @@
 //                  [--levels L] [--threads T] [--band K] [--no-quality]
 //                  [--distance-only] [--iterations N] [--final-iterations N]
 //                  [--reach R] [--min-reach C] [--weight W] [--no-correction] [--no-coverage-pull]
+//                  [--pull-max-edge C] [--rmse-spread]
 //                  [--correction-cells C] [--untangle N] [--coarse-untangle N] [--base FILE]
 //                  [--write-base FILE] [--no-peer] [--repeat N] [--final-quality] [--rmse]
 //                  [--small-components N] [--no-nearest-correction]
@@ -21,7 +22,9 @@
 //   --repeat times the distance field and the shrink-wrap N times (noisy
 //   shared machines); --final-quality measures level L only; --rmse runs the
 //   wavelet analysis of the fit and prints the paper's Table 1 RMSE rows
-//   (unquantized coefficients, importance-weighted truncation).
+//   (unquantized coefficients, importance-weighted truncation), --rmse-spread
+//   also each row's error quantiles and the share of its largest 1%;
+//   --pull-max-edge sets the coverage pull's edge limit (0.5: level L only).
 #include <sys/resource.h>
 
 #include <algorithm>
@@ -29,6 +32,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <numeric>
 #include <string>
 #include <vector>
 
@@ -92,8 +96,10 @@ int main(int argc, char** argv) {
   std::size_t min_component = 50, base_vertices = 0;
   int levels = 3, threads = 2;
   double band = 3;
-  bool quality = true, sdf_only = false, correction = true, peer = true, final_quality_only = false, rmse = false;
+  bool quality = true, sdf_only = false, correction = true, peer = true, final_quality_only = false, rmse = false,
+       rmse_spread = false;
   bool coverage_pull = true;
+  double pull_max_edge = ShrinkWrapOptions{}.pull_max_edge_cells;
   std::string base_input, base_output;
   int repeat = 1;
   int untangle_rounds = ShrinkWrapOptions().untangle_rounds;
@@ -122,6 +128,7 @@ int main(int argc, char** argv) {
     else if (arg == "--distance-only") sdf_only = true;
     else if (arg == "--no-correction") correction = false;
     else if (arg == "--no-coverage-pull") coverage_pull = false;
+    else if (arg == "--pull-max-edge") pull_max_edge = std::stod(next());
     else if (arg == "--weight") weight = std::stod(next());
     else if (arg == "--correction-cells") correction_cells = std::stod(next());
     else if (arg == "--untangle") untangle_rounds = std::stoi(next());
@@ -138,6 +145,7 @@ int main(int argc, char** argv) {
     else if (arg == "--repeat") repeat = std::max(1, std::stoi(next()));
     else if (arg == "--final-quality") final_quality_only = true;
     else if (arg == "--rmse") rmse = true;
+    else if (arg == "--rmse-spread") rmse = rmse_spread = true;
     else positional.push_back(arg);
   }
   if (positional.size() == 2) {
@@ -256,6 +264,7 @@ int main(int argc, char** argv) {
     wrap_options.small_component_vertices = small_components;
     wrap_options.correction_from_nearest_point = nearest_correction;
     if (coverage_pull) wrap_options.surface = &extracted;
+    wrap_options.pull_max_edge_cells = pull_max_edge;
     ShrinkWrapResult wrapped;
     double wrap_seconds = 0;
     for (int run = 0; run < repeat; ++run) {
@@ -271,11 +280,11 @@ int main(int argc, char** argv) {
     for (const WrapLevelStatistics& s : wrapped.levels)
       std::printf("  level %d: %zu vertices (%zu on the box, %zu fixed) %.3f s (setup %.3f, relax %.3f, attract %.3f, "
                   "correct %.3f, untangle %.3f, pull %.3f); mean edge %.2f cell; pulled %zu toward %zu uncovered "
-                  "isosurface vertices; last attraction: %zu attracted "
+                  "isosurface vertices (%zu back); last attraction: %zu attracted "
                   "(mean %.3f, max %.2f cell), %zu out of reach, %zu without direction\n",
                   s.level, s.vertices, s.boundary_vertices, s.fixed_vertices, s.seconds, s.seconds_setup,
                   s.seconds_relaxation, s.seconds_attraction, s.seconds_correction, s.seconds_untangle, s.seconds_pull,
-                  s.mean_edge_cells, s.pulled_vertices, s.uncovered_samples,
+                  s.mean_edge_cells, s.pulled_vertices, s.uncovered_samples, s.pulled_back,
                   s.last_attraction.attracted,
                   s.last_attraction.mean_move_cells, s.last_attraction.max_move_cells, s.last_attraction.out_of_reach,
                   s.last_attraction.no_direction);
@@ -316,6 +325,23 @@ int main(int argc, char** argv) {
         synthesize(hierarchy, kept);
         const PointErrors errors = point_errors(kept, wrapped.positions, hierarchy.fine_vertex_count());
         std::printf("  %g%% %.2f", percent, 100 * errors.rms / cell);
+        if (rmse_spread) {
+          // How the squared error is spread over the fine points: a few
+          // outliers (folds, points off the surface) or the whole surface.
+          std::vector<double> squared(hierarchy.fine_vertex_count());
+          for (std::size_t i = 0; i < squared.size(); ++i) squared[i] = squared_norm(kept[i] - wrapped.positions[i]);
+          std::sort(squared.begin(), squared.end());
+          const double total = std::accumulate(squared.begin(), squared.end(), 0.0);
+          const auto share_of_largest = [&](double fraction) {
+            const auto first = squared.begin() + std::ptrdiff_t(double(squared.size()) * (1 - fraction));
+            return total > 0 ? 100 * std::accumulate(first, squared.end(), 0.0) / total : 0.0;
+          };
+          const auto quantile = [&](double q) {
+            return 100 * std::sqrt(squared[std::min(squared.size() - 1, std::size_t(q * double(squared.size())))]) / cell;
+          };
+          std::printf(" [p50 %.1f p90 %.1f p99 %.1f; largest 1%% %.0f%% of the squared error]", quantile(0.5),
+                      quantile(0.9), quantile(0.99), share_of_largest(0.01));
+        }
       }
       std::printf("  (%% of a cell, %.1f s)\n", seconds_since(start));
     }

@@ -98,7 +98,8 @@ std::size_t CoveragePull::bin_of(const Vec3& p, std::int64_t bin[3]) const {
   return static_cast<std::size_t>(bin[0] + bins_[0] * (bin[1] + bins_[1] * bin[2]));
 }
 
-CoveragePullStatistics CoveragePull::apply(const WrapLevelMesh& mesh, std::vector<Vec3>& positions) {
+CoveragePullStatistics CoveragePull::apply(const WrapLevelMesh& mesh, std::vector<Vec3>& positions,
+                                           std::vector<PulledPoint>* pulled) {
   const std::size_t n = mesh.vertex_count;
   assert(positions.size() >= n);
   CoveragePullStatistics stats;
@@ -200,12 +201,14 @@ CoveragePullStatistics CoveragePull::apply(const WrapLevelMesh& mesh, std::vecto
     if (nearest[s] != kNone) picks.emplace_back(nearest[s], static_cast<std::uint32_t>(s));
   stats.uncovered_samples = picks.size();
   tbb::parallel_sort(picks.begin(), picks.end());
+  if (pulled) pulled->clear();
   for (std::size_t i = 0; i < picks.size();) {
     const std::uint32_t v = picks[i].first;
     Vec3 sum;
     std::size_t j = i;
     for (; j < picks.size() && picks[j].first == v; ++j) sum += samples_[picks[j].second];
     if (mesh.role[v] == WrapRole::Free && mesh.box_face[v] < 0) {
+      if (pulled) pulled->push_back({v, positions[v]});
       positions[v] = (1.0 / double(j - i)) * sum;
       ++stats.pulled_vertices;
     }

@@ -8,8 +8,8 @@
 // extracted vertex farther than `covered` from the mesh (nearest control
 // point, then the faces around it and its neighbours) picks its nearest
 // control point within `reach`, and each picked point moves to the mean of
-// the vertices that picked it; the attraction that follows puts it on the
-// isosurface.
+// the vertices that picked it; the attraction that follows (on the finest
+// level, the correction) puts it on the isosurface.
 //
 // Control points are binned by 2 x 2 x 2 volume cells (a counting sort,
 // arrays reused for every level), so a covered extracted vertex costs a scan
@@ -30,6 +30,12 @@ struct CoveragePullStatistics {
   std::size_t pulled_vertices = 0;    // control points moved
 };
 
+// A control point the pull moved, and where it was before.
+struct PulledPoint {
+  std::uint32_t vertex;
+  Vec3 from;
+};
+
 class CoveragePull {
  public:
   // samples: the extracted isosurface's vertices (kept by reference);
@@ -37,10 +43,12 @@ class CoveragePull {
   CoveragePull(const std::vector<Vec3>& samples, const Volume& grid, double covered, double reach);
 
   // One pull of the free control points of `mesh` not held on a box face,
-  // in place (measured first, moved after). Deterministic for any thread
-  // count; O(samples * bins scanned + vertices) time; 20 bytes of memory per
+  // in place (measured first, moved after); with `pulled`, the moved points
+  // are listed there, ascending. Deterministic for any thread count;
+  // O(samples * bins scanned + vertices) time; 20 bytes of memory per
   // control point, 4 per sample and 4 per bin.
-  CoveragePullStatistics apply(const WrapLevelMesh& mesh, std::vector<Vec3>& positions);
+  CoveragePullStatistics apply(const WrapLevelMesh& mesh, std::vector<Vec3>& positions,
+                               std::vector<PulledPoint>* pulled = nullptr);
 
  private:
   // The bin holding p (clamped into the grid), its coordinates into `bin`.

@@ -735,19 +735,26 @@ bool project_onto_isosurface(const WrapLevelMesh& mesh, const Box& box, const Tr
 }
 
 // 1 if face f's normal disagrees with the field gradient at its centroid
-// (normals toward lower values unless flipped: expected_sign -1, else +1).
-inline std::uint8_t face_tangled(const WrapLevelMesh& mesh, const TrilinearGrid& field, double expected_sign,
-                                 const std::vector<Vec3>& positions, std::size_t f) {
+// (normals toward lower values unless flipped: expected_sign -1, else +1),
+// its corners at position(vertex).
+template <class Position>
+inline std::uint8_t face_tangled_at(const WrapLevelMesh& mesh, const TrilinearGrid& field, double expected_sign,
+                                    std::size_t f, const Position& position) {
   const std::uint32_t begin = mesh.face_offsets[f], size = mesh.face_offsets[f + 1] - begin;
   const std::uint32_t* corners = mesh.face_vertices.data() + begin;
   Vec3 newell, centroid;
   for (std::uint32_t k = 0; k < size; ++k) {
-    const Vec3& a = positions[corners[k]];
-    newell += cross(a, positions[corners[k + 1 == size ? 0 : k + 1]]);
+    const Vec3 a = position(corners[k]);
+    newell += cross(a, position(corners[k + 1 == size ? 0 : k + 1]));
     centroid += a;
   }
   centroid *= 1.0 / double(size);
   return !(expected_sign * dot(newell, field.sample(centroid).gradient) > 0);
+}
+
+inline std::uint8_t face_tangled(const WrapLevelMesh& mesh, const TrilinearGrid& field, double expected_sign,
+                                 const std::vector<Vec3>& positions, std::size_t f) {
+  return face_tangled_at(mesh, field, expected_sign, f, [&](std::uint32_t v) -> const Vec3& { return positions[v]; });
 }
 
 // The centroid's samples are near those of the first corner.
@@ -809,6 +816,36 @@ int near_box_axis(const Box& box, double cell, const Vec3& p) {
   return axis;
 }
 
+// The correction of one movable vertex v (see correct_with), in place and
+// counted in `partial`; false if it found no root and left v where it was.
+bool correct_vertex(const WrapLevelMesh& mesh, const TrilinearGrid& field, const Box& box, double cell, double iso,
+                    double range, const TrilinearGrid* nearest, std::size_t v, std::vector<Vec3>& positions,
+                    CorrectionPartial& partial) {
+  ++partial.movable;
+  const Vec3 p = positions[v];
+  Vec3 target, start;
+  if (!project_onto_isosurface(mesh, box, field, cell, iso, range, v, p, target)) {
+    const bool free = mesh.role[v] == WrapRole::Free && mesh.box_face[v] < 0;
+    if (free && nearest && nearest_zero(*nearest, box, cell, range, p, start) &&
+        project_onto_isosurface(mesh, box, field, cell, iso, range, v, start, target)) {
+      ++partial.nearest;
+    } else {
+      const int axis = free ? near_box_axis(box, cell, p) : -1;
+      if (axis < 0 || !project_onto_isosurface(mesh, box, field, cell, iso, range, v, p, target, axis)) {
+        ++partial.failed;
+        return false;
+      }
+      ++partial.along_box;
+    }
+  }
+  positions[v] = target;
+  ++partial.corrected;
+  const double moved = norm(target - p) / cell;
+  partial.move_sum += moved;
+  partial.move_max = std::max(partial.move_max, moved);
+  return true;
+}
+
 // correct_to_isosurface(); with `nearest` (the signed-distance field), a free
 // vertex whose gradient line has no root within range starts again from the
 // nearest point of the distance field's zero set. A free vertex still without
@@ -823,29 +860,7 @@ CorrectionStatistics correct_with(const WrapLevelMesh& mesh, const TrilinearGrid
       mesh.vertex_count, [&](std::size_t begin, std::size_t end, CorrectionPartial& partial) {
         for (std::size_t v = begin; v < end; ++v) {
           if (v + kPrefetchDistance < end) field.prefetch_at(field.grid_point(positions[v + kPrefetchDistance]));
-          if (mesh.role[v] == WrapRole::Fixed) continue;
-          ++partial.movable;
-          const Vec3 p = positions[v];
-          Vec3 target, start;
-          if (!project_onto_isosurface(mesh, box, field, cell, iso, range, v, p, target)) {
-            const bool free = mesh.role[v] == WrapRole::Free && mesh.box_face[v] < 0;
-            if (free && nearest && nearest_zero(*nearest, box, cell, range, p, start) &&
-                project_onto_isosurface(mesh, box, field, cell, iso, range, v, start, target)) {
-              ++partial.nearest;
-            } else {
-              const int axis = free ? near_box_axis(box, cell, p) : -1;
-              if (axis < 0 || !project_onto_isosurface(mesh, box, field, cell, iso, range, v, p, target, axis)) {
-                ++partial.failed;
-                continue;
-              }
-              ++partial.along_box;
-            }
-          }
-          positions[v] = target;
-          ++partial.corrected;
-          const double moved = norm(target - p) / cell;
-          partial.move_sum += moved;
-          partial.move_max = std::max(partial.move_max, moved);
+          if (mesh.role[v] != WrapRole::Fixed) correct_vertex(mesh, field, box, cell, iso, range, nearest, v, positions, partial);
         }
       });
   CorrectionStatistics stats;
@@ -861,6 +876,44 @@ CorrectionStatistics correct_with(const WrapLevelMesh& mesh, const TrilinearGrid
   }
   stats.mean_move_cells = stats.corrected ? sum / double(stats.corrected) : 0.0;
   return stats;
+}
+
+// Puts the points the coverage pull moved on level L onto the isosurface of
+// `field` (as correct_with, `nearest` likewise); a point without a root
+// there, or around which more faces are tangled (face_tangled) than at its
+// old place, goes back where it was. Returns how many went back.
+std::size_t settle_pulled_points(const WrapLevelMesh& mesh, const TrilinearGrid& field, const Box& box, double cell,
+                                 double iso, bool flip, double max_move_cells, const TrilinearGrid* nearest,
+                                 const std::vector<PulledPoint>& pulled, std::vector<Vec3>& positions) {
+  const double expected_sign = flip ? 1.0 : -1.0;
+  std::vector<std::uint8_t> back(pulled.size(), 0);
+  for_blocks<char>(pulled.size(), [&](std::size_t first, std::size_t last, char&) {
+    CorrectionPartial partial;
+    for (std::size_t i = first; i < last; ++i)
+      back[i] = !correct_vertex(mesh, field, box, cell, iso, max_move_cells * cell, nearest, pulled[i].vertex,
+                                positions, partial);
+  });
+  // Judged with every other pulled point in its new place, then applied.
+  for_vertices(pulled.size(), [&](std::size_t i) {
+    if (back[i]) return;
+    const std::uint32_t v = pulled[i].vertex;
+    const std::uint32_t begin = mesh.vertex_face_offsets[v], end = mesh.vertex_face_offsets[v + 1];
+    int now = 0;
+    for (std::uint32_t k = begin; k < end; ++k) now += face_tangled(mesh, field, expected_sign, positions, mesh.vertex_faces[k]);
+    if (now == 0) return;
+    const auto old_place = [&](std::uint32_t u) { return u == v ? pulled[i].from : positions[u]; };
+    int was = 0;
+    for (std::uint32_t k = begin; k < end; ++k)
+      was += face_tangled_at(mesh, field, expected_sign, mesh.vertex_faces[k], old_place);
+    back[i] = now > was;
+  });
+  std::size_t count = 0;
+  for (std::size_t i = 0; i < pulled.size(); ++i)
+    if (back[i]) {
+      positions[pulled[i].vertex] = pulled[i].from;
+      ++count;
+    }
+  return count;
 }
 
 // Sets a flag that other threads may set at the same time (always to 1).
@@ -1293,6 +1346,9 @@ ShrinkWrapResult shrink_wrap(const SubdivisionHierarchy& hierarchy, const std::v
     }
     if (pull) stats.mean_edge_cells = mean_edge_length(mesh, data) / cell;
     const bool pulls = pull && stats.mean_edge_cells <= options.pull_max_edge_cells;
+    // On level L the pull waits for the correction and the untangling, whose
+    // smoothing would otherwise take back part of what it covered.
+    const bool pull_last = pulls && level == levels && options.final_correction;
     scratch.resize(mesh.vertex_count);
     for (int round = 0; round < rounds; ++round) {
       auto phase = Clock::now();
@@ -1302,7 +1358,7 @@ ShrinkWrapResult shrink_wrap(const SubdivisionHierarchy& hierarchy, const std::v
       stats.last_attraction = attract_with(mesh, distance, options.attraction, scratch, data, face_normals);
       if (!small.empty()) fit_small_components(mesh, small, scalar_grid, box, cell, distance.iso, scratch, data);
       stats.seconds_attraction += seconds_since(phase);
-      if (pulls && round + 1 == rounds) {
+      if (pulls && !pull_last && round + 1 == rounds) {
         // On the attracted points of the level's last round: measured on
         // relaxed or merely subdivided points, the pull took the surface
         // those had shrunk away from for left out. Pulling after every round
@@ -1339,6 +1395,18 @@ ShrinkWrapResult shrink_wrap(const SubdivisionHierarchy& hierarchy, const std::v
         result.untangle = untangle_with(mesh, field_grid, box, cell, distance.iso, distance.flip,
                                         options.untangle_rounds, options.correction_max_cells, data, scratch);
         stats.seconds_untangle = seconds_since(phase);
+      }
+      if (pull_last) {
+        phase = Clock::now();
+        std::vector<PulledPoint> pulled_points;
+        const CoveragePullStatistics pulled = pull->apply(mesh, data, &pulled_points);
+        stats.uncovered_samples = pulled.uncovered_samples;
+        stats.pulled_vertices = pulled.pulled_vertices;
+        stats.pulled_back = settle_pulled_points(mesh, field_grid, box, cell, distance.iso, distance.flip,
+                                                 options.correction_max_cells,
+                                                 options.correction_from_nearest_point ? &distance_grid : nullptr,
+                                                 pulled_points, data);
+        stats.seconds_pull += seconds_since(phase);
       }
     }
     if (level < levels && options.coarse_untangle_rounds > 0) {

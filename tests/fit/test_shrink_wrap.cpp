@@ -207,6 +207,11 @@ TEST(ShrinkWrap, CoveragePullCoversWhatTheBaseMeshCutOff) {
   EXPECT_EQ(after.nonfinite_vertices, 0u);
   EXPECT_LE(after.isosurface_rms, 0.01);
   EXPECT_LE(after.tangled_fraction, 0.001);
+  // The finest level is pulled last, after its correction: each pulled point
+  // is corrected onto the isosurface or goes back where it was, so no more
+  // points lie off it than the correction itself left.
+  const IsosurfaceDistance off = isosurface_distance(pulled.positions, pulled.positions.size(), p.field, 0.0, 1e-3);
+  EXPECT_LE(off.far, pulled.correction.failed);
 }
 
 TEST(ShrinkWrap, ResultDoesNotDependOnThreadCount) {
