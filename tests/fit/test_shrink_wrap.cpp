@@ -217,14 +217,18 @@ TEST(ShrinkWrap, CoveragePullCoversWhatTheBaseMeshCutOff) {
 TEST(ShrinkWrap, ResultDoesNotDependOnThreadCount) {
   const Pipeline p = prepare(make_builtin_field("marschner-lobb", 48), 0.0, 200);
   const SubdivisionHierarchy hierarchy(p.base, 2);
+  ShrinkWrapOptions options = options_for(p);
+  options.pull_max_edge_cells = 2.0;  // level 2's edges average 1.07 cells: pull there too
   std::vector<Vec3> one, two;
   {
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
-    one = shrink_wrap(hierarchy, p.base.positions, p.distance, p.field, options_for(p)).positions;
+    one = shrink_wrap(hierarchy, p.base.positions, p.distance, p.field, options).positions;
   }
   {
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 2);
-    two = shrink_wrap(hierarchy, p.base.positions, p.distance, p.field, options_for(p)).positions;
+    const ShrinkWrapResult result = shrink_wrap(hierarchy, p.base.positions, p.distance, p.field, options);
+    EXPECT_GT(result.levels.back().pulled_vertices, 0u);
+    two = result.positions;
   }
   ASSERT_EQ(one.size(), two.size());
   for (std::size_t v = 0; v < one.size(); ++v) ASSERT_TRUE(one[v] == two[v]) << "vertex " << v;
