@@ -76,14 +76,13 @@ bool near_faces(const WrapLevelMesh& mesh, const std::vector<Vec3>& positions, s
 
 }  // namespace
 
-CoveragePull::CoveragePull(const std::vector<Vec3>& samples, const Volume& grid, double covered, double reach)
+CoveragePull::CoveragePull(const std::vector<Vec3>& samples, const Volume& grid, double covered)
     : samples_(samples),
       origin_(grid.origin),
       spacing_(kBinCells * grid.spacing),
       covered_squared_(covered * covered),
-      reach_(reach),
       min_spacing_(std::min({spacing_.x, spacing_.y, spacing_.z})) {
-  assert(covered > 0 && covered <= reach && min_spacing_ > 0);
+  assert(covered > 0 && min_spacing_ > 0);
   for (int a = 0; a < 3; ++a) {
     const std::int64_t grid_cells = std::max<std::int64_t>(1, static_cast<std::int64_t>(grid.dims[a]) - 1);
     bins_[a] = (grid_cells + kBinCells - 1) / kBinCells;
@@ -98,10 +97,10 @@ std::size_t CoveragePull::bin_of(const Vec3& p, std::int64_t bin[3]) const {
   return static_cast<std::size_t>(bin[0] + bins_[0] * (bin[1] + bins_[1] * bin[2]));
 }
 
-CoveragePullStatistics CoveragePull::apply(const WrapLevelMesh& mesh, std::vector<Vec3>& positions,
+CoveragePullStatistics CoveragePull::apply(const WrapLevelMesh& mesh, std::vector<Vec3>& positions, double reach,
                                            std::vector<PulledPoint>* pulled) {
   const std::size_t n = mesh.vertex_count;
-  assert(positions.size() >= n);
+  assert(positions.size() >= n && reach * reach >= covered_squared_);
   CoveragePullStatistics stats;
   // Counting sort of the control points by bin (serial, so the order in a
   // bin, and with it every tie, does not depend on the threads).
@@ -130,7 +129,7 @@ CoveragePullStatistics CoveragePull::apply(const WrapLevelMesh& mesh, std::vecto
   first_[0] = 0;
 
   // Each sample's nearest control point when the sample is uncovered.
-  const std::int64_t shells = static_cast<std::int64_t>(std::ceil(reach_ / min_spacing_));
+  const std::int64_t shells = static_cast<std::int64_t>(std::ceil(reach / min_spacing_));
   const double covered_distance = std::sqrt(covered_squared_);
   std::vector<std::uint32_t> nearest(samples_.size(), kNone);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, samples_.size(), 1024), [&](const tbb::blocked_range<std::size_t>& r) {
@@ -165,7 +164,7 @@ CoveragePullStatistics CoveragePull::apply(const WrapLevelMesh& mesh, std::vecto
       // Uncovered: the nearest control point within reach, shell by shell of
       // bins around p's, skipping bins farther than the best so far.
       bin_of(p, centre);
-      double best = reach_ * reach_;
+      double best = reach * reach;
       std::uint32_t best_vertex = kNone;
       for (std::int64_t k = 0; k <= shells; ++k) {
         for (std::int64_t z = std::max<std::int64_t>(0, centre[2] - k); z <= std::min(bins_[2] - 1, centre[2] + k); ++z)

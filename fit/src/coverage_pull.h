@@ -39,15 +39,17 @@ struct PulledPoint {
 class CoveragePull {
  public:
   // samples: the extracted isosurface's vertices (kept by reference);
-  // covered and reach in world units, 0 < covered <= reach.
-  CoveragePull(const std::vector<Vec3>& samples, const Volume& grid, double covered, double reach);
+  // covered in world units, > 0.
+  CoveragePull(const std::vector<Vec3>& samples, const Volume& grid, double covered);
 
-  // One pull of the free control points of `mesh` not held on a box face,
+  // One pull of the free control points of `mesh` not held on a box face
+  // toward the uncovered samples within `reach` (world units, >= covered),
   // in place (measured first, moved after); with `pulled`, the moved points
   // are listed there, ascending. Deterministic for any thread count;
-  // O(samples * bins scanned + vertices) time; 20 bytes of memory per
+  // O(samples * bins scanned + vertices) time, the bins scanned for an
+  // uncovered sample growing with the cube of reach; 20 bytes of memory per
   // control point, 4 per sample and 4 per bin.
-  CoveragePullStatistics apply(const WrapLevelMesh& mesh, std::vector<Vec3>& positions,
+  CoveragePullStatistics apply(const WrapLevelMesh& mesh, std::vector<Vec3>& positions, double reach,
                                std::vector<PulledPoint>* pulled = nullptr);
 
  private:
@@ -57,7 +59,7 @@ class CoveragePull {
   const std::vector<Vec3>& samples_;
   Vec3 origin_, spacing_;
   std::int64_t bins_[3];
-  double covered_squared_, reach_, min_spacing_;
+  double covered_squared_, min_spacing_;
   // Control points by bin (2 x 2 x 2 volume cells): those
   // of bin c are order_[first_[c] .. first_[c + 1]).
   std::vector<std::uint32_t> first_, order_, vertex_bin_;

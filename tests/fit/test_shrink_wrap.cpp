@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include <tbb/global_control.h>
 
@@ -361,6 +362,9 @@ TEST(ShrinkWrap, RejectsBadInput) {
   EXPECT_THROW(shrink_wrap(hierarchy, p.base.positions, p.distance, p.field, options), Error);
   options = options_for(p);
   options.pull_reach_cells = 0.5 * options.pull_covered_cells;
+  EXPECT_THROW(shrink_wrap(hierarchy, p.base.positions, p.distance, p.field, options), Error);
+  options = options_for(p);
+  options.final_pull_reach_cells = std::numeric_limits<double>::infinity();
   EXPECT_THROW(shrink_wrap(hierarchy, p.base.positions, p.distance, p.field, options), Error);
   const Volume other = make_builtin_field("sphere", 20);
   EXPECT_THROW(shrink_wrap(hierarchy, p.base.positions, p.distance, other), Error);
