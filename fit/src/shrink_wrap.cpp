@@ -860,7 +860,8 @@ CorrectionStatistics correct_with(const WrapLevelMesh& mesh, const TrilinearGrid
       mesh.vertex_count, [&](std::size_t begin, std::size_t end, CorrectionPartial& partial) {
         for (std::size_t v = begin; v < end; ++v) {
           if (v + kPrefetchDistance < end) field.prefetch_at(field.grid_point(positions[v + kPrefetchDistance]));
-          if (mesh.role[v] != WrapRole::Fixed) correct_vertex(mesh, field, box, cell, iso, range, nearest, v, positions, partial);
+          if (mesh.role[v] != WrapRole::Fixed)
+            correct_vertex(mesh, field, box, cell, iso, range, nearest, v, positions, partial);
         }
       });
   CorrectionStatistics stats;
@@ -899,7 +900,8 @@ std::size_t settle_pulled_points(const WrapLevelMesh& mesh, const TrilinearGrid&
     const std::uint32_t v = pulled[i].vertex;
     const std::uint32_t begin = mesh.vertex_face_offsets[v], end = mesh.vertex_face_offsets[v + 1];
     int now = 0;
-    for (std::uint32_t k = begin; k < end; ++k) now += face_tangled(mesh, field, expected_sign, positions, mesh.vertex_faces[k]);
+    for (std::uint32_t k = begin; k < end; ++k)
+      now += face_tangled(mesh, field, expected_sign, positions, mesh.vertex_faces[k]);
     if (now == 0) return;
     const auto old_place = [&](std::uint32_t u) { return u == v ? pulled[i].from : positions[u]; };
     int was = 0;

@@ -202,16 +202,17 @@ struct ShrinkWrapOptions {
   // `surface` (the extracted isosurface the distance field was built from),
   // on each level whose edges average at most pull_max_edge_cells cells,
   // every extracted vertex farther than pull_covered_cells from the fit pulls
-  // its nearest control point (within pull_reach_cells) toward it. Below L
+  // its nearest control point (within pull_reach_cells; on level L
+  // final_pull_reach_cells) toward it. Below L
   // it runs after the last round, and the next attraction puts the pulled
   // points back on the isosurface. On level L (with the final correction)
   // it runs last, after the correction and untangle(), and the pulled
   // points are corrected onto the isosurface; one without a root there, or
   // around which more faces are tangled than at its old place, goes back
-  // (26,654 of 69,967 on miranda). Pulled before them, as up to 2026-11-25,
+  // (27,971 of 71,826 on miranda). Pulled before them, as up to 2026-11-25,
   // the untangling's smoothing took back part of what the pull covered.
-  // Miranda, pulled last against pulled after level L's round (bench_fit
-  // --final-quality --rmse): coverage RMS 1.198 -> 0.994 cells, p99 5.71 ->
+  // Miranda, pulled last against pulled after level L's round, both within
+  // 4 cells (bench_fit --final-quality --rmse): coverage RMS 1.198 -> 0.994 cells, p99 5.71 ->
   // 4.94; tangled 6.60% -> 6.58%; isosurface RMS 0.079 both; Table 1 rows
   // 14.59 / 28.44 / 49.45 / 87.62 -> 15.26 / 30.76 / 53.41 / 90.24% of a
   // cell (the fuller fit has more detail; without the return for tangles
@@ -219,8 +220,9 @@ struct ShrinkWrapOptions {
   // 94.88). Mixing at 96^3: coverage max 1.55 -> 1.13 cells, the rest within
   // 0.001, the Table 1 rows of the other test surfaces within 0.1% of a
   // cell. Earlier figures, pull on level L before the correction against no
-  // pull at all (miranda, bench_fit, 89,969-vertex base, L = 3): coverage RMS 1.62 -> 1.20 cells, p99 6.98 ->
-  // 5.76, for 1 s on each of levels 2 and 3. The Table 1 rows, measured
+  // pull at all (miranda, bench_fit, 89,969-vertex base, L = 3): coverage
+  // RMS 1.62 -> 1.20 cells, p99 6.98 -> 5.76, for 1 s on each of levels 2
+  // and 3. The Table 1 rows, measured
   // against the fit, rise (12.55 / 24.74 / 43.16 / 78.78 -> 14.58 / 28.46 /
   // 49.52 / 87.47% of a cell): the fuller fit has more detail. Per byte the
   // decoded surface is better: `convert` at 20% 5.76 MB, coverage RMS 1.21
