@@ -17,6 +17,9 @@
 // the isosurface of the trilinearly interpolated field, and folds left on
 // level L are repaired locally (untangle(), not in the paper; also on every
 // coarser level, against the signed-distance field: coarse_untangle_rounds).
+// With the extracted surface (ShrinkWrapOptions::surface), the fine levels
+// are also pulled toward the parts of it they leave out; on level L that
+// comes last.
 //
 // Small closed components (droplets a few cells across, mostly tetrahedra;
 // see ShrinkWrapOptions::small_component_vertices) are fitted differently,
@@ -203,26 +206,26 @@ struct ShrinkWrapOptions {
   // on each level whose edges average at most pull_max_edge_cells cells,
   // every extracted vertex farther than pull_covered_cells from the fit pulls
   // its nearest control point (within pull_reach_cells; on level L
-  // final_pull_reach_cells) toward it. Below L
-  // it runs after the last round, and the next attraction puts the pulled
-  // points back on the isosurface. On level L (with the final correction)
-  // it runs last, after the correction and untangle(), and the pulled
-  // points are corrected onto the isosurface; one without a root there, or
-  // around which more faces are tangled than at its old place, goes back
-  // (27,971 of 71,826 on miranda). Pulled before them, as up to 2026-11-25,
-  // the untangling's smoothing took back part of what the pull covered.
-  // Miranda, pulled last against pulled after level L's round, both within
-  // 4 cells (bench_fit --final-quality --rmse): coverage RMS 1.198 -> 0.994 cells, p99 5.71 ->
-  // 4.94; tangled 6.60% -> 6.58%; isosurface RMS 0.079 both; Table 1 rows
-  // 14.59 / 28.44 / 49.45 / 87.62 -> 15.26 / 30.76 / 53.41 / 90.24% of a
-  // cell (the fuller fit has more detail; without the return for tangles
-  // coverage 0.891 / 4.56 but 7.01% tangled and rows 16.50 / 33.69 / 58.02 /
-  // 94.88). Mixing at 96^3: coverage max 1.55 -> 1.13 cells, the rest within
-  // 0.001, the Table 1 rows of the other test surfaces within 0.1% of a
-  // cell. Earlier figures, pull on level L before the correction against no
-  // pull at all (miranda, bench_fit, 89,969-vertex base, L = 3): coverage
-  // RMS 1.62 -> 1.20 cells, p99 6.98 -> 5.76, for 1 s on each of levels 2
-  // and 3. The Table 1 rows, measured
+  // final_pull_reach_cells) toward it. Below L it runs after the last round,
+  // and the next attraction puts the pulled points back on the isosurface.
+  // On level L (with the final correction) it runs last, after the
+  // correction and untangle(), and the pulled points are corrected onto the
+  // isosurface; one without a root there, or around which more faces are
+  // tangled than at its old place, goes back (27,971 of 71,826 on miranda).
+  // Pulled before them, as up to 2026-11-25, the untangling's smoothing took
+  // back part of what the pull covered. Miranda, pulled last against pulled
+  // after level L's round, both within 4 cells (bench_fit --final-quality
+  // --rmse): coverage RMS 1.198 -> 0.994 cells, p99 5.71 -> 4.94; tangled
+  // 6.60% -> 6.58%; isosurface RMS 0.079 both; Table 1 rows 14.59 / 28.44 /
+  // 49.45 / 87.62 -> 15.26 / 30.76 / 53.41 / 90.24% of a cell (the fuller
+  // fit has more detail; without the return for tangles coverage 0.891 /
+  // 4.56 but 7.01% tangled and rows 16.50 / 33.69 / 58.02 / 94.88). Mixing
+  // at 96^3: coverage max 1.55 -> 1.13 cells, the rest within 0.001, the
+  // Table 1 rows of the other test surfaces within 0.1% of a cell. Earlier
+  // figures, pull on level L before the correction against no pull at all
+  // (miranda, bench_fit, 89,969-vertex base, L = 3): coverage RMS 1.62 ->
+  // 1.20 cells, p99 6.98 -> 5.76, for 1 s on each of levels 2 and 3. The
+  // Table 1 rows, measured
   // against the fit, rise (12.55 / 24.74 / 43.16 / 78.78 -> 14.58 / 28.46 /
   // 49.52 / 87.47% of a cell): the fuller fit has more detail. Per byte the
   // decoded surface is better: `convert` at 20% 5.76 MB, coverage RMS 1.21
@@ -293,7 +296,7 @@ struct WrapLevelStatistics {
   double mean_edge_cells = 0;     // after refinement, before the rounds (measured with `surface` only)
   std::size_t uncovered_samples = 0;  // the level's pull (0 if it did not pull)
   std::size_t pulled_vertices = 0;
-  std::size_t pulled_back = 0;  // level L: pulled points the correction found no root for, returned
+  std::size_t pulled_back = 0;  // level L: pulled points returned (no root on the isosurface, or folding)
 };
 
 struct ShrinkWrapResult {
