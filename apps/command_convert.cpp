@@ -257,12 +257,12 @@ int convert(const Args& raw) {
                   "\"fine_vertices\": %zu, \"levels\": %d, \"seconds\": {\"load\": %.3f, \"extract\": %.3f, "
                   "\"simplify\": %.3f, \"distance\": %.3f, \"fit\": %.3f, \"analysis\": %.3f, \"encode\": %.3f, "
                   "\"evaluate\": %.3f}, \"fit_isosurface_rms_cells\": %.6g, \"fit_isosurface_max_cells\": %.6g, "
-                  "\"fit_points_beyond_one_cell\": %zu, \"isosurface_uncovered_share\": %.6g, \"base_attempts\": %d, "
-                  "\"rows\": [",
+                  "\"fit_points_beyond_one_cell\": %zu, \"isosurface_uncovered_share\": %.6g, "
+                  "\"fit_tangled_share\": %.6g, \"base_attempts\": %d, \"rows\": [",
                   r.bytes.size(), r.cell_size, r.extracted_vertices, r.base_vertices, r.fine_vertices, r.levels,
                   o.load_seconds, r.seconds.extract, r.seconds.simplify, r.seconds.distance, r.seconds.fit,
                   r.seconds.analysis, r.seconds.encode, r.seconds.evaluate, r.fit_isosurface.rms, r.fit_isosurface.max,
-                  r.fit_isosurface.far, r.uncovered_share, r.base_attempts);
+                  r.fit_isosurface.far, r.uncovered_share, r.tangled_share(), r.base_attempts);
       for (std::size_t k = 0; k < r.summary.size(); ++k) {
         const RateDistortionRow& row = r.summary[k];
         std::printf("%s{\"percent\": %.4f, \"coefficients\": %zu, \"rmse_percent_cell\": %.6g, \"max_percent_cell\": "
@@ -302,9 +302,10 @@ int convert(const Args& raw) {
                   r.seconds.analysis, r.seconds.encode, r.seconds.evaluate,
                   8.0 * static_cast<double>(r.bytes.size()) / static_cast<double>(r.fine_vertices));
       std::printf("%-28s fit: the fine control points lie %.3g cell RMS (max %.3g) off the isosurface, %zu of them "
-                  "more than a cell; %.3g%% of the isosurface lies more than %g cells from all of them\n",
+                  "more than a cell; %.3g%% of the isosurface lies more than %g cells from all of them; %.3g%% of the "
+                  "fine faces are folded against the field gradient\n",
                   "", r.fit_isosurface.rms, r.fit_isosurface.max, r.fit_isosurface.far, 100.0 * r.uncovered_share,
-                  kUncoveredCells);
+                  kUncoveredCells, 100.0 * r.tangled_share());
       if (r.base_attempts > 1)
         std::printf("%-28s the base mesh grew from %zu to %zu vertices (%d tries) to cover the isosurface\n", "",
                     r.first_base_vertices, r.base_vertices, r.base_attempts);

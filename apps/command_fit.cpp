@@ -164,10 +164,17 @@ int fit(const Args& raw) {
   if (result.untangle.tangled_before > 0)
     std::printf("  untangle: %zu tangled faces on level %d before, %zu after %d rounds\n", result.untangle.tangled_before,
                 levels, result.untangle.tangled_after, result.untangle.rounds);
-  if (smooth == 0 && result.untangle.tangled_after > fine.face_count() / 1000)
+  if (result.unfold.skipped)
+    std::printf("  unfold: skipped, over %.2f%% of the faces tangled\n",
+                100.0 * wrap_options.unfold_max_tangled_fraction);
+  else if (result.unfold.tangled_before > 0)
+    std::printf("  unfold: %zu tangled faces before, %zu after %d rounds\n", result.unfold.tangled_before,
+                result.unfold.tangled_after, result.unfold.rounds);
+  const std::size_t tangled = result.tangled_faces;
+  if (smooth == 0 && tangled > fine.face_count() / 1000)
     std::printf("  note: %.2f%% of the fine faces stay tangled; folds sit mostly on necks and tunnels thinner than a "
-                "cell, which a one-voxel pre-filter (--smooth 1) removes (built-in mixing layer: 0.31%% -> 0.06%%)\n",
-                100.0 * double(result.untangle.tangled_after) / double(fine.face_count()));
+                "cell, which a one-voxel pre-filter (--smooth 1) removes\n",
+                100.0 * double(tangled) / double(fine.face_count()));
   if (report) {
     std::printf("quality:\n");
     const SurfaceDistance reference(surface.mesh);

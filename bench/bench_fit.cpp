@@ -12,7 +12,8 @@
 //                  [--distance-only] [--iterations N] [--final-iterations N]
 //                  [--reach R] [--min-reach C] [--weight W] [--no-correction] [--no-coverage-pull]
 //                  [--pull-max-edge C] [--rmse-spread]
-//                  [--correction-cells C] [--untangle N] [--coarse-untangle N] [--base FILE]
+//                  [--correction-cells C] [--untangle N] [--coarse-untangle N] [--unfold N]
+//                  [--unfold-limit FRACTION] [--base FILE]
 //                  [--write-base FILE] [--no-peer] [--repeat N] [--final-quality] [--rmse]
 //                  [--small-components N] [--no-nearest-correction]
 //   INPUT is a volume file or builtin:NAME[:N]; --base-vertices 0 simplifies
@@ -104,6 +105,8 @@ int main(int argc, char** argv) {
   int repeat = 1;
   int untangle_rounds = ShrinkWrapOptions().untangle_rounds;
   int coarse_untangle_rounds = ShrinkWrapOptions().coarse_untangle_rounds;
+  int unfold_rounds = ShrinkWrapOptions().unfold_rounds;
+  double unfold_limit = ShrinkWrapOptions().unfold_max_tangled_fraction;
   std::size_t small_components = ShrinkWrapOptions().small_component_vertices;
   bool nearest_correction = ShrinkWrapOptions().correction_from_nearest_point;
   double weight = 0.5, correction_cells = ShrinkWrapOptions().correction_max_cells;
@@ -133,6 +136,8 @@ int main(int argc, char** argv) {
     else if (arg == "--correction-cells") correction_cells = std::stod(next());
     else if (arg == "--untangle") untangle_rounds = std::stoi(next());
     else if (arg == "--coarse-untangle") coarse_untangle_rounds = std::stoi(next());
+    else if (arg == "--unfold") unfold_rounds = std::stoi(next());
+    else if (arg == "--unfold-limit") unfold_limit = std::stod(next());
     else if (arg == "--small-components") small_components = std::stoul(next());
     else if (arg == "--no-nearest-correction") nearest_correction = false;
     else if (arg == "--reach") reach = std::stod(next());
@@ -261,6 +266,8 @@ int main(int argc, char** argv) {
     wrap_options.correction_max_cells = correction_cells;
     wrap_options.untangle_rounds = untangle_rounds;
     wrap_options.coarse_untangle_rounds = coarse_untangle_rounds;
+    wrap_options.unfold_rounds = unfold_rounds;
+    wrap_options.unfold_max_tangled_fraction = unfold_limit;
     wrap_options.small_component_vertices = small_components;
     wrap_options.correction_from_nearest_point = nearest_correction;
     if (coverage_pull) wrap_options.surface = &extracted;
@@ -279,11 +286,13 @@ int main(int argc, char** argv) {
                 hierarchy_seconds, hierarchy.fine_vertex_count(), wrap_seconds, repeat > 1 ? " best" : "");
     for (const WrapLevelStatistics& s : wrapped.levels)
       std::printf("  level %d: %zu vertices (%zu on the box, %zu fixed) %.3f s (setup %.3f, relax %.3f, attract %.3f, "
-                  "correct %.3f, untangle %.3f, pull %.3f); mean edge %.2f cell; pulled %zu toward %zu uncovered "
+                  "correct %.3f, untangle %.3f, pull %.3f, unfold %.3f); mean edge %.2f cell; pulled %zu toward %zu "
+                  "uncovered "
                   "isosurface vertices (%zu back); last attraction: %zu attracted "
                   "(mean %.3f, max %.2f cell), %zu out of reach, %zu without direction\n",
                   s.level, s.vertices, s.boundary_vertices, s.fixed_vertices, s.seconds, s.seconds_setup,
                   s.seconds_relaxation, s.seconds_attraction, s.seconds_correction, s.seconds_untangle, s.seconds_pull,
+                  s.seconds_unfold,
                   s.mean_edge_cells, s.pulled_vertices, s.uncovered_samples, s.pulled_back,
                   s.last_attraction.attracted,
                   s.last_attraction.mean_move_cells, s.last_attraction.max_move_cells, s.last_attraction.out_of_reach,
@@ -294,6 +303,9 @@ int main(int argc, char** argv) {
                 wrapped.correction.from_nearest_point, wrapped.correction.along_box_face, wrapped.correction.failed);
     std::printf("  untangle: %zu tangled faces before, %zu after %d rounds\n", wrapped.untangle.tangled_before,
                 wrapped.untangle.tangled_after, wrapped.untangle.rounds);
+    std::printf("  unfold: %zu tangled faces before, %zu after %d rounds (%zu moves)%s\n",
+                wrapped.unfold.tangled_before, wrapped.unfold.tangled_after, wrapped.unfold.rounds, wrapped.unfold.moved,
+                wrapped.unfold.skipped ? ", skipped: over the limit" : "");
     {
       // FNV-1a over the fitted positions' bytes: equal hashes mean bit-identical fits.
       std::uint64_t hash = 1469598103934665603ull;

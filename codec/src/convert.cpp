@@ -20,6 +20,11 @@
 #include "isowave/transform/wavelet_transform.h"
 
 namespace isowave {
+
+double ConvertResult::tangled_share() const {
+  return fine_faces ? double(fit.tangled_faces) / double(fine_faces) : 0.0;
+}
+
 namespace {
 
 using Clock = std::chrono::steady_clock;
@@ -142,6 +147,9 @@ ConvertResult convert_volume(const Volume& volume, const std::string& source, co
     shared_hierarchy.reset();
     shared_hierarchy = std::make_shared<const SubdivisionHierarchy>(base, result.levels);
     result.fine_vertices = shared_hierarchy->fine_vertex_count();
+    // Each parent face of n corners gives n quads.
+    result.fine_faces =
+        result.levels > 0 ? shared_hierarchy->step(result.levels).face_vertices.size() : base.face_count();
     ShrinkWrapOptions wrap_options = options.shrink_wrap;
     if (options.coverage_pull) wrap_options.surface = &surface.mesh;
     result.fit = shrink_wrap(*shared_hierarchy, base.positions, *distance, field, wrap_options, progress);
@@ -227,6 +235,7 @@ ConvertResult convert_volume(const Volume& volume, const std::string& source, co
   metadata.values["fit_isosurface_rms_cells"] = number(result.fit_isosurface.rms);
   metadata.values["fit_isosurface_max_cells"] = number(result.fit_isosurface.max);
   metadata.values["isosurface_uncovered_share"] = number(result.uncovered_share);
+  metadata.values["fit_tangled_share"] = number(result.tangled_share());
   metadata.values["options"] = "flip=" + std::to_string(options.flip) +
                                " min_component_vertices=" + std::to_string(options.min_component_vertices) +
                                " smooth_sigma=" + number(options.smooth_sigma) + " step_cells=" + number(options.step_cells);

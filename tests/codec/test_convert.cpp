@@ -94,5 +94,25 @@ TEST(Convert, WarnsWhenTheFitLeavesPartsOfTheSurfaceOut) {
   EXPECT_LT(percentile(distances, 0.99), 0.5);
 }
 
+// The folded share convert reports is the fit's own count after its last
+// repair (the unfold runs on this fit); measured independently on the fitted
+// fine mesh by the quality report, it is the same.
+TEST(Convert, ReportsTheShareOfFoldedFineFaces) {
+  const Volume field = make_builtin_field("mixing", 96);
+  ConvertOptions options;
+  options.keep_extracted_mesh = true;
+  options.summary_percents = {100};
+  const ConvertResult result = convert_volume(field, "mixing", options);
+  ASSERT_FALSE(result.fit.unfold.skipped);
+  const IswDecoded decoded = decode_isw(result.bytes, "test");
+  const SurfaceDistance reference(result.extracted_mesh);
+  const FitQuality quality = measure_fit_quality(*decoded.hierarchy, decoded.hierarchy->levels(), result.fit.positions,
+                                                 result.extracted_mesh, reference, field, options.iso, options.flip);
+  EXPECT_GT(quality.tangled_faces, 0u);
+  EXPECT_EQ(result.fine_faces, quality.faces);
+  EXPECT_EQ(result.fit.tangled_faces, quality.tangled_faces);
+  EXPECT_DOUBLE_EQ(result.tangled_share(), quality.tangled_fraction);
+}
+
 }  // namespace
 }  // namespace isowave

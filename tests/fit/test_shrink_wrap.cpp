@@ -90,12 +90,12 @@ TEST(ShrinkWrap, ViscousFingersMeetsTheTargets) {
 
 // The built-in mixing layer has droplets and filaments a few cells across,
 // finer than a base mesh of 1/16 of the extracted vertices can follow. The
-// coverage and isosurface targets are met; the tangles (0.31% against 0.1%,
-// on necks and tunnels thinner than a cell: see the next test) are not, nor
-// quite the distance to the extracted mesh (RMS 0.0512 against 0.05, max 0.65
-// against 0.5: the flat triangles themselves stray 0.040 RMS and up to 0.57
-// cells from the exact isosurface the fit lies on, first order at four points
-// per triangle).
+// coverage, isosurface and tangle targets are met (tangled 0.32% before the
+// unfold, on necks and tunnels thinner than a cell: see the next test); the
+// distance to the extracted mesh is not quite (RMS 0.0513 against 0.05, max
+// 0.65 against 0.5), because the flat triangles themselves stray 0.040 RMS
+// and up to 0.57 cells from the exact isosurface the fit lies on (first
+// order at four points per triangle).
 TEST(ShrinkWrap, MixingStaysFiniteAndMostlyOnTheIsosurface) {
   const Pipeline p = prepare(make_builtin_field("mixing", 96), 0.0, 2400);
   const SubdivisionHierarchy hierarchy(p.base, 3);
@@ -106,12 +106,15 @@ TEST(ShrinkWrap, MixingStaysFiniteAndMostlyOnTheIsosurface) {
   const FitQuality q = measure_fit_quality(hierarchy, 3, result.positions, p.extracted, reference, p.field, p.iso, false);
   EXPECT_EQ(q.nonfinite_vertices, 0u);
   EXPECT_LE(q.surface_rms, 0.2);
-  // The droplets no longer fold (small_component_vertices): coverage p99 0.33
-  // cells (0.93 with the paper's steps). Tangled 0.31% with the coarse untangle
-  // and the local reverts in untangle() (0.78% without, 1.83% with the paper's
-  // steps); isosurface RMS 0.0050 cells with the correction along box faces.
+  // The droplets no longer fold (small_component_vertices): coverage p99 0.31
+  // cells (0.93 with the paper's steps). Tangled 0.05% with the unfold, 0.32%
+  // with the coarse untangle and the local reverts in untangle() alone (0.78%
+  // without those, 1.83% with the paper's steps); isosurface RMS 0.0047
+  // cells with the correction along box faces.
   EXPECT_LE(q.coverage_p99, 0.5);
-  EXPECT_LE(q.tangled_fraction, 0.004);
+  EXPECT_LE(q.tangled_fraction, 0.001);
+  EXPECT_FALSE(result.unfold.skipped);
+  EXPECT_EQ(result.unfold.tangled_after, q.tangled_faces);  // the same measure, counted independently
   EXPECT_LE(q.isosurface_rms, 0.01);
   EXPECT_GT(result.correction.along_box_face, 0u);
 }
@@ -282,6 +285,33 @@ TEST(ShrinkWrap, RelaxationAveragesWithTheNeighbourCentroid) {
   EXPECT_NEAR(out[edge].y, in[edge].y, 1e-12);
 }
 
+TEST(ShrinkWrap, UnfoldOpensAFoldAndKeepsThePointsOnTheIsosurface) {
+  // A fold on the plane z = 4 (field 10 - z, iso 6: normals toward +z): an
+  // interior column of an 8 x 8 quad grid pushed 0.7 past the next, which
+  // inverts the six faces between them that no boundary corner holds.
+  const Volume field = test::sampled_volume({20, 20, 20}, [](double, double, double z) { return 10.0 - z; });
+  PolygonMesh grid = test::quad_grid(8, 8);
+  for (Vec3& p : grid.positions) p += Vec3{3, 3, 4};
+  std::vector<Vec3> folded = grid.positions;
+  for (int row = 1; row < 8; ++row) folded[std::size_t(row) * 9 + 3].x = 3 + 4.7;
+  const SubdivisionHierarchy hierarchy(grid, 1);
+  const WrapLevelMesh mesh = make_wrap_level_mesh(hierarchy, 0, folded, field);
+  std::vector<Vec3> flat = grid.positions;
+  ASSERT_EQ(unfold(mesh, field, 6.0, false, 0, 2.0, flat).tangled_before, 0u);  // the grid's own orientation
+  std::vector<Vec3> unfolded = folded;
+  const UnfoldStatistics stats = unfold(mesh, field, 6.0, false, 10, 2.0, unfolded);
+  EXPECT_EQ(stats.tangled_before, 6u);
+  EXPECT_EQ(stats.tangled_after, 0u);
+  EXPECT_GT(stats.moved, 0u);
+  for (std::size_t v = 0; v < unfolded.size(); ++v) EXPECT_NEAR(unfolded[v].z, 4.0, 1e-9) << "vertex " << v;
+  std::vector<Vec3> one_thread = folded;
+  {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
+    unfold(mesh, field, 6.0, false, 10, 2.0, one_thread);
+  }
+  for (std::size_t v = 0; v < unfolded.size(); ++v) ASSERT_TRUE(one_thread[v] == unfolded[v]) << "vertex " << v;
+}
+
 TEST(ShrinkWrap, CorrectionSearchesAlongABoxFaceWhenTheGradientLeavesTheBox) {
   // Field y - x, iso 5: the surface y = x + 5. A free vertex at x = 0.3 has
   // its root along the gradient (-1, 1, 0) outside the box (x = -0.35); along
@@ -365,6 +395,12 @@ TEST(ShrinkWrap, RejectsBadInput) {
   EXPECT_THROW(shrink_wrap(hierarchy, p.base.positions, p.distance, p.field, options), Error);
   options = options_for(p);
   options.final_pull_reach_cells = std::numeric_limits<double>::infinity();
+  EXPECT_THROW(shrink_wrap(hierarchy, p.base.positions, p.distance, p.field, options), Error);
+  options = ShrinkWrapOptions();
+  options.unfold_rounds = -1;
+  EXPECT_THROW(shrink_wrap(hierarchy, p.base.positions, p.distance, p.field, options), Error);
+  options = ShrinkWrapOptions();
+  options.unfold_max_tangled_fraction = std::nan("");
   EXPECT_THROW(shrink_wrap(hierarchy, p.base.positions, p.distance, p.field, options), Error);
   const Volume other = make_builtin_field("sphere", 20);
   EXPECT_THROW(shrink_wrap(hierarchy, p.base.positions, p.distance, other), Error);

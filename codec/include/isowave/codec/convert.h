@@ -85,7 +85,7 @@ struct ConvertResult {
   simplify::SimplifyReport simplification;
   ShrinkWrapResult fit;  // positions: the fitted fine control points
   int levels = 0;
-  std::size_t extracted_vertices = 0, base_vertices = 0, fine_vertices = 0;
+  std::size_t extracted_vertices = 0, base_vertices = 0, fine_vertices = 0, fine_faces = 0;
   double cell_size = 1;
   ConvertTimings seconds;
   // The fitted fine control points against the isosurface of the field they
@@ -96,6 +96,9 @@ struct ConvertResult {
   // kUncoveredCells cells from every fine control point (share_farther_than):
   // what the fit left out. More than kUncoveredWarning adds a warning.
   double uncovered_share = 0;
+  // The share of the fine faces whose normal disagrees with the field
+  // gradient (ShrinkWrapResult::tangled_faces): folds of the parameterization.
+  double tangled_share() const;
   // Tries at the base mesh (ConvertOptions::grow_base_until_covered) and the
   // first one's vertex count; base_vertices is the last one's.
   int base_attempts = 1;
