@@ -45,8 +45,8 @@
 // level L from the start and reused by the coarser levels, and on level L a
 // copy of the scalar field and a few flags per vertex and face for
 // untangle() (which moves its selected vertices through the second position
-// buffer). Large buffers live on transparent huge pages, faulted in on all
-// threads.
+// buffer) and, when it runs, unfold() (3 bytes per vertex, 1 per face).
+// Large buffers live on transparent huge pages, faulted in on all threads.
 #include <cstddef>
 #include <cstdint>
 #include <vector>
