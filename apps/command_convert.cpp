@@ -121,6 +121,7 @@ int convert(const Args& raw) {
       {"quiet", false, "print nothing but errors", ""},
       {"json", false, "print machine-readable results as one JSON object", ""},
   };
+  cli::add_unfold_option(options);
   cli::add_extraction_options(options);
   cli::add_volume_options(options);
   const cli::CommandSpec spec{
@@ -150,6 +151,7 @@ int convert(const Args& raw) {
   convert_options.grow_base_until_covered = !args.has("base-vertices") && !args.has("base-ratio");
   convert_options.valence_flips = !args.has("no-flips");
   convert_options.coverage_pull = !args.has("no-coverage-pull");
+  cli::set_unfold_limit(args, convert_options.shrink_wrap);
   convert_options.verify_file = args.has("verify");
   if (!(convert_options.base_ratio > 0 && convert_options.base_ratio <= 1))
     throw Error(ErrorKind::InvalidArgument, "--base-ratio must be in (0, 1]");

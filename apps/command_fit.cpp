@@ -69,6 +69,7 @@ int fit(const Args& raw) {
   spec.options.push_back({"no-correction", false, "skip the final move onto the exact isosurface", ""});
   spec.options.push_back({"no-coverage-pull", false,
                           "skip the pull of the fine levels toward isosurface parts the fit leaves out", ""});
+  cli::add_unfold_option(spec.options);
   spec.options.push_back({"no-report", false, "skip the quality report (it needs distance trees)", ""});
   spec.options.push_back({"ascii", false, "write ASCII PLY instead of binary", ""});
   spec.options.push_back({"quiet", false, "print nothing on success", ""});
@@ -94,6 +95,7 @@ int fit(const Args& raw) {
   wrap_options.small_component_vertices = static_cast<std::size_t>(
       args.get_int("droplet-vertices", static_cast<int>(wrap_options.small_component_vertices), 0, 1000000));
   wrap_options.final_correction = !args.has("no-correction");
+  cli::set_unfold_limit(args, wrap_options);
   const bool report = !args.has("no-report") && !args.has("quiet");
   wrap_options.keep_levels = report;
   const double band = args.get_double("band", 3.0);
@@ -165,7 +167,7 @@ int fit(const Args& raw) {
     std::printf("  untangle: %zu tangled faces on level %d before, %zu after %d rounds\n", result.untangle.tangled_before,
                 levels, result.untangle.tangled_after, result.untangle.rounds);
   if (result.unfold.skipped)
-    std::printf("  unfold: skipped, over %.2f%% of the faces tangled\n",
+    std::printf("  unfold: skipped, over %.2f%% of the faces tangled (--unfold-limit 100 forces it)\n",
                 100.0 * wrap_options.unfold_max_tangled_fraction);
   else if (result.unfold.tangled_before > 0)
     std::printf("  unfold: %zu tangled faces before, %zu after %d rounds\n", result.unfold.tangled_before,

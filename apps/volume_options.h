@@ -1,13 +1,15 @@
 #pragma once
 // Volume reader options shared by the subcommands that read volumes (extract,
-// and fit and convert later): --dims, --type, --endian, --spacing, --origin,
-// --field and --grid, turned into isowave::VolumeReadOptions.
+// fit and convert): --dims, --type, --endian, --spacing, --origin, --field
+// and --grid, turned into isowave::VolumeReadOptions; and the extraction and
+// fit options those subcommands share.
 #include <string>
 #include <vector>
 
 #include "cli.h"
 #include "isowave/extract/isosurface.h"
 #include "isowave/extract/volume_io.h"
+#include "isowave/fit/shrink_wrap.h"
 
 namespace isowave::cli {
 
@@ -25,6 +27,13 @@ void add_extraction_options(std::vector<OptionSpec>& options);
 // Those options as given (iso left at 0); Error(InvalidArgument) for a
 // --smooth outside 0..100 voxels.
 IsosurfaceOptions extraction_options(const Arguments& args);
+
+// Appends --unfold-limit PERCENT (fit and convert) and applies it to the
+// shrink-wrap options: the unfold runs when untangle() left at most that
+// share of the finest level's faces folded (0: never); Error(InvalidArgument)
+// outside 0..100.
+void add_unfold_option(std::vector<OptionSpec>& options);
+void set_unfold_limit(const Arguments& args, ShrinkWrapOptions& options);
 
 // True for generated inputs (builtin:NAME[:N]), whose surface is at 0.
 bool is_builtin_volume(const std::string& input);

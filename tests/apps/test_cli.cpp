@@ -197,6 +197,7 @@ TEST_F(CliTest, BadInputGivesOneLineAndANonZeroExitCode) {
       {"subdivide", path("garbage.ply"), "--levels", "2", "-o", path("x.ply")},
       {"convert", "builtin:nonsense", "-o", path("x.isw")},
       {"convert", "builtin:sphere:32", "--levels", "9", "-o", path("x.isw")},
+      {"convert", "builtin:sphere:32", "--unfold-limit", "101", "-o", path("x.isw")},
       {"nonsense"},
   };
   for (const auto& arguments : cases) {
