@@ -223,6 +223,7 @@ TEST(ShrinkWrap, ResultDoesNotDependOnThreadCount) {
   const SubdivisionHierarchy hierarchy(p.base, 2);
   ShrinkWrapOptions options = options_for(p);
   options.pull_max_edge_cells = 2.0;  // level 2's edges average 1.07 cells: pull there too
+  options.unfold_max_tangled_fraction = 1.0;  // 62 faces tangled, over the default limit: unfold too
   std::vector<Vec3> one, two;
   {
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
@@ -232,6 +233,7 @@ TEST(ShrinkWrap, ResultDoesNotDependOnThreadCount) {
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 2);
     const ShrinkWrapResult result = shrink_wrap(hierarchy, p.base.positions, p.distance, p.field, options);
     EXPECT_GT(result.levels.back().pulled_vertices, 0u);
+    EXPECT_GT(result.unfold.moved, 0u);
     two = result.positions;
   }
   ASSERT_EQ(one.size(), two.size());
