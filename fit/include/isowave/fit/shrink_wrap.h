@@ -135,6 +135,12 @@ struct CorrectionStatistics {
   std::size_t corrected = 0;  // now on the interpolated isosurface
   std::size_t failed = 0;     // no root within reach or no gradient: left in place
   std::size_t from_nearest_point = 0;  // of the corrected: see correction_from_nearest_point
+  // Of the corrected: vertices without a root that found one from the
+  // centroid of their neighbours (once those were corrected; up to five
+  // Jacobi rounds). Engine CT (base 1/16 of its isosurface, 3 levels): 59 of
+  // 214 failures, isosurface RMS 0.0109 -> 0.0065 cells, the far ones
+  // among them; miranda 18,322 of 32,695, 0.0785 -> 0.0734.
+  std::size_t from_neighbours = 0;
   // Of the corrected: free vertices within a cell of a box face whose root
   // lies outside the box along the gradient (and, with
   // correction_from_nearest_point, from the nearest point), found instead
@@ -151,7 +157,9 @@ struct CorrectionStatistics {
 // their face) to where the field equals iso (within about 1e-4 cells, by
 // Newton steps along that line), searching at most max_move_cells cells; a
 // free vertex without a root there retries along the gradient's part
-// parallel to a box face within a cell (along_box_face); in place.
+// parallel to a box face within a cell (along_box_face), and a vertex still
+// without one from the centroid of its neighbours (from_neighbours); in
+// place.
 CorrectionStatistics correct_to_isosurface(const WrapLevelMesh& mesh, const Volume& field, double iso,
                                            double max_move_cells, std::vector<Vec3>& positions);
 
