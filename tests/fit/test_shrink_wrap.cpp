@@ -287,6 +287,28 @@ TEST(ShrinkWrap, RelaxationAveragesWithTheNeighbourCentroid) {
   EXPECT_NEAR(out[edge].y, in[edge].y, 1e-12);
 }
 
+TEST(ShrinkWrap, CorrectionRetriesFromTheNeighboursCentroid) {
+  // The plane z = 4 (field 10 - z, iso 6) and a 4 x 4 quad grid on it whose
+  // centre vertex is lifted 5 cells: its root along the gradient lies beyond
+  // the 2-cell search, its neighbours' centroid is on the plane.
+  const Volume field = test::sampled_volume({12, 12, 12}, [](double, double, double z) { return 10.0 - z; });
+  PolygonMesh grid = test::quad_grid(4, 4);
+  for (Vec3& p : grid.positions) p += Vec3{3, 3, 4};
+  const std::uint32_t centre = 12;  // (2, 2) in the 5x5 vertex grid
+  std::vector<Vec3> positions = grid.positions;
+  positions[centre].z += 5.0;
+  const SubdivisionHierarchy hierarchy(grid, 1);
+  const WrapLevelMesh mesh = make_wrap_level_mesh(hierarchy, 0, positions, field);
+  ASSERT_EQ(mesh.role[centre], WrapRole::Free);
+  const CorrectionStatistics stats = correct_to_isosurface(mesh, field, 6.0, 2.0, positions);
+  EXPECT_EQ(stats.from_neighbours, 1u);
+  EXPECT_EQ(stats.failed, 0u);
+  EXPECT_NEAR(positions[centre].x, 5.0, 1e-9);
+  EXPECT_NEAR(positions[centre].y, 5.0, 1e-9);
+  EXPECT_NEAR(positions[centre].z, 4.0, 1e-9);
+  EXPECT_NEAR(stats.max_move_cells, 5.0, 1e-9);
+}
+
 TEST(ShrinkWrap, UnfoldOpensAFoldAndKeepsThePointsOnTheIsosurface) {
   // A fold on the plane z = 4 (field 10 - z, iso 6: normals toward +z): an
   // interior column of an 8 x 8 quad grid pushed 0.7 past the next, which
