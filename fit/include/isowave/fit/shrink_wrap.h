@@ -214,7 +214,7 @@ struct UnfoldStatistics {
 // by colour they move in parallel (Gauss-Seidel across colours, the same
 // for any thread count). Until a round moves none, at most `rounds`. In
 // place. Costs one scan of the level's faces, then per round O(corners x
-// (valence + faces around) x trilinear samples); mixing at 96^3: 456 -> 75
+// (valence + faces around) x trilinear samples); mixing at 96^3: 450 -> 78
 // tangled faces in 10 rounds, 0.02 s.
 UnfoldStatistics unfold(const WrapLevelMesh& mesh, const Volume& field, double iso, bool flip, int rounds,
                         double max_move_cells, std::vector<Vec3>& positions);
@@ -326,7 +326,7 @@ struct ShrinkWrapOptions {
   // thinner than its base mesh can follow, it would cost seconds and raise
   // the wavelet RMSE more. Measured 2026-11-25 (base 1/16 of the isosurface,
   // 3 levels; tangled before -> after, time, RMSE at 20% of the
-  // coefficients in % of a cell): mixing at 96^3 0.32% -> 0.05%, 0.02 s,
+  // coefficients in % of a cell): mixing at 96^3 0.32% -> 0.06%, 0.02 s,
   // 4.41 -> 4.50; engine CT 0.042% -> 0.015%, 0.06 s, 1.68 -> 1.69;
   // aneurism 1.19% -> 0.22%, 0.20 s, 6.52 -> 6.85; heptane 1.22% -> 0.20%,
   // 0.23 s, 5.38 -> 5.63. Skipped: HCCI 4.1% (forced: 0.79%, 1.27 s,
