@@ -174,11 +174,10 @@ int fit(const Args& raw) {
   else if (result.unfold.tangled_before > 0)
     std::printf("  unfold: %zu tangled faces before, %zu after %d rounds\n", result.unfold.tangled_before,
                 result.unfold.tangled_after, result.unfold.rounds);
-  const std::size_t tangled = result.tangled_faces;
-  if (smooth == 0 && tangled > fine.face_count() / 1000)
+  if (smooth == 0 && result.tangled_faces > fine.face_count() / 1000)
     std::printf("  note: %.2f%% of the fine faces stay tangled; folds sit mostly on necks and tunnels thinner than a "
                 "cell, which a one-voxel pre-filter (--smooth 1) removes\n",
-                100.0 * double(tangled) / double(fine.face_count()));
+                100.0 * double(result.tangled_faces) / double(fine.face_count()));
   if (report) {
     std::printf("quality:\n");
     const SurfaceDistance reference(surface.mesh);

@@ -287,13 +287,11 @@ int main(int argc, char** argv) {
     for (const WrapLevelStatistics& s : wrapped.levels)
       std::printf("  level %d: %zu vertices (%zu on the box, %zu fixed) %.3f s (setup %.3f, relax %.3f, attract %.3f, "
                   "correct %.3f, untangle %.3f, pull %.3f, unfold %.3f); mean edge %.2f cell; pulled %zu toward %zu "
-                  "uncovered "
-                  "isosurface vertices (%zu back); last attraction: %zu attracted "
+                  "uncovered isosurface vertices (%zu back); last attraction: %zu attracted "
                   "(mean %.3f, max %.2f cell), %zu out of reach, %zu without direction\n",
                   s.level, s.vertices, s.boundary_vertices, s.fixed_vertices, s.seconds, s.seconds_setup,
                   s.seconds_relaxation, s.seconds_attraction, s.seconds_correction, s.seconds_untangle, s.seconds_pull,
-                  s.seconds_unfold,
-                  s.mean_edge_cells, s.pulled_vertices, s.uncovered_samples, s.pulled_back,
+                  s.seconds_unfold, s.mean_edge_cells, s.pulled_vertices, s.uncovered_samples, s.pulled_back,
                   s.last_attraction.attracted,
                   s.last_attraction.mean_move_cells, s.last_attraction.max_move_cells, s.last_attraction.out_of_reach,
                   s.last_attraction.no_direction);

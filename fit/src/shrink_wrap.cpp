@@ -736,9 +736,6 @@ bool project_onto_isosurface(const WrapLevelMesh& mesh, const Box& box, const Tr
   return is_finite(target);
 }
 
-// 1 if face f's normal disagrees with the field gradient at its centroid
-// (normals toward lower values unless flipped: expected_sign -1, else +1),
-// its corners at position(vertex).
 // Face f's Newell normal (twice its area vector) and the field gradient at
 // its centroid, its corners at position(vertex).
 template <class Position>
@@ -757,6 +754,9 @@ inline void face_normal_and_gradient(const WrapLevelMesh& mesh, const TrilinearG
   gradient = field.sample(centroid).gradient;
 }
 
+// 1 if face f's normal disagrees with the field gradient at its centroid
+// (normals toward lower values unless flipped: expected_sign -1, else +1),
+// its corners at position(vertex).
 template <class Position>
 inline std::uint8_t face_tangled_at(const WrapLevelMesh& mesh, const TrilinearGrid& field, double expected_sign,
                                     std::size_t f, const Position& position) {
@@ -800,9 +800,9 @@ std::size_t find_tangled_faces(const WrapLevelMesh& mesh, const TrilinearGrid& f
 constexpr int kCorrectionRetryRounds = 5;
 
 struct CorrectionPartial {
-  std::size_t movable = 0, corrected = 0, failed = 0, nearest = 0, along_box = 0;
+  std::size_t movable = 0, corrected = 0, nearest = 0, along_box = 0;
   double move_sum = 0, move_max = 0;
-  std::vector<std::uint32_t> failed_vertices;
+  std::vector<std::uint32_t> failed;  // no root found: left where they were
 };
 
 // The nearest point of the zero set of `distance` (Newton steps along its
@@ -850,8 +850,7 @@ bool correct_vertex(const WrapLevelMesh& mesh, const TrilinearGrid& field, const
     } else {
       const int axis = free ? near_box_axis(box, cell, p) : -1;
       if (axis < 0 || !project_onto_isosurface(mesh, box, field, cell, iso, range, v, p, target, axis)) {
-        ++partial.failed;
-        partial.failed_vertices.push_back(static_cast<std::uint32_t>(v));
+        partial.failed.push_back(static_cast<std::uint32_t>(v));
         return false;
       }
       ++partial.along_box;
@@ -893,7 +892,7 @@ CorrectionStatistics correct_with(const WrapLevelMesh& mesh, const TrilinearGrid
     stats.along_box_face += partial.along_box;
     sum += partial.move_sum;
     stats.max_move_cells = std::max(stats.max_move_cells, partial.move_max);
-    failed.insert(failed.end(), partial.failed_vertices.begin(), partial.failed_vertices.end());
+    failed.insert(failed.end(), partial.failed.begin(), partial.failed.end());
   }
   // A vertex without a root tries again from its neighbours' centroid, most
   // of whose corners found the isosurface; Jacobi rounds while they help.
@@ -1653,7 +1652,7 @@ ShrinkWrapResult shrink_wrap(const SubdivisionHierarchy& hierarchy, const std::v
           double(result.untangle.tangled_after) > options.unfold_max_tangled_fraction * double(mesh.face_count());
       result.tangled_faces = result.untangle.tangled_after;
       if (options.unfold_rounds > 0 && too_tangled) {
-        result.unfold.tangled_before = result.unfold.tangled_after = result.untangle.tangled_after;
+        result.unfold.tangled_before = result.unfold.tangled_after = result.tangled_faces;
         result.unfold.skipped = true;
       } else if (options.unfold_rounds > 0) {
         phase = Clock::now();
