@@ -110,6 +110,21 @@ std::vector<double> Arguments::get_double_list(const std::string& name, const st
   return values;
 }
 
+std::string json_string(const std::string& text) {
+  std::string out = "\"";
+  for (const char c : text) {
+    if (c == '"' || c == '\\') out += '\\';
+    if (static_cast<unsigned char>(c) < 0x20) {
+      char escaped[8];
+      std::snprintf(escaped, sizeof escaped, "\\u%04x", static_cast<unsigned>(static_cast<unsigned char>(c)));
+      out += escaped;
+      continue;
+    }
+    out += c;
+  }
+  return out + "\"";
+}
+
 bool print_help_if_requested(const CommandSpec& spec, const Arguments& args) {
   if (!args.help_requested()) return false;
   std::fputs(usage(spec).c_str(), stdout);

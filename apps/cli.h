@@ -52,4 +52,7 @@ std::string usage(const CommandSpec& spec);
 // command then returns 0).
 bool print_help_if_requested(const CommandSpec& spec, const Arguments& args);
 
+// `text` as a JSON string literal, quotes included (control characters as \u escapes).
+std::string json_string(const std::string& text);
+
 }  // namespace isowave::cli

@@ -28,7 +28,8 @@ namespace fs = std::filesystem;
 struct Job {
   std::string input;
   double iso = 0;
-  std::string output;
+  std::string output;   // empty for an input with a problem
+  std::string problem;  // see Input
 };
 
 struct JobOutcome {
@@ -44,27 +45,36 @@ bool is_volume_file(const fs::path& path) {
   return ext == ".raw" || ext == ".nrrd" || ext == ".nhdr" || ext == ".vtk" || ext == ".vti" || ext == ".vdb";
 }
 
+// An input argument's files. A directory or pattern that yields none is an
+// input that failed (`problem`), reported in the summary like the others.
+struct Input {
+  std::string path;
+  std::string problem;
+};
+
 // Files, directories (their volume files, sorted) and glob patterns.
-std::vector<std::string> expand_inputs(const std::vector<std::string>& arguments) {
-  std::vector<std::string> inputs;
+std::vector<Input> expand_inputs(const std::vector<std::string>& arguments) {
+  std::vector<Input> inputs;
   for (const std::string& argument : arguments) {
+    std::error_code error;
     if (argument.rfind("builtin:", 0) == 0) {
-      inputs.push_back(argument);
-    } else if (fs::is_directory(argument)) {
+      inputs.push_back({argument, {}});
+    } else if (fs::is_directory(argument, error)) {
       std::vector<std::string> found;
-      for (const auto& entry : fs::directory_iterator(argument))
-        if (entry.is_regular_file() && is_volume_file(entry.path())) found.push_back(entry.path().string());
+      for (fs::directory_iterator it(argument, error), end; !error && it != end; it.increment(error))
+        if (it->is_regular_file() && is_volume_file(it->path())) found.push_back(it->path().string());
       std::sort(found.begin(), found.end());
-      if (found.empty()) throw Error(ErrorKind::InvalidArgument, argument + ": no volume files in this directory");
-      inputs.insert(inputs.end(), found.begin(), found.end());
+      if (error) inputs.push_back({argument, "cannot list this directory (" + error.message() + ")"});
+      else if (found.empty()) inputs.push_back({argument, "no volume files in this directory"});
+      for (std::string& path : found) inputs.push_back({std::move(path), {}});
     } else if (argument.find_first_of("*?[") != std::string::npos) {
       glob_t matches{};
-      if (glob(argument.c_str(), 0, nullptr, &matches) == 0)
-        for (std::size_t i = 0; i < matches.gl_pathc; ++i) inputs.push_back(matches.gl_pathv[i]);
+      const bool any = glob(argument.c_str(), 0, nullptr, &matches) == 0 && matches.gl_pathc > 0;
+      for (std::size_t i = 0; any && i < matches.gl_pathc; ++i) inputs.push_back({matches.gl_pathv[i], {}});
       globfree(&matches);
-      if (inputs.empty()) throw Error(ErrorKind::InvalidArgument, argument + ": no file matches this pattern");
+      if (!any) inputs.push_back({argument, "no file matches this pattern"});
     } else {
-      inputs.push_back(argument);  // a missing file is reported when its job runs
+      inputs.push_back({argument, {}});  // a missing file is reported when its job runs
     }
   }
   return inputs;
@@ -83,19 +93,6 @@ std::string iso_text(double iso) {
   char text[32];
   std::snprintf(text, sizeof text, "%g", iso);
   return text;
-}
-
-std::string json_escape(const std::string& s) {
-  std::string out;
-  for (char c : s) {
-    if (c == '"' || c == '\\') out += '\\';
-    if (static_cast<unsigned char>(c) < 0x20) {
-      out += ' ';
-      continue;
-    }
-    out += c;
-  }
-  return out;
 }
 
 }  // namespace
@@ -164,17 +161,22 @@ int convert(const Args& raw) {
   const int jobs_count = args.get_int("jobs", 1, 1, 64);
   const bool force = args.has("force");
   const bool json = args.has("json");
+  // --json keeps stdout for the JSON object; warnings still go to stderr.
   const bool quiet = args.has("quiet") || json;
+  const bool warn = !args.has("quiet");
 
-  const std::vector<std::string> inputs = expand_inputs(args.positional());
   std::vector<Job> jobs;
-  for (const std::string& input : inputs) {
+  for (const auto& [input, problem] : expand_inputs(args.positional())) {
+    if (!problem.empty()) {
+      jobs.push_back({input, std::nan(""), {}, problem});
+      continue;
+    }
     std::vector<double> isovalues;
     if (args.has("iso")) isovalues = args.get_double_list("iso", "", -HUGE_VAL, HUGE_VAL);
     else if (cli::is_builtin_volume(input)) isovalues = {0.0};
     else throw Error(ErrorKind::InvalidArgument, "missing --iso (needed for " + input + ")");
     for (double iso : isovalues) {
-      Job job{input, iso, {}};
+      Job job{input, iso, {}, {}};
       if (args.has("output")) {
         job.output = args.get("output");
       } else {
@@ -205,6 +207,7 @@ int convert(const Args& raw) {
       JobOutcome& outcome = outcomes[j];
       const std::string label = stem_of(job.input) + (args.has("iso") ? " @" + iso_text(job.iso) : "");
       try {
+        if (!job.problem.empty()) throw Error(ErrorKind::InvalidArgument, job.input + ": " + job.problem);
         if (!force && fs::exists(job.output))
           throw Error(ErrorKind::Io, job.output + ": already exists (use --force to overwrite)");
         cli::ConsoleProgress progress(label, mode);
@@ -218,7 +221,7 @@ int convert(const Args& raw) {
         outcome.result = convert_volume(volume, job.input, job_options, progress);
         write_isw(job.output, outcome.result.bytes, force);
         outcome.ok = true;
-        if (!quiet) {
+        if (warn) {
           std::lock_guard<std::mutex> lock(print_mutex);
           for (const std::string& warning : outcome.result.warnings)
             std::fprintf(stderr, "isowave convert: warning: %s: %s\n", job.input.c_str(), warning.c_str());
@@ -247,11 +250,15 @@ int convert(const Args& raw) {
     std::printf("{\"converted\": %zu, \"failed\": %zu, \"results\": [", jobs.size() - failed, failed);
     for (std::size_t j = 0; j < jobs.size(); ++j) {
       const JobOutcome& o = outcomes[j];
-      std::printf("%s{\"input\": \"%s\", \"iso\": %.10g, \"output\": \"%s\", \"ok\": %s", j ? ", " : "",
-                  json_escape(jobs[j].input).c_str(), jobs[j].iso, json_escape(jobs[j].output).c_str(),
-                  o.ok ? "true" : "false");
+      if (jobs[j].problem.empty())
+        std::printf("%s{\"input\": %s, \"iso\": %.10g, \"output\": %s, \"ok\": %s", j ? ", " : "",
+                    cli::json_string(jobs[j].input).c_str(), jobs[j].iso, cli::json_string(jobs[j].output).c_str(),
+                    o.ok ? "true" : "false");
+      else
+        std::printf("%s{\"input\": %s, \"iso\": null, \"output\": null, \"ok\": false", j ? ", " : "",
+                    cli::json_string(jobs[j].input).c_str());
       if (!o.ok) {
-        std::printf(", \"error\": \"%s\"}", json_escape(o.error).c_str());
+        std::printf(", \"error\": %s}", cli::json_string(o.error).c_str());
         continue;
       }
       const ConvertResult& r = o.result;
@@ -260,11 +267,14 @@ int convert(const Args& raw) {
                   "\"simplify\": %.3f, \"distance\": %.3f, \"fit\": %.3f, \"analysis\": %.3f, \"encode\": %.3f, "
                   "\"evaluate\": %.3f}, \"fit_isosurface_rms_cells\": %.6g, \"fit_isosurface_max_cells\": %.6g, "
                   "\"fit_points_beyond_one_cell\": %zu, \"isosurface_uncovered_share\": %.6g, "
-                  "\"fit_tangled_share\": %.6g, \"base_attempts\": %d, \"rows\": [",
+                  "\"fit_tangled_share\": %.6g, \"base_attempts\": %d, ",
                   r.bytes.size(), r.cell_size, r.extracted_vertices, r.base_vertices, r.fine_vertices, r.levels,
                   o.load_seconds, r.seconds.extract, r.seconds.simplify, r.seconds.distance, r.seconds.fit,
                   r.seconds.analysis, r.seconds.encode, r.seconds.evaluate, r.fit_isosurface.rms, r.fit_isosurface.max,
                   r.fit_isosurface.far, r.uncovered_share, r.tangled_share(), r.base_attempts);
+      for (std::size_t k = 0; k < r.warnings.size(); ++k)
+        std::printf("%s%s", k ? ", " : "\"warnings\": [", cli::json_string(r.warnings[k]).c_str());
+      std::printf("%s\"rows\": [", r.warnings.empty() ? "" : "], ");
       for (std::size_t k = 0; k < r.summary.size(); ++k) {
         const RateDistortionRow& row = r.summary[k];
         std::printf("%s{\"percent\": %.4f, \"coefficients\": %zu, \"rmse_percent_cell\": %.6g, \"max_percent_cell\": "
@@ -281,7 +291,8 @@ int convert(const Args& raw) {
     for (std::size_t j = 0; j < jobs.size(); ++j) {
       const JobOutcome& o = outcomes[j];
       if (!o.ok) {
-        std::printf("%-28s FAILED: %s\n", jobs[j].output.c_str(), o.error.c_str());
+        std::printf("%-28s FAILED: %s\n", (jobs[j].problem.empty() ? jobs[j].output : jobs[j].input).c_str(),
+                    o.error.c_str());
         continue;
       }
       const ConvertResult& r = o.result;

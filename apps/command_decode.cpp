@@ -20,7 +20,7 @@ int decode(const Args& raw) {
       "IN.isw (--percent P | --coefficients N) [--level L] [--limit] [--triangulate] [--ascii] -o OUT.ply|OUT.obj",
       "Rebuilds the surface from the base mesh and the most important wavelet coefficients of IN.isw.\n"
       "--percent counts as the paper does: the total is the number of fine control points (base vertices plus\n"
-      "all coefficients), and the base mesh alone is the smallest choice. Reads only the part of the file it needs.",
+      "all coefficients), and the base mesh alone is the smallest choice. Decodes only the chunks it needs.",
       {{"percent", true, "keep this percentage of full resolution (0..100)", "P"},
        {"coefficients", true, "keep this many wavelet coefficients (besides the base mesh)", "N"},
        {"level", true, "write the control mesh of this level (default: the finest)", "L"},

@@ -64,28 +64,13 @@ std::string statistics_json(const SurfaceStatistics& s) {
          ", \"component_size_histogram_decades\": [" + histogram + "]}";
 }
 
-std::string json_string(const std::string& text) {
-  std::string out = "\"";
-  for (char c : text) {
-    if (c == '"' || c == '\\') out += '\\';
-    if (static_cast<unsigned char>(c) < 0x20) {
-      char escaped[8];
-      std::snprintf(escaped, sizeof escaped, "\\u%04x", c);
-      out += escaped;
-      continue;
-    }
-    out += c;
-  }
-  return out + "\"";
-}
-
 std::string report_json(const std::string& input, const Volume& volume, const IsosurfaceReport& r, double load_seconds,
                         double extract_seconds) {
   std::string json = "{\n";
-  json += "  \"input\": " + json_string(input) + ",\n";
+  json += "  \"input\": " + cli::json_string(input) + ",\n";
   json += "  \"dims\": [" + std::to_string(volume.dims[0]) + ", " + std::to_string(volume.dims[1]) + ", " +
           std::to_string(volume.dims[2]) + "],\n";
-  json += "  \"source_type\": " + json_string(to_string(volume.source_type)) + ",\n";
+  json += "  \"source_type\": " + cli::json_string(to_string(volume.source_type)) + ",\n";
   json += "  \"iso\": " + number(r.iso) + ",\n";
   json += "  \"flipped\": " + std::string(r.flipped ? "true" : "false") + ",\n";
   json += "  \"nonfinite_samples\": " + std::to_string(r.nonfinite_samples) + ",\n";

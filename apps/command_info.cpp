@@ -19,7 +19,7 @@ int info(const Args& raw) {
   IswDecodeOptions options;
   options.headers_only = true;
   const IswDecoded decoded = read_isw(input, options);
-  std::printf("%s: isowave .isw format %u.%u\n", input.c_str(), kIswMajorVersion, kIswMinorVersion);
+  std::printf("%s: isowave .isw format %u.%u\n", input.c_str(), decoded.major_version, decoded.minor_version);
   for (const auto& [key, value] : decoded.metadata.values) std::printf("  %-22s %s\n", key.c_str(), value.c_str());
   std::printf("base mesh:        %zu vertices, %zu faces, %zu sharp vertices\n", decoded.base.vertex_count(),
               decoded.base.face_count(), decoded.base.sharp_count());

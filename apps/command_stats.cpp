@@ -108,10 +108,12 @@ int stats(const Args& raw) {
   const auto pct = [&](double world) { return 100.0 * world / cell; };
 
   if (args.has("json")) {
-    std::printf("{\"file\": \"%s\", \"cell_size\": %.9g, \"cell_size_known\": %s, \"fine_vertices\": %.0f, "
+    const std::string note = decoded.metadata.text("cell_size_note");
+    std::printf("{\"file\": %s, \"cell_size\": %.9g, \"cell_size_known\": %s, %s\"fine_vertices\": %.0f, "
                 "\"base_vertices\": %zu, \"levels\": %d, \"extracted_vertices\": %.0f, \"rows\": [",
-                input.c_str(), cell, cell_known ? "true" : "false", fine, decoded.hierarchy->vertex_count(0),
-                decoded.levels, extracted);
+                cli::json_string(input).c_str(), cell, cell_known ? "true" : "false",
+                note.empty() ? "" : ("\"cell_size_note\": " + cli::json_string(note) + ", ").c_str(), fine,
+                decoded.hierarchy->vertex_count(0), decoded.levels, extracted);
     for (std::size_t i = 0; i < rows.size(); ++i) {
       const auto& r = rows[i];
       std::printf("%s{\"coefficients\": %zu, \"percent\": %.4f, \"rmse_percent_cell\": %.6g, \"max_percent_cell\": %.6g, "

@@ -236,9 +236,17 @@ ConvertResult convert_volume(const Volume& volume, const std::string& source, co
   metadata.values["fit_isosurface_max_cells"] = number(result.fit_isosurface.max);
   metadata.values["isosurface_uncovered_share"] = number(result.uncovered_share);
   metadata.values["fit_tangled_share"] = number(result.tangled_share());
-  metadata.values["options"] = "flip=" + std::to_string(options.flip) +
-                               " min_component_vertices=" + std::to_string(options.min_component_vertices) +
-                               " smooth_sigma=" + number(options.smooth_sigma) + " step_cells=" + number(options.step_cells);
+  metadata.values["options"] =
+      "flip=" + std::to_string(options.flip) + " min_component_vertices=" +
+      std::to_string(options.min_component_vertices) + " smooth_sigma=" + number(options.smooth_sigma) +
+      " levels=" + (options.levels > 0 ? std::to_string(options.levels) : std::string("auto")) +
+      (options.base_vertices > 0 ? " base_vertices=" + std::to_string(options.base_vertices)
+                                 : " base_ratio=" + number(options.base_ratio)) +
+      " grow_base_until_covered=" + std::to_string(options.grow_base_until_covered) +
+      " valence_flips=" + std::to_string(options.valence_flips) +
+      " coverage_pull=" + std::to_string(options.coverage_pull) +
+      " unfold_max_tangled_fraction=" + number(options.shrink_wrap.unfold_max_tangled_fraction) +
+      " step_cells=" + number(options.step_cells);
   IswEncodeOptions encode_options;
   encode_options.step = options.step_cells * result.cell_size;
   encode_options.class_weights = wavelet_norms(hierarchy);

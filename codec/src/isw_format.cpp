@@ -242,10 +242,12 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
-std::string sanitize(const std::string& text) {
+// Metadata lines are `key=value`, split at the first '=': a key loses its
+// '=', both lose line breaks (to spaces).
+std::string sanitize(const std::string& text, bool key) {
   std::string s = text;
   for (char& c : s)
-    if (c == '\n' || c == '\r' || c == '=') c = ' ';
+    if (c == '\n' || c == '\r' || (key && c == '=')) c = ' ';
   return s;
 }
 
@@ -407,7 +409,7 @@ std::string encode_isw(const SubdivisionHierarchy& hierarchy, const std::vector<
 
   {  // META
     std::string text;
-    for (const auto& [key, value] : metadata.values) text += sanitize(key) + "=" + sanitize(value) + "\n";
+    for (const auto& [key, value] : metadata.values) text += sanitize(key, true) + "=" + sanitize(value, false) + "\n";
     put_section(out, "META", text);
   }
   {  // BASE
@@ -606,8 +608,12 @@ class HierarchyBuild {
 IswDecoded decode_isw(const std::string& bytes, const std::string& name, const IswDecodeOptions& options) {
   const auto decode_start = std::chrono::steady_clock::now();
   IswDecoded result;
-  if (bytes.size() < kHeaderBytes || std::memcmp(bytes.data(), kMagic, 8) != 0)
+  if (bytes.empty()) throw Error(ErrorKind::Format, name + ": empty file, not an isowave .isw file");
+  if (std::memcmp(bytes.data(), kMagic, std::min<std::size_t>(8, bytes.size())) != 0)
     throw Error(ErrorKind::Format, name + ": not an isowave .isw file (bad magic)");
+  if (bytes.size() < kHeaderBytes)
+    throw Error(ErrorKind::Format, name + ": truncated inside the file header (" + std::to_string(bytes.size()) +
+                                       " of " + std::to_string(kHeaderBytes) + " bytes)");
   std::uint16_t major = 0, minor = 0;
   std::uint32_t reserved = 0;
   std::memcpy(&major, bytes.data() + 8, 2);
@@ -618,6 +624,8 @@ IswDecoded decode_isw(const std::string& bytes, const std::string& name, const I
                                             std::to_string(minor) + " is not supported (this build reads " +
                                             std::to_string(kIswMajorVersion) + ".x)");
   if (reserved != 0) throw Error(ErrorKind::Format, name + ": corrupt file header (reserved field is not zero)");
+  result.major_version = major;
+  result.minor_version = minor;
 
   std::size_t position = kHeaderBytes;
   std::shared_ptr<const SubdivisionHierarchy> hierarchy;
@@ -634,7 +642,8 @@ IswDecoded decode_isw(const std::string& bytes, const std::string& name, const I
   std::vector<std::uint8_t> significant;
   std::vector<std::uint64_t> chunk_ends;
   std::uint64_t nonzero_total = 0;
-  const char* expected_order[] = {"META", "BASE", "QUAN", "BPTS"};
+  static constexpr const char* expected_order[] = {"META", "BASE", "QUAN", "BPTS"};
+  static constexpr std::string_view kKnownTags[] = {"META", "BASE", "QUAN", "BPTS", "CHNK", "END "};
   std::size_t section_index = 0;
   bool saw_end = false;
 
@@ -645,7 +654,8 @@ IswDecoded decode_isw(const std::string& bytes, const std::string& name, const I
           result.truncated = true;
           break;
         }
-        throw Error(ErrorKind::Format, name + ": truncated section header at byte " + std::to_string(position));
+        throw Error(ErrorKind::Format, name + ": truncated inside the header of section " +
+                                           expected_order[section_index] + " (at byte " + std::to_string(position) + ")");
       }
       const std::string tag = bytes.substr(position, 4);
       std::uint64_t size = 0;
@@ -655,12 +665,15 @@ IswDecoded decode_isw(const std::string& bytes, const std::string& name, const I
       const std::string where = name + ": section " + tag + " (at byte " + std::to_string(position) + ")";
       if (header_crc(tag.c_str(), size) != stored_header_crc)
         throw Error(ErrorKind::Format, where + ": corrupt section header (CRC mismatch)");
-      if (section_index < 4 && tag != expected_order[section_index])
+      // A section this reader does not know comes from a later minor version:
+      // checked like the others, then skipped.
+      const bool known_tag = std::find(std::begin(kKnownTags), std::end(kKnownTags), tag) != std::end(kKnownTags);
+      if (known_tag && section_index < 4 && tag != expected_order[section_index])
         throw Error(ErrorKind::Format, where + ": expected section " + expected_order[section_index]);
-      if (section_index >= 4 && tag != "CHNK" && tag != "END ")
-        throw Error(ErrorKind::Format, where + ": unknown section");
+      if (known_tag && section_index >= 4 && tag != "CHNK" && tag != "END ")
+        throw Error(ErrorKind::Format, where + ": section out of order");
       if (size > bytes.size() - position - kSectionHeader || bytes.size() - position - kSectionHeader - size < 4) {
-        if (tag == "CHNK") {
+        if (tag == "CHNK" || (!known_tag && section_index >= 4)) {
           result.truncated = true;
           break;
         }
@@ -672,6 +685,10 @@ IswDecoded decode_isw(const std::string& bytes, const std::string& name, const I
       if (crc_of(tag.c_str(), payload) != stored_crc) throw Error(ErrorKind::Format, where + " is corrupt (CRC mismatch)");
       IswSectionInfo info{tag, position, size + kSectionOverhead, 0};
       position += static_cast<std::size_t>(size) + kSectionOverhead;
+      if (!known_tag) {
+        result.sections.push_back(info);
+        continue;
+      }
       PayloadReader reader(payload, where);
       ++section_index;
 
@@ -912,7 +929,9 @@ IswDecoded decode_isw(const std::string& bytes, const std::string& name, const I
       }
       result.sections.push_back(info);
     }
-    if (section_index < 4) throw Error(ErrorKind::Format, name + ": the file ends before the coefficient sections");
+    if (section_index < 4)
+      throw Error(ErrorKind::Format, name + ": truncated before section " + expected_order[section_index] + " (at byte " +
+                                         std::to_string(position) + ")");
   } catch (...) {
     build.rethrow_error();
     throw;

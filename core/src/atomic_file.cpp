@@ -5,9 +5,11 @@
 #include <cerrno>
 #include <cstdlib>
 #include <cstring>
+#include <string>
 #include <fcntl.h>
 #include <sys/stat.h>
 #include <unistd.h>
+#include <utility>
 
 #include "isowave/core/error.h"
 
@@ -41,20 +43,31 @@ void remove_uncommitted_temporary_files() noexcept {
 
 AtomicFileWriter::AtomicFileWriter(std::string path, bool overwrite) : path_(std::move(path)), overwrite_(overwrite) {
   if (path_.empty()) throw Error(ErrorKind::InvalidArgument, "empty output path");
-  std::string pattern = path_ + ".tmp-XXXXXX";
-  const int fd = mkstemp(pattern.data());
-  if (fd < 0) throw Error(ErrorKind::Io, path_ + ": cannot create a temporary file: " + std::strerror(errno));
-  temporary_path_ = pattern;
-  registered_path_ = strdup(temporary_path_.c_str());
-  if (registered_path_) register_temporary(registered_path_);
-  // mkstemp creates the file 0600; give it the permissions a plain create would.
-  const mode_t mask = umask(0);
-  umask(mask);
-  fchmod(fd, 0666 & ~mask);
+  // An unnamed file in the target's directory (O_TMPFILE) leaves nothing
+  // behind even when the process is killed (SIGKILL, power loss); commit()
+  // gives it its name through /proc/self/fd. Where the file system or a
+  // missing /proc does not allow that, a named temporary file.
+  int fd = -1;
+  if (access("/proc/self/fd", X_OK) == 0) {
+    const std::size_t slash = path_.rfind('/');
+    const std::string directory = slash == std::string::npos ? "." : slash == 0 ? "/" : path_.substr(0, slash);
+    fd = open(directory.c_str(), O_TMPFILE | O_WRONLY | O_CLOEXEC, 0666);
+  }
+  if (fd < 0) {
+    std::string pattern = path_ + ".tmp-XXXXXX";
+    fd = mkstemp(pattern.data());
+    if (fd < 0) throw Error(ErrorKind::Io, path_ + ": cannot create a temporary file: " + std::strerror(errno));
+    temporary_path_ = pattern;
+    register_path(temporary_path_);
+    // mkstemp creates the file 0600; give it the permissions a plain create would.
+    const mode_t mask = umask(0);
+    umask(mask);
+    fchmod(fd, 0666 & ~mask);
+  }
   file_ = fdopen(fd, "wb");
   if (!file_) {
     ::close(fd);
-    std::remove(temporary_path_.c_str());
+    if (!temporary_path_.empty()) std::remove(temporary_path_.c_str());
     throw Error(ErrorKind::Io, path_ + ": cannot open a temporary file: " + std::strerror(errno));
   }
   static thread_local char buffer[1 << 16];
@@ -65,6 +78,11 @@ AtomicFileWriter::~AtomicFileWriter() {
   if (file_) std::fclose(file_);
   if (!temporary_path_.empty()) std::remove(temporary_path_.c_str());
   release_registration();
+}
+
+void AtomicFileWriter::register_path(const std::string& temporary) {
+  registered_path_ = strdup(temporary.c_str());
+  if (registered_path_) register_temporary(registered_path_);
 }
 
 void AtomicFileWriter::release_registration() {
@@ -95,11 +113,47 @@ void AtomicFileWriter::commit() {
   if (!file_) throw Error(ErrorKind::Io, path_ + ": committed twice");
   // ferror: any earlier failure of stdio on this stream (its data is lost).
   const bool flushed = std::fflush(file_) == 0 && !std::ferror(file_) && fsync(fileno(file_)) == 0;
-  const bool closed = std::fclose(file_) == 0;
-  file_ = nullptr;
-  if (!flushed || !closed) throw Error(ErrorKind::Io, path_ + ": write failed: " + std::strerror(errno));
-  if (!overwrite_ && access(path_.c_str(), F_OK) == 0)
-    throw Error(ErrorKind::Io, path_ + ": already exists (not overwritten)");
+  const int error = errno;
+  if (temporary_path_.empty() && flushed) {
+    link_unnamed_file();  // while the file is open: closing an unnamed one deletes it
+  } else if (!flushed || std::fclose(std::exchange(file_, nullptr)) != 0) {
+    throw Error(ErrorKind::Io, path_ + ": write failed: " + std::strerror(flushed ? errno : error));
+  } else {
+    if (!overwrite_ && access(path_.c_str(), F_OK) == 0)
+      throw Error(ErrorKind::Io, path_ + ": already exists (not overwritten)");
+    rename_into_place();
+  }
+}
+
+void AtomicFileWriter::link_unnamed_file() {
+  const std::string self = "/proc/self/fd/" + std::to_string(fileno(file_));
+  if (!overwrite_) {
+    // linkat() never replaces a file: no window between a check and the link.
+    if (linkat(AT_FDCWD, self.c_str(), AT_FDCWD, path_.c_str(), AT_SYMLINK_FOLLOW) != 0) {
+      const int error = errno;
+      throw Error(ErrorKind::Io, path_ + (error == EEXIST ? ": already exists (not overwritten)"
+                                                          : ": cannot give the file its name: " +
+                                                                std::string(std::strerror(error))));
+    }
+  } else {
+    // A name of its own first, then rename() over the old file.
+    for (int attempt = 0;; ++attempt) {
+      temporary_path_ = path_ + ".tmp-" + std::to_string(getpid()) + "-" + std::to_string(attempt);
+      register_path(temporary_path_);
+      if (linkat(AT_FDCWD, self.c_str(), AT_FDCWD, temporary_path_.c_str(), AT_SYMLINK_FOLLOW) == 0) break;
+      const int error = errno;
+      release_registration();
+      temporary_path_.clear();
+      if (error != EEXIST || attempt == 100)
+        throw Error(ErrorKind::Io, path_ + ": cannot give the file its name: " + std::strerror(error));
+    }
+  }
+  if (std::fclose(std::exchange(file_, nullptr)) != 0)
+    throw Error(ErrorKind::Io, path_ + ": write failed: " + std::strerror(errno));
+  if (!temporary_path_.empty()) rename_into_place();
+}
+
+void AtomicFileWriter::rename_into_place() {
   if (std::rename(temporary_path_.c_str(), path_.c_str()) != 0)
     throw Error(ErrorKind::Io, path_ + ": cannot rename the temporary file into place: " + std::strerror(errno));
   temporary_path_.clear();

@@ -2,6 +2,8 @@
 // batches with a bad input, interrupted runs, and bad input giving one line
 // and a non-zero exit code.
 #include <csignal>
+#include <cstring>
+#include <fcntl.h>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -157,27 +159,68 @@ TEST_F(CliTest, BatchSkipsAFailingInputAndExitsNonZero) {
   EXPECT_EQ(forced.exit_code, 0) << forced.err;
 }
 
+// An empty directory and a pattern that matches nothing are failed inputs of
+// the batch: the other inputs convert, the summary and --json name them, and
+// the exit code is non-zero.
+TEST_F(CliTest, BatchReportsEmptyDirectoriesAndPatternsMatchingNothing) {
+  fs::create_directories(path("empty"));
+  write_sphere_nrrd(path("a.nrrd"), 20, 5);
+  const RunResult r = run({"convert", path("a.nrrd"), path("empty"), path("nothing*.nrrd"), "--iso", "0", "--out-dir",
+                           path("out"), "--levels", "1", "--json"},
+                          dir_);
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_TRUE(fs::exists(path("out/a.isw")));
+  EXPECT_NE(r.err.find("no volume files in this directory"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("no file matches this pattern"), std::string::npos) << r.err;
+  EXPECT_NE(r.out.find("\"converted\": 1, \"failed\": 2"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("\"iso\": null"), std::string::npos) << r.out;
+  // The JSON parses (scripts/setup installs python3 for this).
+  std::ofstream(path("result.json")) << r.out;
+  EXPECT_EQ(std::system(("python3 -m json.tool '" + path("result.json") + "' > /dev/null").c_str()), 0) << r.out;
+}
+
+// Signals at several stages, the last ones around the writing of the file:
+// a stage's progress line (stderr, not a terminal) is read, then the signal
+// sent. Whatever the run was doing, it leaves no .isw or a complete one, and
+// no temporary file (after SIGKILL too, where the file system gives unnamed
+// files: see AtomicFileWriter).
 TEST_F(CliTest, AnInterruptedRunLeavesNoPartialOutput) {
-  for (int signal_number : {SIGTERM, SIGINT, SIGKILL}) {
+  const int probe = open(dir_.c_str(), O_TMPFILE | O_WRONLY, 0600);
+  const bool unnamed_files = probe >= 0 && access("/proc/self/fd", X_OK) == 0;
+  if (probe >= 0) close(probe);
+  const std::pair<int, const char*> cases[] = {{SIGTERM, "shrink-wrap done"}, {SIGINT, "encode done"},
+                                               {SIGKILL, "analysis done"},    {SIGKILL, "encode done"},
+                                               {SIGKILL, "evaluate done"},    {SIGTERM, "evaluate done"}};
+  for (const auto& [signal_number, stage] : cases) {
+    SCOPED_TRACE(std::string(strsignal(signal_number)) + " after " + stage);
+    int progress[2];
+    ASSERT_EQ(pipe(progress), 0);
     const pid_t child = fork();
     ASSERT_GE(child, 0);
     if (child == 0) {
+      dup2(progress[1], STDERR_FILENO);
+      close(progress[0]);
       const std::string out = path("killed.isw");
-      execl(ISOWAVE_BINARY, ISOWAVE_BINARY, "convert", "builtin:mixing:128", "-o", out.c_str(), "--quiet", "--force",
+      execl(ISOWAVE_BINARY, ISOWAVE_BINARY, "convert", "builtin:mixing:96", "-o", out.c_str(), "--force",
             static_cast<char*>(nullptr));
       _exit(127);
     }
-    usleep(1500 * 1000);
+    close(progress[1]);
+    std::string seen;
+    char buffer[256];
+    for (ssize_t n; seen.find(stage) == std::string::npos && (n = read(progress[0], buffer, sizeof buffer)) > 0;)
+      seen.append(buffer, static_cast<std::size_t>(n));
+    ASSERT_NE(seen.find(stage), std::string::npos) << seen;
     kill(child, signal_number);
+    close(progress[0]);
     int status = 0;
     waitpid(child, &status, 0);
-    // Whatever stage it was in: no .isw at all, or a complete one.
     for (const auto& entry : fs::directory_iterator(dir_)) {
       const std::string name = entry.path().filename().string();
       if (entry.path().extension() == ".isw") {
         EXPECT_NO_THROW(read_isw(entry.path().string())) << "partial " << name;
       }
-      if (signal_number != SIGKILL) {
+      if (signal_number != SIGKILL || unnamed_files) {
         EXPECT_EQ(name.find(".tmp-"), std::string::npos) << "left " << name;
       }
     }

@@ -313,8 +313,14 @@ TEST(IswFormat, EveryTruncationFailsCleanlyOrDecodesTheCompleteChunks) {
       for (std::uint32_t i : d.ranked) EXPECT_TRUE(d.coefficients[i] == full.coefficients[i]);
     } catch (const Error& error) {
       ++errors;
-      EXPECT_EQ(error.kind(), ErrorKind::Format) << error.what();
-      EXPECT_NE(std::string(error.what()).find("cut.isw"), std::string::npos);
+      const std::string message = error.what();
+      EXPECT_EQ(error.kind(), ErrorKind::Format) << message;
+      EXPECT_NE(message.find("cut.isw"), std::string::npos);
+      // It says where the file ends: in its header or at a named section.
+      bool named = message.find("file header") != std::string::npos || message.find("empty file") != std::string::npos;
+      for (const char* tag : {"META", "BASE", "QUAN", "BPTS", "CHNK", "END"})
+        named = named || message.find(std::string("section ") + tag) != std::string::npos;
+      EXPECT_TRUE(named) << length << ": " << message;
     }
   }
   EXPECT_GT(partial, 0u);
@@ -390,6 +396,46 @@ std::string with_section_payload(const std::string& bytes, const std::string& ta
     position = end;
   }
   return out;
+}
+
+// `bytes` with a section `tag` holding `payload` (valid sizes and CRCs)
+// inserted before the section at index `before` (0: META).
+std::string with_section_inserted(const std::string& bytes, std::size_t before, const std::string& tag,
+                                  const std::string& payload) {
+  constexpr std::size_t kFileHeader = 16, kSectionHeader = 16;
+  std::size_t position = kFileHeader;
+  for (std::size_t index = 0; index < before; ++index) {
+    std::uint64_t size = 0;
+    std::memcpy(&size, bytes.data() + position + 4, 8);
+    position += kSectionHeader + static_cast<std::size_t>(size) + 4;
+  }
+  std::string size_bytes(8, '\0');
+  const std::uint64_t size = payload.size();
+  std::memcpy(size_bytes.data(), &size, 8);
+  const std::uint32_t header_crc = section_crc(tag, size_bytes), payload_crc = section_crc(tag, payload);
+  return bytes.substr(0, position) + tag + size_bytes + std::string(reinterpret_cast<const char*>(&header_crc), 4) +
+         payload + std::string(reinterpret_cast<const char*>(&payload_crc), 4) + bytes.substr(position);
+}
+
+TEST(IswFormat, SectionsOfALaterMinorVersionAreSkipped) {
+  // docs/FORMAT.md: readers accept any minor version, which may add sections.
+  const Encoded e = encode_sample(test::cube(), 2, 1e-2);
+  const IswDecoded full = decode_isw(e.bytes, "test.isw");
+  for (const std::size_t before : {std::size_t{0}, std::size_t{2}, std::size_t{4}, std::size_t{5}}) {
+    SCOPED_TRACE(before);
+    const IswDecoded d = decode_isw(with_section_inserted(e.bytes, before, "NEWS", "future payload"), "new.isw");
+    EXPECT_FALSE(d.truncated);
+    ASSERT_EQ(d.coefficients.size(), full.coefficients.size());
+    for (std::size_t i = 0; i < d.coefficients.size(); ++i) ASSERT_TRUE(d.coefficients[i] == full.coefficients[i]);
+    EXPECT_EQ(d.sections.size(), full.sections.size() + 1);
+  }
+  // A known section out of its place stays an error.
+  EXPECT_THROW(decode_isw(with_section_inserted(e.bytes, 5, "QUAN", "x"), "bad.isw"), Error);
+  // The header's version is reported as the file has it.
+  std::string minor5 = e.bytes;
+  minor5[10] = 5;
+  EXPECT_EQ(decode_isw(minor5, "minor.isw").minor_version, 5);
+  EXPECT_EQ(decode_isw(minor5, "minor.isw").major_version, kIswMajorVersion);
 }
 
 TEST(IswFormat, BaseMeshTheHierarchyCannotRefineIsAFormatErrorNamingTheSection) {

@@ -13,6 +13,7 @@
 #include <random>
 
 #include <csignal>
+#include <fcntl.h>
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -242,6 +243,48 @@ TEST_F(MeshIoTest, InterruptedWritersLeaveNothingBehind) {
   refused.write("other");
   EXPECT_THROW(refused.commit(), Error);
   EXPECT_EQ(read_bytes("done.isw"), "complete");
+}
+
+// A process killed outright (SIGKILL: no handler runs) in the middle of a
+// write leaves neither the output nor a temporary file, where the file
+// system gives unnamed files (O_TMPFILE; otherwise the writer falls back to a
+// named temporary, which only SIGINT and SIGTERM clean up).
+TEST_F(MeshIoTest, KilledWriterLeavesNothingBehind) {
+  const int probe = open(directory_.c_str(), O_TMPFILE | O_WRONLY, 0600);
+  if (probe < 0 || access("/proc/self/fd", X_OK) != 0) GTEST_SKIP() << "no O_TMPFILE here";
+  close(probe);
+  int ready[2];
+  ASSERT_EQ(pipe(ready), 0);
+  const pid_t child = fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    AtomicFileWriter writer(path("killed.isw"));
+    writer.write(std::string(1 << 20, 'x'));
+    (void)!write(ready[1], "w", 1);
+    pause();
+    std::_Exit(1);
+  }
+  char byte = 0;
+  ASSERT_EQ(read(ready[0], &byte, 1), 1);
+  kill(child, SIGKILL);
+  int status = 0;
+  ASSERT_EQ(waitpid(child, &status, 0), child);
+  close(ready[0]);
+  close(ready[1]);
+  for (const auto& entry : fs::directory_iterator(directory_)) ADD_FAILURE() << "left " << entry.path();
+  // The same writer, committed, makes the file (and only it), replacing an
+  // older one or, when it may not overwrite, refusing without a trace.
+  std::ofstream(path("killed.isw")) << "old";
+  AtomicFileWriter writer(path("killed.isw"));
+  writer.write("new");
+  writer.commit();
+  AtomicFileWriter refused(path("killed.isw"), false);
+  refused.write("other");
+  EXPECT_THROW(refused.commit(), Error);
+  EXPECT_EQ(read_bytes("killed.isw"), "new");
+  std::size_t files = 0;
+  for ([[maybe_unused]] const auto& entry : fs::directory_iterator(directory_)) ++files;
+  EXPECT_EQ(files, 1u);
 }
 
 // The binary PLY layout byte by byte: header, little-endian float32 x y z

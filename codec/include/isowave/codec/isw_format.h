@@ -93,6 +93,7 @@ struct IswDecodeTimings {
 };
 
 struct IswDecoded {
+  std::uint16_t major_version = 0, minor_version = 0;  // the file's, from its header
   IswMetadata metadata;
   PolygonMesh base;  // topology and sharp flags; positions are the base control points
   int levels = 0;

@@ -1,7 +1,10 @@
 #pragma once
-// Writes a file so that readers never see it half-written: the data goes to a
-// temporary file in the same directory, which replaces the target by rename()
-// only on commit(). Destroying an uncommitted writer removes the temporary.
+// Writes a file so that readers never see it half-written: the data goes to an
+// unnamed file in the target's directory (O_TMPFILE; a named temporary file
+// where that is not available), which takes the target's name only on
+// commit(). Destroying an uncommitted writer removes the temporary; a killed
+// process leaves none behind (with a named temporary: none after SIGINT or
+// SIGTERM, see remove_uncommitted_temporary_files()).
 #include <cstdint>
 #include <cstdio>
 #include <string>
@@ -27,10 +30,13 @@ class AtomicFileWriter {
 
  private:
   std::string path_;
-  std::string temporary_path_;
+  std::string temporary_path_;  // empty while the file is unnamed
   std::FILE* file_ = nullptr;
   char* registered_path_ = nullptr;  // copy of temporary_path_ known to remove_uncommitted_temporary_files()
+  void register_path(const std::string& temporary);
   void release_registration();
+  void link_unnamed_file();
+  void rename_into_place();
   bool overwrite_ = true;
   std::uint64_t written_ = 0;       // bytes written so far
   std::uint64_t written_back_ = 0;  // of which writeback to disk has been started
