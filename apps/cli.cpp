@@ -3,6 +3,8 @@
 #include <charconv>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
+#include <unistd.h>
 
 #include "isowave/core/error.h"
 
@@ -10,6 +12,11 @@ namespace isowave::cli {
 namespace {
 
 [[noreturn]] void usage_error(const std::string& message) { throw Error(ErrorKind::InvalidArgument, message); }
+
+// An argument that is an option rather than a value (a negative number is a value).
+bool looks_like_option(const std::string& arg) {
+  return arg.size() > 1 && arg[0] == '-' && !std::isdigit(static_cast<unsigned char>(arg[1])) && arg[1] != '.';
+}
 
 const OptionSpec* find_option(const CommandSpec& spec, const std::string& name) {
   for (const OptionSpec& option : spec.options)
@@ -26,7 +33,7 @@ Arguments::Arguments(const CommandSpec& spec, const std::vector<std::string>& ar
       help_ = true;
       return;
     }
-    if (arg.size() > 1 && arg[0] == '-' && !(arg.size() > 1 && (std::isdigit(static_cast<unsigned char>(arg[1])) || arg[1] == '.'))) {
+    if (looks_like_option(arg)) {
       std::string name = arg.substr(arg[1] == '-' ? 2 : 1);
       std::string value;
       bool inline_value = false;
@@ -39,7 +46,9 @@ Arguments::Arguments(const CommandSpec& spec, const std::vector<std::string>& ar
       const OptionSpec* option = find_option(spec, name);
       if (!option) usage_error("unknown option '" + arg + "' (see 'isowave " + spec.name + " --help')");
       if (option->takes_value && !inline_value) {
-        if (i + 1 >= args.size()) usage_error("option --" + name + " needs a value");
+        if (i + 1 >= args.size() || looks_like_option(args[i + 1]))
+          usage_error("option --" + name + " needs a value" +
+                      (i + 1 < args.size() ? " (got the option '" + args[i + 1] + "')" : std::string()));
         value = args[++i];
       } else if (!option->takes_value && inline_value) {
         usage_error("option --" + name + " takes no value");
@@ -50,8 +59,12 @@ Arguments::Arguments(const CommandSpec& spec, const std::vector<std::string>& ar
     }
   }
   const int count = static_cast<int>(positional_.size());
-  if (count < spec.min_positional || (spec.max_positional >= 0 && count > spec.max_positional))
-    usage_error("wrong number of arguments (usage: isowave " + spec.name + " " + spec.synopsis + ")");
+  if (count < spec.min_positional || (spec.max_positional >= 0 && count > spec.max_positional)) {
+    std::string synopsis;  // on one line
+    for (const char c : spec.synopsis)
+      if (!((c == ' ' || c == '\n') && !synopsis.empty() && synopsis.back() == ' ')) synopsis += c == '\n' ? ' ' : c;
+    usage_error("wrong number of arguments (usage: isowave " + spec.name + " " + synopsis + ")");
+  }
 }
 
 std::string Arguments::get(const std::string& name, const std::string& fallback) const {
@@ -108,6 +121,37 @@ std::vector<double> Arguments::get_double_list(const std::string& name, const st
     start = comma + 1;
   }
   return values;
+}
+
+void check_outputs(const Arguments& args, const std::vector<std::string>& outputs) {
+  namespace fs = std::filesystem;
+  std::vector<fs::path> seen;
+  for (const std::string& output : outputs) {
+    if (output.empty()) usage_error("an output path is empty");
+    std::error_code error;
+    const fs::path path(output);
+    if (fs::is_directory(path, error)) throw Error(ErrorKind::Io, output + ": is a directory");
+    const fs::path parent = path.parent_path().empty() ? fs::path(".") : path.parent_path();
+    if (!fs::is_directory(parent, error))
+      throw Error(ErrorKind::Io, output + ": the directory " + parent.string() + " does not exist");
+    if (fs::exists(path, error) && !args.has("force"))
+      throw Error(ErrorKind::Io, output + ": already exists (use --force to overwrite)");
+    const fs::path canonical = fs::weakly_canonical(path, error);
+    for (const fs::path& other : seen)
+      if (other == canonical) usage_error(output + ": given for two outputs");
+    seen.push_back(canonical);
+  }
+}
+
+void check_memory(double fine_vertices, double bytes_per_vertex, const std::string& what) {
+  const double needed = fine_vertices * bytes_per_vertex;
+  const double physical = static_cast<double>(sysconf(_SC_PHYS_PAGES)) * static_cast<double>(sysconf(_SC_PAGESIZE));
+  if (physical > 0 && needed > physical) {
+    char message[256];
+    std::snprintf(message, sizeof message, "%s would make %.0f fine vertices, about %.1f GB, more than this machine's %.1f GB",
+                  what.c_str(), fine_vertices, needed / 1e9, physical / 1e9);
+    usage_error(message);
+  }
 }
 
 std::string json_string(const std::string& text) {

@@ -52,6 +52,19 @@ std::string usage(const CommandSpec& spec);
 // command then returns 0).
 bool print_help_if_requested(const CommandSpec& spec, const Arguments& args);
 
+// The option every command that writes files takes.
+inline OptionSpec force_option() { return {"force", false, "overwrite existing output files", ""}; }
+
+// Checks, before any work, that each output can be written: not a directory,
+// in an existing directory, not an existing file unless --force was given,
+// and no two outputs the same file. Throws Error with one line naming it.
+void check_outputs(const Arguments& args, const std::vector<std::string>& outputs);
+
+// Refuses, with Error(InvalidArgument) naming `what`, a job whose estimate
+// (fine_vertices x bytes_per_vertex) exceeds this machine's physical memory:
+// a clear message at once rather than minutes of swapping or the OOM killer.
+void check_memory(double fine_vertices, double bytes_per_vertex, const std::string& what);
+
 // `text` as a JSON string literal, quotes included (control characters as \u escapes).
 std::string json_string(const std::string& text);
 

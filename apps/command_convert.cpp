@@ -67,7 +67,7 @@ std::vector<Input> expand_inputs(const std::vector<std::string>& arguments) {
       if (error) inputs.push_back({argument, "cannot list this directory (" + error.message() + ")"});
       else if (found.empty()) inputs.push_back({argument, "no volume files in this directory"});
       for (std::string& path : found) inputs.push_back({std::move(path), {}});
-    } else if (argument.find_first_of("*?[") != std::string::npos) {
+    } else if (argument.find_first_of("*?[") != std::string::npos && !fs::exists(argument, error)) {
       glob_t matches{};
       const bool any = glob(argument.c_str(), 0, nullptr, &matches) == 0 && matches.gl_pathc > 0;
       for (std::size_t i = 0; any && i < matches.gl_pathc; ++i) inputs.push_back({matches.gl_pathv[i], {}});
@@ -91,7 +91,7 @@ std::string stem_of(const std::string& input) {
 
 std::string iso_text(double iso) {
   char text[32];
-  std::snprintf(text, sizeof text, "%g", iso);
+  std::snprintf(text, sizeof text, "%.10g", iso);
   return text;
 }
 
@@ -188,6 +188,20 @@ int convert(const Args& raw) {
   }
   if (args.has("output") && jobs.size() != 1)
     throw Error(ErrorKind::InvalidArgument, "-o takes one input and one isovalue; use --out-dir for batches");
+  if (args.has("output")) {
+    const fs::path parent = fs::path(args.get("output")).parent_path();
+    if (!parent.empty() && !fs::is_directory(parent))
+      throw Error(ErrorKind::Io, args.get("output") + ": the directory " + parent.string() + " does not exist");
+    if (fs::is_directory(args.get("output"))) throw Error(ErrorKind::Io, args.get("output") + ": is a directory");
+  }
+  // Two jobs writing one file would lose one of them (same stems in a
+  // directory, isovalues equal in their file names).
+  for (std::size_t j = 0; j < jobs.size(); ++j)
+    for (std::size_t k = 0; k < j && jobs[j].problem.empty(); ++k)
+      if (jobs[k].problem.empty() && jobs[k].output == jobs[j].output)
+        throw Error(ErrorKind::InvalidArgument, jobs[k].input + " and " + jobs[j].input + " (iso " + iso_text(jobs[k].iso) +
+                                                    ", " + iso_text(jobs[j].iso) + ") would both write " +
+                                                    jobs[j].output + "; convert them in separate runs");
   if (args.has("out-dir")) {
     std::error_code ignored;
     fs::create_directories(args.get("out-dir"), ignored);

@@ -28,6 +28,7 @@ int decode(const Args& raw) {
        {"triangulate", false, "split quads into triangles", ""},
        {"ascii", false, "write ASCII PLY instead of binary", ""},
        {"quiet", false, "print nothing on success", ""},
+       cli::force_option(),
        {"output", true, "output mesh (.ply, .obj or .off)", "OUT"}},
       1,
       1};
@@ -36,6 +37,7 @@ int decode(const Args& raw) {
   if (args.has("percent") == args.has("coefficients"))
     throw Error(ErrorKind::InvalidArgument, "give exactly one of --percent and --coefficients");
   const std::string output = args.require("output");
+  cli::check_outputs(args, {output});
   mesh_format_from_path(output);
   const auto start = std::chrono::steady_clock::now();
 

@@ -106,11 +106,14 @@ int extract(const Args& raw) {
   spec.options.push_back({"ascii", false, "write ASCII PLY instead of binary", ""});
   spec.options.push_back({"stats-json", true, "also write the report as JSON", "FILE"});
   spec.options.push_back({"quiet", false, "print nothing on success", ""});
+  spec.options.push_back(cli::force_option());
   spec.options.push_back({"output", true, "output mesh (.ply or .obj)", "MESH"});
   const cli::Arguments args(spec, raw);
   if (cli::print_help_if_requested(spec, args)) return 0;
   const std::string& input = args.positional()[0];
   const std::string output = args.require("output");
+  if (args.has("stats-json")) cli::check_outputs(args, {output, args.get("stats-json")});
+  else cli::check_outputs(args, {output});
   if (mesh_format_from_path(output) == MeshFormat::Off)
     throw Error(ErrorKind::InvalidArgument, output + ": extract writes .ply or .obj");
   if (!args.has("iso") && !cli::is_builtin_volume(input))

@@ -36,7 +36,7 @@ int info(const Args& raw) {
     total += s.bytes;
   }
   std::printf("total  %25llu bytes\n", static_cast<unsigned long long>(total));
-  if (decoded.truncated) std::printf("warning: the file is truncated (its last section is incomplete)\n");
+  if (decoded.truncated) std::printf("warning: %s\n", decoded.truncation_note.c_str());
   return 0;
 }
 

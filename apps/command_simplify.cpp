@@ -33,6 +33,7 @@ int simplify(const Args& raw) {
        {"no-distance", false, "skip the distance from the input vertices to the base mesh", ""},
        {"ascii", false, "write ASCII PLY instead of binary", ""},
        {"quiet", false, "print nothing on success", ""},
+       cli::force_option(),
        {"output", true, "base mesh (.ply or .obj)", "BASE"}},
       1,
       1};
@@ -41,6 +42,7 @@ int simplify(const Args& raw) {
   if (args.has("target-vertices") == args.has("ratio"))
     throw Error(ErrorKind::InvalidArgument, "give exactly one of --target-vertices and --ratio");
   const std::string output = args.require("output");
+  cli::check_outputs(args, {output});
   if (mesh_format_from_path(output) == MeshFormat::Off)
     throw Error(ErrorKind::InvalidArgument, "the base mesh must be written as .ply or .obj: " + output);
   simplify::SimplifyOptions options;

@@ -89,11 +89,13 @@ int stats(const Args& raw) {
       {{"percents", true, "percentages of full resolution to tabulate", "LIST"},
        {"csv", false, "print CSV", ""},
        {"json", false, "print one JSON object", ""},
-       {"plot", true, "draw RMSE against percent as SVG", "FILE.svg"}},
+       {"plot", true, "draw RMSE against percent as SVG", "FILE.svg"},
+       cli::force_option()},
       1,
       1};
   const cli::Arguments args(spec, raw);
   if (cli::print_help_if_requested(spec, args)) return 0;
+  if (args.has("plot")) cli::check_outputs(args, {args.get("plot")});
   if (args.has("csv") && args.has("json")) throw Error(ErrorKind::InvalidArgument, "give at most one of --csv and --json");
   const std::vector<double> percents = args.get_double_list("percents", "100,20,10,5", 0, 100);
   const std::string& input = args.positional()[0];

@@ -111,8 +111,8 @@ IsosurfaceOptions extraction_options(const Arguments& args) {
   options.flip = args.has("flip");
   options.min_component_vertices = static_cast<std::size_t>(args.get_int("min-component-vertices", 0, 0, 1 << 30));
   options.smooth_sigma = args.get_double("smooth", 0.0);
-  if (!(options.smooth_sigma >= 0 && options.smooth_sigma <= 100))
-    throw Error(ErrorKind::InvalidArgument, "--smooth must be in 0..100 voxels, got " + args.get("smooth"));
+  if (!(options.smooth_sigma == 0 || (options.smooth_sigma >= 0.1 && options.smooth_sigma <= 100)))
+    throw Error(ErrorKind::InvalidArgument, "--smooth must be 0 (off) or in 0.1..100 voxels, got " + args.get("smooth"));
   return options;
 }
 

@@ -23,6 +23,7 @@
 
 #include "isowave/codec/importance.h"
 #include "isowave/core/atomic_file.h"
+#include "isowave/core/mesh_io.h"
 #include "isowave/core/error.h"
 #include "isowave/core/huge_page_vector.h"
 #include "isowave/core/mesh_topology.h"
@@ -673,7 +674,7 @@ IswDecoded decode_isw(const std::string& bytes, const std::string& name, const I
       if (known_tag && section_index >= 4 && tag != "CHNK" && tag != "END ")
         throw Error(ErrorKind::Format, where + ": section out of order");
       if (size > bytes.size() - position - kSectionHeader || bytes.size() - position - kSectionHeader - size < 4) {
-        if (tag == "CHNK" || (!known_tag && section_index >= 4)) {
+        if (tag == "CHNK" || tag == "END " || (!known_tag && section_index >= 4)) {
           result.truncated = true;
           break;
         }
@@ -845,6 +846,11 @@ IswDecoded decode_isw(const std::string& bytes, const std::string& name, const I
             result.sections.push_back(next);
             position += static_cast<std::size_t>(next.bytes);
           }
+          // As the full decode says it: a file without its END is truncated.
+          if (result.sections.back().tag != "END ") result.truncated = true;
+          if (result.truncated)
+            result.truncation_note = "file is truncated after byte " + std::to_string(position) + " of " +
+                                     std::to_string(bytes.size()) + " (not checked further: headers only)";
           return result;
         }
         reserve_fresh_on_huge_pages(significant, layout->fine());
@@ -974,14 +980,7 @@ IswDecoded decode_isw(const std::string& bytes, const std::string& name, const I
 
 IswDecoded read_isw(const std::string& path, const IswDecodeOptions& options) {
   const auto start = std::chrono::steady_clock::now();
-  std::ifstream in(path, std::ios::binary | std::ios::ate);
-  if (!in) throw Error(ErrorKind::Io, path + ": cannot open");
-  // One read of the whole file (a stream iterator goes byte by byte).
-  const std::streamoff size = in.tellg();
-  if (size < 0) throw Error(ErrorKind::Io, path + ": cannot determine the file size");
-  std::string bytes(static_cast<std::size_t>(size), '\0');
-  in.seekg(0);
-  if (!in.read(bytes.data(), size) || in.gcount() != size) throw Error(ErrorKind::Io, path + ": read failed");
+  const std::string bytes = read_file_bytes(path);
   const double read_seconds = seconds_since(start);
   IswDecoded result = decode_isw(bytes, path, options);
   result.seconds.read = read_seconds;

@@ -1,12 +1,14 @@
 #include "isowave/core/mesh_io.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cctype>
 #include <charconv>
 #include <cerrno>
 #include <cstring>
 #include <fstream>
 #include <limits>
+#include <sys/stat.h>
 
 #include <tbb/parallel_pipeline.h>
 
@@ -27,18 +29,6 @@ std::string lower_extension(const std::string& path) {
   std::string ext = path.substr(dot + 1);
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
   return ext;
-}
-
-std::string read_whole_file(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw Error(ErrorKind::Io, path + ": cannot open: " + std::strerror(errno));
-  in.seekg(0, std::ios::end);
-  const std::streamoff size = in.tellg();
-  if (size < 0) throw Error(ErrorKind::Io, path + ": cannot read (not a regular file?)");
-  in.seekg(0);
-  std::string data(static_cast<std::size_t>(size), '\0');
-  if (size > 0 && !in.read(data.data(), size)) throw Error(ErrorKind::Io, path + ": read failed");
-  return data;
 }
 
 // Cursor over text: whitespace-separated tokens, line-aware.
@@ -605,7 +595,7 @@ MeshFormat mesh_format_from_path(const std::string& path) {
 
 PolygonMesh read_mesh(const std::string& path) {
   const MeshFormat format = mesh_format_from_path(path);
-  const std::string data = read_whole_file(path);
+  const std::string data = read_file_bytes(path);
   PolygonMesh mesh;
   switch (format) {
     case MeshFormat::Ply: mesh = read_ply(path, data); break;
@@ -616,13 +606,49 @@ PolygonMesh read_mesh(const std::string& path) {
   return mesh;
 }
 
+bool float_loses_geometry(const PolygonMesh& mesh) {
+  if (mesh.positions.empty()) return false;
+  double low[3], high[3], largest = 0, smallest = std::numeric_limits<double>::infinity();
+  for (int k = 0; k < 3; ++k) low[k] = high[k] = mesh.positions[0][k];
+  for (const Vec3& p : mesh.positions)
+    for (int k = 0; k < 3; ++k) {
+      low[k] = std::min(low[k], p[k]);
+      high[k] = std::max(high[k], p[k]);
+      largest = std::max(largest, std::abs(p[k]));
+      if (p[k] != 0) smallest = std::min(smallest, std::abs(p[k]));
+    }
+  const double extent = std::max({high[0] - low[0], high[1] - low[1], high[2] - low[2]});
+  // Beyond float's range, near its smallest normal numbers, or rounding the
+  // largest coordinate (by about largest * 2^-24) by more than a millionth
+  // of the mesh's size: a far origin.
+  return largest > 0.5 * std::numeric_limits<float>::max() || smallest < 1e4 * std::numeric_limits<float>::min() ||
+         largest * 0x1p-24 > 1e-6 * extent;
+}
+
 void write_mesh(const std::string& path, const PolygonMesh& mesh, const MeshWriteOptions& options) {
   const MeshFormat format = mesh_format_from_path(path);
   validate_indices(mesh, path);
+  MeshWriteOptions chosen = options;
+  chosen.double_precision = options.double_precision || float_loses_geometry(mesh);
   AtomicFileWriter file(path);
-  if (format == MeshFormat::Ply) write_ply(file, mesh, options);
-  else write_text_mesh(file, mesh, options, format);
+  if (format == MeshFormat::Ply) write_ply(file, mesh, chosen);
+  else write_text_mesh(file, mesh, chosen, format);
   file.commit();
+}
+
+std::string read_file_bytes(const std::string& path) {
+  struct stat info {};
+  if (stat(path.c_str(), &info) != 0) throw Error(ErrorKind::Io, path + ": cannot open: " + std::strerror(errno));
+  if (S_ISDIR(info.st_mode)) throw Error(ErrorKind::Io, path + ": cannot read: is a directory");
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw Error(ErrorKind::Io, path + ": cannot open: " + std::strerror(errno));
+  in.seekg(0, std::ios::end);
+  const std::streamoff size = in.tellg();
+  if (size < 0) throw Error(ErrorKind::Io, path + ": cannot read: not a regular file");
+  in.seekg(0);
+  std::string data(static_cast<std::size_t>(size), '\0');
+  if (size > 0 && !in.read(data.data(), size)) throw Error(ErrorKind::Io, path + ": read failed: " + std::strerror(errno));
+  return data;
 }
 
 }  // namespace isowave

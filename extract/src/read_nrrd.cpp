@@ -411,8 +411,8 @@ Volume read_nrrd(const std::string& path, const VolumeReadOptions& options) {
         format_error(where, "truncated data: " + std::to_string(available) + " bytes of gzip data cannot hold " +
                                 size_text(volume.dims, volume.source_type) + " samples (" + std::to_string(expected) +
                                 " bytes)");
-      volume.values.resize(count);
-      SampleDecoder decoder(volume.values.data(), count, volume.source_type, big_endian);
+      reserve_samples(volume.values, count, where);
+      SampleDecoder decoder(volume.values, count, volume.source_type, big_endian);
       inflate_data(*data, skip, decoder);
       break;
     }

@@ -7,7 +7,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
-#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -312,11 +311,15 @@ std::uint64_t read_header_word(ByteSource& source, const Encoding& enc, const st
   return v;
 }
 
-// Reads one binary array (after its header) into samples; `allocate` is
-// called once the headers have been checked against the data available.
+// Reads one binary array (after its header) into `values` (count samples),
+// allocated once the headers have been checked against the data available.
 void read_binary_array(ByteSource& source, const Encoding& enc, std::uint64_t expected, ScalarType type,
-                       const std::function<float*()>& allocate, std::size_t count, const std::string& path,
+                       std::vector<float>& values, std::size_t count, const std::string& path,
                        const std::string& what) {
+  const auto allocate = [&values, count]() {
+    values.resize(count);
+    return values.data();
+  };
   const std::uint64_t word = enc.header64 ? 8 : 4;
   if (!enc.compressed) {
     const std::uint64_t bytes = read_header_word(source, enc, path, "array header");
@@ -366,7 +369,9 @@ void read_binary_array(ByteSource& source, const Encoding& enc, std::uint64_t ex
       format_error(path, "corrupt compression header in " + what + " (impossible compression ratio)");
   }
 
-  SampleDecoder decoder(allocate(), count, type, enc.big_endian);
+  // Memory as the blocks inflate: a block may claim up to 1032 times its size.
+  reserve_samples(values, count, path);
+  SampleDecoder decoder(values, count, type, enc.big_endian);
   std::vector<std::uint8_t> input, output(std::size_t{1} << 18);
   z_stream zs{};
   if (inflateInit(&zs) != Z_OK) throw Error(ErrorKind::Io, path + ": cannot initialise zlib");
@@ -582,7 +587,7 @@ Volume read_vti(const std::string& path, const VolumeReadOptions& options) {
     parse_text_samples(text_begin, text_end, count, *type, false, true, allocate(), path, what);
   } else if (format == "binary") {
     Base64Source source(text_begin, text_end, path);
-    read_binary_array(source, enc, expected, *type, allocate, count, path, what);
+    read_binary_array(source, enc, expected, *type, volume.values, count, path, what);
   } else if (format == "appended") {
     if (!doc.appended) format_error(path, "missing <AppendedData> for " + what);
     const std::string* offset_text = array->attribute("offset");
@@ -595,10 +600,10 @@ Volume read_vti(const std::string& path, const VolumeReadOptions& options) {
     const std::string appended_encoding = encoding ? *encoding : "raw";
     if (appended_encoding == "raw") {
       RawSource source(buffer.data() + start, buffer.data() + buffer.size());
-      read_binary_array(source, enc, expected, *type, allocate, count, path, what);
+      read_binary_array(source, enc, expected, *type, volume.values, count, path, what);
     } else if (appended_encoding == "base64") {
       Base64Source source(buffer.data() + start, buffer.data() + buffer.size(), path);
-      read_binary_array(source, enc, expected, *type, allocate, count, path, what);
+      read_binary_array(source, enc, expected, *type, volume.values, count, path, what);
     } else {
       format_error(path, "unsupported AppendedData encoding '" + appended_encoding + "'");
     }

@@ -3,6 +3,8 @@
 // number scanning, geometry checks).
 #include "isowave/extract/volume_io.h"
 
+#include <cassert>
+#include <cstdio>
 #include <sys/stat.h>
 
 #include <algorithm>
@@ -167,9 +169,26 @@ SampleDecoder::SampleDecoder(float* out, std::size_t count, ScalarType type, boo
       sample_size_(scalar_type_size(type)),
       remaining_bytes_(static_cast<std::uint64_t>(count) * scalar_type_size(type)) {}
 
+SampleDecoder::SampleDecoder(std::vector<float>& grow, std::size_t count, ScalarType type, bool big_endian)
+    : SampleDecoder(grow.data(), count, type, big_endian) {
+  assert(grow.empty() && grow.capacity() >= count);  // data() stays put as it grows
+  grow_ = &grow;
+}
+
+void reserve_samples(std::vector<float>& values, std::size_t count, const std::string& where) {
+  try {
+    values.reserve(count);
+  } catch (const std::bad_alloc&) {
+    format_error(where, "the header declares " + std::to_string(count) + " samples, more than this machine can hold");
+  } catch (const std::length_error&) {
+    format_error(where, "the header declares " + std::to_string(count) + " samples, more than this machine can hold");
+  }
+}
+
 void SampleDecoder::push(const std::uint8_t* data, std::size_t bytes) {
   if (bytes > remaining_bytes_) bytes = static_cast<std::size_t>(remaining_bytes_);  // callers bound this; be safe
   remaining_bytes_ -= bytes;
+  if (grow_) grow_->resize(grow_->size() + (carry_size_ + bytes) / sample_size_);
   if (carry_size_ > 0) {
     const std::size_t take = std::min(bytes, sample_size_ - carry_size_);
     std::memcpy(carry_ + carry_size_, data, take);
@@ -390,6 +409,14 @@ void check_option_vec(const Vec3& v, bool positive, const char* what) {
   if (!finite || (positive && !(v.x > 0 && v.y > 0 && v.z > 0)))
     throw Error(ErrorKind::InvalidArgument, std::string("invalid ") + what +
                                                 (positive ? " (must be finite and positive)" : " (must be finite)"));
+  const double low = positive ? detail::kMinSpacing : -detail::kMaxCoordinate;
+  const double high = positive ? detail::kMaxSpacing : detail::kMaxCoordinate;
+  for (int k = 0; k < 3; ++k)
+    if (v[k] < low || v[k] > high) {
+      char range[64];
+      std::snprintf(range, sizeof range, " (each must be in %g..%g)", low, high);
+      throw Error(ErrorKind::InvalidArgument, std::string("invalid ") + what + range);
+    }
 }
 
 }  // namespace
@@ -425,6 +452,19 @@ Volume read_volume(const std::string& path, const VolumeReadOptions& options) {
 
   if (options.spacing) volume.spacing = *options.spacing;
   if (options.origin) volume.origin = *options.origin;
+  char text[160];
+  for (int k = 0; k < 3; ++k) {
+    if (volume.spacing[k] < detail::kMinSpacing || volume.spacing[k] > detail::kMaxSpacing) {
+      std::snprintf(text, sizeof text, ": spacing %g is outside %g..%g (override it with --spacing)", volume.spacing[k],
+                    detail::kMinSpacing, detail::kMaxSpacing);
+      throw Error(ErrorKind::Format, path + text);
+    }
+    if (std::abs(volume.origin[k]) > detail::kMaxCoordinate) {
+      std::snprintf(text, sizeof text, ": origin %g is outside +-%g (override it with --origin)", volume.origin[k],
+                    detail::kMaxCoordinate);
+      throw Error(ErrorKind::Format, path + text);
+    }
+  }
 
   std::size_t nonfinite = 0;
   for (const float v : volume.values) nonfinite += std::isfinite(v) ? 0 : 1;

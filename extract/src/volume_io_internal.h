@@ -16,6 +16,10 @@ namespace isowave::detail {
 
 // Error(Format, "PATH: WHAT") and Error(Io, "PATH: WHAT").
 [[noreturn]] void format_error(const std::string& path, const std::string& what);
+
+// The geometry every stage handles (squares and cubes of lengths stay far
+// from double's limits); check_geometry() and the options enforce it.
+constexpr double kMinSpacing = 1e-30, kMaxSpacing = 1e30, kMaxCoordinate = 1e30;
 [[noreturn]] void io_error(const std::string& path, const std::string& what);
 
 // The most bytes a zlib/gzip stream of `compressed` bytes can inflate to
@@ -62,6 +66,10 @@ void decode_samples(const std::uint8_t* src, std::size_t count, ScalarType type,
 class SampleDecoder {
  public:
   SampleDecoder(float* out, std::size_t count, ScalarType type, bool big_endian);
+  // Into `grow` (empty, with capacity for `count`, see reserve_samples()),
+  // which grows as samples arrive: memory follows the data actually decoded,
+  // not what a (possibly lying) header declares.
+  SampleDecoder(std::vector<float>& grow, std::size_t count, ScalarType type, bool big_endian);
   // Consumes bytes; the caller never pushes more than bytes_remaining().
   void push(const std::uint8_t* data, std::size_t bytes);
   std::uint64_t bytes_remaining() const { return remaining_bytes_; }
@@ -69,6 +77,7 @@ class SampleDecoder {
 
  private:
   float* out_;
+  std::vector<float>* grow_ = nullptr;
   ScalarType type_;
   bool big_endian_;
   std::size_t sample_size_;
@@ -76,6 +85,10 @@ class SampleDecoder {
   std::uint8_t carry_[8] = {};
   std::size_t carry_size_ = 0;
 };
+
+// Reserves (without touching) room for `count` samples of a compressed array
+// in the empty `values`; Error(Format) naming `where` when the machine cannot.
+void reserve_samples(std::vector<float>& values, std::size_t count, const std::string& where);
 
 // Reads count samples from the file's current position (the caller has
 // checked that the file holds them).

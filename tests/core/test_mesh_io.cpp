@@ -287,6 +287,35 @@ TEST_F(MeshIoTest, KilledWriterLeavesNothingBehind) {
   EXPECT_EQ(files, 1u);
 }
 
+// A small surface far from the origin (georeferenced grids) or at float's
+// range limits is written in double, in every format, and reads back as it
+// was; an ordinary mesh stays float.
+TEST_F(MeshIoTest, CoordinatesFloatWouldLoseAreWrittenAsDouble) {
+  const PolygonMesh grid = test::quad_grid(5, 4);
+  const std::pair<double, Vec3> cases[] = {
+      {1.0, {0, 0, 0}}, {1.0, {500000, 4000000, 0}}, {1e-300, {0, 0, 0}}, {1e300, {0, 0, 0}}};
+  for (const auto& [scale, offset] : cases) {
+    PolygonMesh mesh = grid;
+    for (Vec3& p : mesh.positions) p = scale * (0.01 * p + Vec3{0.001, 0.002, 0.003}) + offset;
+    const bool far = offset.y != 0 || scale != 1.0;
+    EXPECT_EQ(float_loses_geometry(mesh), far) << scale << " " << offset.y;
+    for (const char* name : {"m.ply", "m.obj", "m.off"}) {
+      for (const bool ascii : {false, true}) {
+        MeshWriteOptions options;
+        options.ascii = ascii;
+        write_mesh(path(name), mesh, options);
+        const PolygonMesh back = read_mesh(path(name));
+        ASSERT_EQ(back.vertex_count(), mesh.vertex_count());
+        for (std::size_t v = 0; v < mesh.vertex_count(); ++v)
+          for (int k = 0; k < 3; ++k)
+            ASSERT_NEAR(back.positions[v][k], mesh.positions[v][k], far ? 1e-12 * std::abs(mesh.positions[v][k]) : 1e-6)
+                << name << " scale " << scale << " offset " << offset.y;
+      }
+      std::remove(path(name).c_str());
+    }
+  }
+}
+
 // The binary PLY layout byte by byte: header, little-endian float32 x y z
 // and the uchar sharp flag per vertex, then per face a uchar count and int32
 // indices.

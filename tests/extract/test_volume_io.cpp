@@ -5,6 +5,8 @@
 #include <gtest/gtest.h>
 #include <openvdb/io/File.h>
 #include <openvdb/openvdb.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
 #include <unistd.h>
 #include <zlib.h>
 
@@ -650,6 +652,40 @@ TEST(VolumeIo, SharedRawAgreesWithNrrdCopy) {
   const Volume nrrd = read_volume(copy);
   EXPECT_EQ(nrrd.dims, raw.dims);
   EXPECT_EQ(nrrd.values, raw.values);
+}
+
+// A gzip NRRD whose header claims 1.7 GB of float samples while its 1 MB of
+// data inflates to 1 MB: the reader says so without first allocating (and
+// zero-filling) what the header claims. In a child process, whose peak
+// resident memory wait4() reports.
+TEST(VolumeIo, LyingCompressedSizeIsRejectedWithoutAllocatingIt) {
+  TempDir dir;
+  Bytes noise(1u << 20);
+  std::mt19937 rng(3);
+  for (auto& byte : noise) byte = static_cast<std::uint8_t>(rng());
+  Bytes file;
+  append(file, std::string("NRRD0004\ntype: uint8\ndimension: 3\nsizes: 1200 1200 300\nencoding: gzip\n\n"));
+  append(file, gzip(noise));
+  const std::string path = dir.file("lying.nrrd");
+  write_file(path, file);
+  const pid_t child = fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    try {
+      read_volume(path);
+    } catch (const Error& error) {
+      std::_Exit(std::string(error.what()).find("truncated data") != std::string::npos ? 0 : 2);
+    } catch (...) {
+      std::_Exit(3);
+    }
+    std::_Exit(4);
+  }
+  int status = 0;
+  rusage usage{};
+  ASSERT_EQ(wait4(child, &status, 0, &usage), child);
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 0) << "not the truncation error";
+  EXPECT_LT(usage.ru_maxrss, 600 * 1024) << "peak KB; the header claims 1.7 GB of floats";
 }
 
 // ---------------------------------------------------------------------------

@@ -29,10 +29,22 @@ MeshFormat mesh_format_from_path(const std::string& path);
 // (see require_manifold()).
 PolygonMesh read_mesh(const std::string& path);
 
+// The whole file's bytes. Throws Error(Io) naming the path and the cause (no
+// such file, a directory, no permission, a failed read).
+std::string read_file_bytes(const std::string& path);
+
 struct MeshWriteOptions {
   bool ascii = false;             // PLY only; OBJ and OFF are always text
-  bool double_precision = false;  // coordinates as double instead of float
+  // Coordinates as double instead of float. Chosen anyway when float would
+  // lose the geometry (float_loses_geometry()).
+  bool double_precision = false;
 };
+
+// True when float32 coordinates would not keep `mesh`'s shape: its largest
+// coordinate rounds by more than a millionth of its bounding box (a
+// georeferenced origin far from a small surface), or it is near float's range
+// limits (huge or tiny).
+bool float_loses_geometry(const PolygonMesh& mesh);
 
 // Writes atomically (temporary file, then rename). PLY gets the uchar vertex
 // property `sharp` when any vertex is sharp; OBJ and OFF cannot carry it.
