@@ -17,7 +17,7 @@ namespace isowave::commands {
 int decode(const Args& raw) {
   const cli::CommandSpec spec{
       "decode",
-      "IN.isw (--percent P | --coefficients N) [--level L] [--limit] [--triangulate] [--ascii] -o OUT.ply|OUT.obj",
+      "IN.isw (--percent P | --coefficients N) [--level L] [--limit] [--triangulate] [--ascii] [--force] -o OUT.ply|OUT.obj|OUT.off",
       "Rebuilds the surface from the base mesh and the most important wavelet coefficients of IN.isw.\n"
       "--percent counts as the paper does: the total is the number of fine control points (base vertices plus\n"
       "all coefficients), and the base mesh alone is the smallest choice. Decodes only the chunks it needs.",

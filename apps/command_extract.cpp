@@ -129,18 +129,10 @@ int extract(const Args& raw) {
   const auto extract_start = Clock::now();
   Isosurface result = extract_isosurface(volume, options);
   const double extract_seconds = seconds_since(extract_start);
-  if (result.mesh.face_count() == 0) {
-    float low = std::numeric_limits<float>::infinity(), high = -low;
-    for (float v : volume.values)
-      if (std::isfinite(v)) {
-        low = std::min(low, v);
-        high = std::max(high, v);
-      }
-    throw Error(ErrorKind::InvalidArgument,
-                input + ": no surface at iso " + number(options.iso) +
-                    (low <= high ? " (finite values range " + number(low) + " .. " + number(high) + ")"
-                                 : " (no finite samples)"));
-  }
+  if (result.mesh.face_count() == 0)
+    throw Error(ErrorKind::InvalidArgument, input + ": no surface at iso " + number(options.iso) +
+                                                value_range_note(volume) +
+                                                (options.smooth_sigma > 0 ? " before smoothing" : ""));
   MeshWriteOptions write_options;
   write_options.ascii = args.has("ascii");
   write_mesh(output, result.mesh, write_options);

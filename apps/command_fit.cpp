@@ -121,7 +121,8 @@ int fit(const Args& raw) {
   if (smooth > 0) field = gaussian_smoothed(field, smooth);
   const Isosurface surface = extract_isosurface(field, extract_options);
   if (surface.mesh.face_count() == 0)
-    throw Error(ErrorKind::InvalidArgument, input + ": the isosurface at " + args.get("iso", "0") + " is empty");
+    throw Error(ErrorKind::InvalidArgument,
+                input + ": the isosurface at " + args.get("iso", "0") + " is empty" + value_range_note(field));
   const double extract_seconds = seconds_since(start);
 
   start = Clock::now();

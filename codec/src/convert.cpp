@@ -88,7 +88,8 @@ ConvertResult convert_volume(const Volume& volume, const std::string& source, co
   result.extracted_vertices = surface.mesh.vertex_count();
   result.seconds.extract = seconds_since(start);
   if (surface.mesh.face_count() == 0)
-    throw Error(ErrorKind::InvalidArgument, source + ": the isosurface at " + number(options.iso) + " is empty");
+    throw Error(ErrorKind::InvalidArgument,
+                source + ": the isosurface at " + number(options.iso) + " is empty" + value_range_note(field));
 
   // The signed-distance field needs only the field and the extracted mesh:
   // it is computed alongside the base mesh, started when the simplification

@@ -5,6 +5,7 @@
 #include <cerrno>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <string>
 #include <fcntl.h>
 #include <sys/stat.h>
@@ -41,20 +42,28 @@ void remove_uncommitted_temporary_files() noexcept {
     if (char* path = slot.load()) unlink(path);
 }
 
-AtomicFileWriter::AtomicFileWriter(std::string path, bool overwrite) : path_(std::move(path)), overwrite_(overwrite) {
+AtomicFileWriter::AtomicFileWriter(std::string path, bool overwrite)
+    : path_(std::move(path)), target_(path_), overwrite_(overwrite) {
   if (path_.empty()) throw Error(ErrorKind::InvalidArgument, "empty output path");
+  // A symbolic link keeps pointing where it did: the file it names is replaced.
+  struct stat link {};
+  if (lstat(path_.c_str(), &link) == 0 && S_ISLNK(link.st_mode)) {
+    std::error_code error;
+    const std::filesystem::path resolved = std::filesystem::weakly_canonical(path_, error);
+    if (!error) target_ = resolved.string();
+  }
   // An unnamed file in the target's directory (O_TMPFILE) leaves nothing
   // behind even when the process is killed (SIGKILL, power loss); commit()
   // gives it its name through /proc/self/fd. Where the file system or a
   // missing /proc does not allow that, a named temporary file.
   int fd = -1;
   if (access("/proc/self/fd", X_OK) == 0) {
-    const std::size_t slash = path_.rfind('/');
-    const std::string directory = slash == std::string::npos ? "." : slash == 0 ? "/" : path_.substr(0, slash);
+    const std::size_t slash = target_.rfind('/');
+    const std::string directory = slash == std::string::npos ? "." : slash == 0 ? "/" : target_.substr(0, slash);
     fd = open(directory.c_str(), O_TMPFILE | O_WRONLY | O_CLOEXEC, 0666);
   }
   if (fd < 0) {
-    std::string pattern = path_ + ".tmp-XXXXXX";
+    std::string pattern = target_ + ".tmp-XXXXXX";
     fd = mkstemp(pattern.data());
     if (fd < 0) throw Error(ErrorKind::Io, path_ + ": cannot create a temporary file: " + std::strerror(errno));
     temporary_path_ = pattern;
@@ -114,12 +123,15 @@ void AtomicFileWriter::commit() {
   // ferror: any earlier failure of stdio on this stream (its data is lost).
   const bool flushed = std::fflush(file_) == 0 && !std::ferror(file_) && fsync(fileno(file_)) == 0;
   const int error = errno;
+  // A replaced file keeps its permissions.
+  struct stat existing {};
+  if (flushed && overwrite_ && stat(target_.c_str(), &existing) == 0) fchmod(fileno(file_), existing.st_mode & 07777);
   if (temporary_path_.empty() && flushed) {
     link_unnamed_file();  // while the file is open: closing an unnamed one deletes it
   } else if (!flushed || std::fclose(std::exchange(file_, nullptr)) != 0) {
     throw Error(ErrorKind::Io, path_ + ": write failed: " + std::strerror(flushed ? errno : error));
   } else {
-    if (!overwrite_ && access(path_.c_str(), F_OK) == 0)
+    if (!overwrite_ && access(target_.c_str(), F_OK) == 0)
       throw Error(ErrorKind::Io, path_ + ": already exists (not overwritten)");
     rename_into_place();
   }
@@ -129,7 +141,7 @@ void AtomicFileWriter::link_unnamed_file() {
   const std::string self = "/proc/self/fd/" + std::to_string(fileno(file_));
   if (!overwrite_) {
     // linkat() never replaces a file: no window between a check and the link.
-    if (linkat(AT_FDCWD, self.c_str(), AT_FDCWD, path_.c_str(), AT_SYMLINK_FOLLOW) != 0) {
+    if (linkat(AT_FDCWD, self.c_str(), AT_FDCWD, target_.c_str(), AT_SYMLINK_FOLLOW) != 0) {
       const int error = errno;
       throw Error(ErrorKind::Io, path_ + (error == EEXIST ? ": already exists (not overwritten)"
                                                           : ": cannot give the file its name: " +
@@ -138,7 +150,7 @@ void AtomicFileWriter::link_unnamed_file() {
   } else {
     // A name of its own first, then rename() over the old file.
     for (int attempt = 0;; ++attempt) {
-      temporary_path_ = path_ + ".tmp-" + std::to_string(getpid()) + "-" + std::to_string(attempt);
+      temporary_path_ = target_ + ".tmp-" + std::to_string(getpid()) + "-" + std::to_string(attempt);
       register_path(temporary_path_);
       if (linkat(AT_FDCWD, self.c_str(), AT_FDCWD, temporary_path_.c_str(), AT_SYMLINK_FOLLOW) == 0) break;
       const int error = errno;
@@ -154,7 +166,7 @@ void AtomicFileWriter::link_unnamed_file() {
 }
 
 void AtomicFileWriter::rename_into_place() {
-  if (std::rename(temporary_path_.c_str(), path_.c_str()) != 0)
+  if (std::rename(temporary_path_.c_str(), target_.c_str()) != 0)
     throw Error(ErrorKind::Io, path_ + ": cannot rename the temporary file into place: " + std::strerror(errno));
   temporary_path_.clear();
   release_registration();

@@ -1,6 +1,7 @@
 // The isowave command end to end: convert -> decode/stats/info round trips,
 // batches with a bad input, interrupted runs, and bad input giving one line
 // and a non-zero exit code.
+#include <algorithm>
 #include <csignal>
 #include <cstring>
 #include <fcntl.h>
@@ -228,6 +229,37 @@ TEST_F(CliTest, AnInterruptedRunLeavesNoPartialOutput) {
   }
 }
 
+// Every command that writes refuses an existing file without --force (the
+// user's file, or the command's own input, stays as it was), and checks its
+// outputs before the work.
+TEST_F(CliTest, ExistingFilesAreKeptWithoutForce) {
+  ASSERT_EQ(run({"convert", "builtin:sphere:24", "-o", path("s.isw"), "--levels", "1", "--quiet"}, dir_).exit_code, 0);
+  std::ofstream(path("mine.ply")) << "the user's file";
+  const auto contents = [&](const std::string& name) {
+    std::ifstream in(path(name), std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  };
+  const std::string isw = contents("s.isw");
+  const std::vector<std::vector<std::string>> refused = {
+      {"decode", path("s.isw"), "--percent", "50", "-o", path("mine.ply")},
+      {"stats", path("s.isw"), "--plot", path("s.isw")},
+      {"extract", "builtin:sphere:24", "-o", path("mine.ply")},
+      {"extract", "builtin:sphere:24", "-o", path("new.ply"), "--stats-json", path("new.ply")},
+      {"decode", path("s.isw"), "--percent", "50", "-o", path("missing_directory/out.ply")},
+  };
+  for (const auto& arguments : refused) {
+    const RunResult r = run(arguments, dir_);
+    EXPECT_NE(r.exit_code, 0) << arguments[0] << ": " << r.out;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  }
+  EXPECT_EQ(contents("mine.ply"), "the user's file");
+  EXPECT_EQ(contents("s.isw"), isw);
+  EXPECT_FALSE(fs::exists(path("new.ply")));
+  const RunResult forced = run({"decode", path("s.isw"), "--percent", "50", "-o", path("mine.ply"), "--force", "--quiet"}, dir_);
+  EXPECT_EQ(forced.exit_code, 0) << forced.err;
+  EXPECT_NO_THROW(read_mesh(path("mine.ply")));
+}
+
 TEST_F(CliTest, BadInputGivesOneLineAndANonZeroExitCode) {
   std::ofstream(path("garbage.isw")) << "not an isw file";
   std::ofstream(path("garbage.ply")) << "ply\nformat ascii 1.0\nelement vertex 99\n";
@@ -241,6 +273,9 @@ TEST_F(CliTest, BadInputGivesOneLineAndANonZeroExitCode) {
       {"convert", "builtin:nonsense", "-o", path("x.isw")},
       {"convert", "builtin:sphere:32", "--levels", "9", "-o", path("x.isw")},
       {"convert", "builtin:sphere:32", "--unfold-limit", "101", "-o", path("x.isw")},
+      {"convert", "builtin:sphere:32", "builtin:sphere:32", "--out-dir", path("x")},  // both would write x/sphere_32.isw
+      {"decode", path("garbage.isw"), "--percent", "-o", path("x.ply")},              // -o is no percentage
+      {"info", dir_.string()},                                                         // a directory
       {"nonsense"},
   };
   for (const auto& arguments : cases) {
@@ -252,6 +287,7 @@ TEST_F(CliTest, BadInputGivesOneLineAndANonZeroExitCode) {
   }
   EXPECT_FALSE(fs::exists(path("x.ply")));
   EXPECT_FALSE(fs::exists(path("x.isw")));
+  EXPECT_FALSE(fs::exists(path("x")));
 }
 
 // A missing input names its real cause (not its file name's ending), with

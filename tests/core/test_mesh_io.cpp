@@ -15,6 +15,7 @@
 #include <csignal>
 #include <fcntl.h>
 #include <sys/resource.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -314,6 +315,24 @@ TEST_F(MeshIoTest, CoordinatesFloatWouldLoseAreWrittenAsDouble) {
       std::remove(path(name).c_str());
     }
   }
+}
+
+// Replacing a file keeps what the user set on it: its permissions, and a
+// symbolic link in its place (the file the link names gets the new data).
+TEST_F(MeshIoTest, ReplacedFilesKeepPermissionsAndSymbolicLinks) {
+  std::ofstream(path("private.isw")) << "old";
+  ASSERT_EQ(chmod(path("private.isw").c_str(), 0600), 0);
+  AtomicFileWriter writer(path("private.isw"));
+  writer.write("new");
+  writer.commit();
+  EXPECT_EQ(read_bytes("private.isw"), "new");
+  EXPECT_EQ(fs::status(path("private.isw")).permissions() & fs::perms::all, fs::perms::owner_read | fs::perms::owner_write);
+  fs::create_symlink(path("private.isw"), path("link.isw"));
+  AtomicFileWriter through_link(path("link.isw"));
+  through_link.write("newer");
+  through_link.commit();
+  EXPECT_TRUE(fs::is_symlink(path("link.isw")));
+  EXPECT_EQ(read_bytes("private.isw"), "newer");
 }
 
 // The binary PLY layout byte by byte: header, little-endian float32 x y z

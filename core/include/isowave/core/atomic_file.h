@@ -4,7 +4,8 @@
 // where that is not available), which takes the target's name only on
 // commit(). Destroying an uncommitted writer removes the temporary; a killed
 // process leaves none behind (with a named temporary: none after SIGINT or
-// SIGTERM, see remove_uncommitted_temporary_files()).
+// SIGTERM, see remove_uncommitted_temporary_files()). A replaced file keeps
+// its permissions; a symbolic link keeps pointing at the file it named.
 #include <cstdint>
 #include <cstdio>
 #include <string>
@@ -29,7 +30,8 @@ class AtomicFileWriter {
   const std::string& path() const { return path_; }
 
  private:
-  std::string path_;
+  std::string path_;    // as given, for messages
+  std::string target_;  // the file written: path_, or the file a symbolic link there names
   std::string temporary_path_;  // empty while the file is unnamed
   std::FILE* file_ = nullptr;
   char* registered_path_ = nullptr;  // copy of temporary_path_ known to remove_uncommitted_temporary_files()
