@@ -10,7 +10,9 @@
 #include <limits>
 #include <sys/stat.h>
 
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_pipeline.h>
+#include <tbb/parallel_reduce.h>
 
 #include "isowave/core/atomic_file.h"
 #include "isowave/core/error.h"
@@ -608,21 +610,41 @@ PolygonMesh read_mesh(const std::string& path) {
 
 bool float_loses_geometry(const PolygonMesh& mesh) {
   if (mesh.positions.empty()) return false;
-  double low[3], high[3], largest = 0, smallest = std::numeric_limits<double>::infinity();
-  for (int k = 0; k < 3; ++k) low[k] = high[k] = mesh.positions[0][k];
-  for (const Vec3& p : mesh.positions)
-    for (int k = 0; k < 3; ++k) {
-      low[k] = std::min(low[k], p[k]);
-      high[k] = std::max(high[k], p[k]);
-      largest = std::max(largest, std::abs(p[k]));
-      if (p[k] != 0) smallest = std::min(smallest, std::abs(p[k]));
-    }
-  const double extent = std::max({high[0] - low[0], high[1] - low[1], high[2] - low[2]});
+  struct Range {
+    double low[3], high[3], largest = 0, smallest = std::numeric_limits<double>::infinity();
+  };
+  Range start;
+  for (int k = 0; k < 3; ++k) start.low[k] = start.high[k] = mesh.positions[0][k];
+  // In parallel: it runs before every mesh write (20 ms serial for 6.7 M vertices).
+  const Range range = tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(0, mesh.positions.size(), 1 << 16), start,
+      [&](const tbb::blocked_range<std::size_t>& r, Range a) {
+        for (std::size_t i = r.begin(); i < r.end(); ++i)
+          for (int k = 0; k < 3; ++k) {
+            const double c = mesh.positions[i][k];
+            a.low[k] = std::min(a.low[k], c);
+            a.high[k] = std::max(a.high[k], c);
+            a.largest = std::max(a.largest, std::abs(c));
+            if (c != 0) a.smallest = std::min(a.smallest, std::abs(c));
+          }
+        return a;
+      },
+      [](Range a, const Range& b) {
+        for (int k = 0; k < 3; ++k) {
+          a.low[k] = std::min(a.low[k], b.low[k]);
+          a.high[k] = std::max(a.high[k], b.high[k]);
+        }
+        a.largest = std::max(a.largest, b.largest);
+        a.smallest = std::min(a.smallest, b.smallest);
+        return a;
+      });
+  const double extent =
+      std::max({range.high[0] - range.low[0], range.high[1] - range.low[1], range.high[2] - range.low[2]});
   // Beyond float's range, near its smallest normal numbers, or rounding the
   // largest coordinate (by about largest * 2^-24) by more than a millionth
   // of the mesh's size: a far origin.
-  return largest > 0.5 * std::numeric_limits<float>::max() || smallest < 1e4 * std::numeric_limits<float>::min() ||
-         largest * 0x1p-24 > 1e-6 * extent;
+  return range.largest > 0.5 * std::numeric_limits<float>::max() ||
+         range.smallest < 1e4 * std::numeric_limits<float>::min() || range.largest * 0x1p-24 > 1e-6 * extent;
 }
 
 void write_mesh(const std::string& path, const PolygonMesh& mesh, const MeshWriteOptions& options) {
