@@ -1,0 +1,144 @@
+// The golden .isw file: tests/codec/data/golden_1_0.isw was written by the
+// format 1.0 encoder from the surface that golden_surface() defines, and
+// every later reader must decode it to that surface. Its expected values
+// come from the generator below, not from a decode: base topology, sharp
+// flags and metadata exactly, base control points and coefficients within
+// half their quantization step. The generator uses only integer arithmetic
+// and decimal constants, so it gives the same values on every platform.
+//
+// Regenerate only with a new format version (and keep the old file, whose
+// test must keep passing): ISOWAVE_WRITE_GOLDEN=PATH codec_tests
+// --gtest_filter='IswGolden.*' writes the current encoder's file to PATH.
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstdlib>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "isowave/codec/importance.h"
+#include "isowave/codec/isw_format.h"
+#include "isowave/core/mesh_io.h"
+
+namespace isowave {
+namespace {
+
+constexpr int kLevels = 2;
+constexpr double kStep = 1e-3;
+constexpr double kDetail = 0.2;
+
+struct GoldenSurface {
+  PolygonMesh base;                // positions are the base control points
+  std::vector<Vec3> coefficients;  // coarse to fine: base control points, then wavelet coefficients
+  IswMetadata metadata;
+};
+
+// A value in [-1, 1) from the coefficient index and axis (a multiplicative
+// hash in 32-bit unsigned arithmetic: the same everywhere).
+double signed_hash(std::uint32_t index, std::uint32_t axis) {
+  const std::uint32_t h = (index + 1u) * 2654435761u ^ (axis + 1u) * 40503u * 2246822519u;
+  return double((h >> 8) & 0xffffu) / 32768.0 - 1.0;
+}
+
+// A pentagonal prism with one side split into two triangles (faces of 3, 4
+// and 5 sides), vertex 7 sharp, 2 levels: 10 base vertices, 120 wavelet
+// coefficients of sizes kDetail / 2^level.
+GoldenSurface golden_surface() {
+  GoldenSurface s;
+  const double ring[5][2] = {{1.0, 0.0}, {0.31, 0.95}, {-0.81, 0.59}, {-0.81, -0.59}, {0.31, -0.95}};
+  for (const double z : {-0.5, 0.5})
+    for (const auto& xy : ring) s.base.positions.push_back({xy[0], xy[1], z});
+  s.base.add_face({4, 3, 2, 1, 0});
+  s.base.add_face({5, 6, 7, 8, 9});
+  s.base.add_face({0, 1, 6});
+  s.base.add_face({0, 6, 5});
+  for (std::uint32_t i = 1; i < 5; ++i) s.base.add_face({i, (i + 1) % 5, (i + 1) % 5 + 5, i + 5});
+  s.base.sharp.assign(10, 0);
+  s.base.sharp[7] = 1;
+  const SubdivisionHierarchy hierarchy(s.base, kLevels);
+  s.coefficients.resize(hierarchy.fine_vertex_count());
+  for (std::size_t i = 0; i < s.base.vertex_count(); ++i) s.coefficients[i] = s.base.positions[i];
+  for (std::size_t i = s.base.vertex_count(); i < s.coefficients.size(); ++i) {
+    const double size = kDetail / double(1 << hierarchy.level_of_index(i));
+    const auto index = static_cast<std::uint32_t>(i);
+    s.coefficients[i] = {size * signed_hash(index, 0), size * signed_hash(index, 1), size * signed_hash(index, 2)};
+  }
+  s.metadata.values["source"] = "golden pentagonal prism";
+  s.metadata.values["isovalue"] = "0.5";
+  s.metadata.values["cell_size"] = "0.05";
+  return s;
+}
+
+std::string golden_path() { return std::string(ISOWAVE_CODEC_TEST_DATA_DIR) + "/golden_1_0.isw"; }
+
+TEST(IswGolden, Format10FileDecodesToItsGenerator) {
+  const GoldenSurface expected = golden_surface();
+  if (const char* out = std::getenv("ISOWAVE_WRITE_GOLDEN")) {
+    IswEncodeOptions options;
+    options.step = kStep;
+    std::ofstream(out, std::ios::binary)
+        << encode_isw(expected.base, kLevels, expected.coefficients, expected.metadata, options);
+    GTEST_SKIP() << "wrote " << out;
+  }
+  const IswDecoded d = read_isw(golden_path());
+  EXPECT_EQ(d.major_version, 1);
+  EXPECT_EQ(d.minor_version, 0);
+  EXPECT_FALSE(d.truncated);
+  EXPECT_EQ(d.chunks_decoded, d.chunks_total);
+  EXPECT_EQ(d.metadata.values, expected.metadata.values);
+  EXPECT_EQ(d.levels, kLevels);
+  EXPECT_DOUBLE_EQ(d.step, kStep);
+  EXPECT_EQ(d.base.face_offsets, expected.base.face_offsets);
+  EXPECT_EQ(d.base.face_vertices, expected.base.face_vertices);
+  EXPECT_EQ(d.base.sharp, expected.base.sharp);
+  ASSERT_EQ(d.coefficients.size(), expected.coefficients.size());
+  // The file's class weights are today's wavelet norms of its hierarchy.
+  const std::vector<double> norms = wavelet_norms(*d.hierarchy);
+  ASSERT_EQ(d.class_weights.size(), norms.size());
+  for (std::size_t c = 0; c < norms.size(); ++c) EXPECT_NEAR(d.class_weights[c], norms[c], 1e-9 * norms[c]) << c;
+  // Every value within half of its class's step per component (the base
+  // control points are class 0).
+  for (std::size_t i = 0; i < d.coefficients.size(); ++i) {
+    const double step = kStep / d.class_weights[static_cast<std::size_t>(coefficient_class(*d.hierarchy, i))];
+    for (int axis = 0; axis < 3; ++axis)
+      ASSERT_LE(std::abs(d.coefficients[i][axis] - expected.coefficients[i][axis]), 0.5 * step * (1 + 1e-9))
+          << "value " << i << " axis " << axis;
+  }
+  EXPECT_EQ(d.ranked.size(), expected.coefficients.size() - expected.base.vertex_count());
+}
+
+TEST(IswGolden, Format10FileDecodesTheMostImportantCoefficientsFirst) {
+  const GoldenSurface expected = golden_surface();
+  IswDecodeOptions options;
+  options.max_percent = 20;
+  const IswDecoded d = read_isw(golden_path(), options);
+  const std::size_t base = expected.base.vertex_count();
+  ASSERT_EQ(d.ranked.size(), coefficients_for_percent(*d.hierarchy, 20));
+  ASSERT_LT(d.ranked.size(), expected.coefficients.size() - base);
+  // Importance is the generator's magnitude times the class weight; every
+  // decoded coefficient is at least as important as every one left out, up
+  // to the quantization of both.
+  const auto importance = [&](std::size_t i) {
+    const double weight = d.class_weights[static_cast<std::size_t>(coefficient_class(*d.hierarchy, i))];
+    return norm(expected.coefficients[i]) * weight;
+  };
+  std::vector<std::uint8_t> decoded(expected.coefficients.size(), 0);
+  double least_decoded = INFINITY;
+  for (const std::uint32_t i : d.ranked) {
+    ASSERT_GE(i, base);
+    decoded[i] = 1;
+    least_decoded = std::min(least_decoded, importance(i));
+  }
+  const double tolerance = std::sqrt(3.0) * kStep;
+  for (std::size_t i = base; i < expected.coefficients.size(); ++i) {
+    if (decoded[i]) continue;
+    EXPECT_LE(importance(i), least_decoded + tolerance) << i;
+    EXPECT_EQ(d.coefficients[i], Vec3{}) << i;
+  }
+}
+
+}  // namespace
+}  // namespace isowave
