@@ -5,11 +5,17 @@
 // REFERENCE to the surface of MESH (how much of the reference it covers; a
 // fit that left parts of the surface out shows only here).
 //
-// usage: bench_mesh_distance MESH REFERENCE [CELL]
-// prints: rms max reverse_rms reverse_max   (in percent of CELL, default 1)
+// usage: bench_mesh_distance MESH REFERENCE [CELL] [--worst N]
+// prints: rms max reverse_rms reverse_max   (in percent of CELL, default 1);
+// --worst N then lists the N vertices of REFERENCE farthest from MESH (index,
+// position, distance in cells): where a fit left the surface out.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
+#include <numeric>
+#include <stdexcept>
 
 #include "isowave/core/huge_page_vector.h"
 #include "isowave/core/mesh_io.h"
@@ -17,14 +23,20 @@
 
 int main(int argc, char** argv) {
   isowave::keep_freed_memory_for_reuse();
-  if (argc < 3) {
-    std::fprintf(stderr, "usage: bench_mesh_distance MESH REFERENCE [CELL]\n");
+  std::size_t worst = 0;
+  if (argc >= 5 && std::strcmp(argv[argc - 2], "--worst") == 0) {
+    worst = static_cast<std::size_t>(std::atol(argv[argc - 1]));
+    argc -= 2;
+  }
+  if (argc < 3 || argc > 4) {
+    std::fprintf(stderr, "usage: bench_mesh_distance MESH REFERENCE [CELL] [--worst N]\n");
     return 2;
   }
   try {
     const isowave::PolygonMesh mesh = isowave::read_mesh(argv[1]);
     const isowave::PolygonMesh reference = isowave::read_mesh(argv[2]);
     const double cell = argc > 3 ? std::atof(argv[3]) : 1.0;
+    if (!(cell > 0)) throw std::runtime_error("CELL must be a positive number");
     const auto rms_and_max = [cell](const std::vector<double>& d) {
       double sum = 0, max = 0;
       for (double x : d) {
@@ -35,8 +47,20 @@ int main(int argc, char** argv) {
     };
     rms_and_max(isowave::SurfaceDistance(reference).distances(mesh.positions));
     std::printf(" ");
-    rms_and_max(isowave::SurfaceDistance(mesh).distances(reference.positions));
+    const std::vector<double> reverse = isowave::SurfaceDistance(mesh).distances(reference.positions);
+    rms_and_max(reverse);
     std::printf("\n");
+    if (worst > 0) {
+      std::vector<std::size_t> order(reverse.size());
+      std::iota(order.begin(), order.end(), std::size_t{0});
+      worst = std::min(worst, order.size());
+      std::partial_sort(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(worst), order.end(),
+                        [&](std::size_t a, std::size_t b) { return reverse[a] > reverse[b]; });
+      for (std::size_t k = 0; k < worst; ++k) {
+        const isowave::Vec3& p = reference.positions[order[k]];
+        std::printf("%zu %.3f %.3f %.3f %.3f\n", order[k], p.x, p.y, p.z, reverse[order[k]] / cell);
+      }
+    }
   } catch (const std::exception& error) {
     std::fprintf(stderr, "bench_mesh_distance: %s\n", error.what());
     return 1;

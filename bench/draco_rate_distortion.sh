@@ -55,7 +55,7 @@ while IFS=, read -r coefficients percent rmse max bytes bits_fine bits_iso base;
   decode_percent="$percent"
   label="isowave ${percent}%"
   if [ "$base" = 1 ]; then decode_percent=0; label="isowave base mesh"; fi
-  "$isowave" decode "$work/surface.isw" --percent "$decode_percent" -o "$work/d.ply" --quiet
+  "$isowave" decode "$work/surface.isw" --percent "$decode_percent" -o "$work/d.ply" --quiet --force
   read -r rms max back_rms back_max < <("$distance" "$work/d.ply" "$work/surface.ply" "$cell")
   printf "%-22s %12d %12.3f %14.3f %14.3f %14.3f %14.3f\n" "$label" "$bytes" "$(awk -v b="$bytes" -v v="$vertices" 'BEGIN { print 8 * b / v }')" "$rms" "$max" "$back_rms" "$back_max"
 done < "$work/stats.csv"
