@@ -21,7 +21,6 @@
 
 #include "isowave/codec/importance.h"
 #include "isowave/codec/isw_format.h"
-#include "isowave/core/mesh_io.h"
 
 namespace isowave {
 namespace {
