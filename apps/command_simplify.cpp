@@ -15,7 +15,7 @@ namespace isowave::commands {
 int simplify(const Args& raw) {
   const cli::CommandSpec spec{
       "simplify",
-      "MESH (--target-vertices N | --ratio R) [--no-edge-removal] [--normal-threshold D] [--no-flips] [--flip-threshold D] [--eager-stencil] [--batch-factor F] -o BASE.ply|BASE.obj",
+      "MESH (--target-vertices N | --ratio R) [--no-edge-removal] [--normal-threshold D] [--no-flips] [--no-boundary-curve-error] [--flip-threshold D] [--eager-stencil] [--batch-factor F] -o BASE.ply|BASE.obj",
       "Builds a base mesh from a 2-manifold triangle mesh (Bertram et al. 2000, Sec. 4.1): edge collapses in\n"
       "bucket-priority order keep genus, components and boundary loops and valences 3..8 (2..8 on the\n"
       "boundary); then edges are removed to form quads and pentagons. Unreferenced vertices are dropped\n"
@@ -25,6 +25,7 @@ int simplify(const Args& raw) {
        {"ratio", true, "target as a fraction of the input vertex count, in (0, 1]", "R"},
        {"no-edge-removal", false, "keep the triangles of the collapse phase", ""},
        {"no-flips", false, "the paper's collapse rules only: no valence-lowering edge flips when they stall", ""},
+       {"no-boundary-curve-error", false, "the paper's collapse error (4.1) only: boundary collapses pay nothing for moving the boundary curve within the surface", ""},
        {"eager-stencil", false, "re-evaluate every edge of a collapse's stencil at once, as the paper does (slower)", ""},
        {"batch-factor", true, "in the two-thread phase (large meshes) and the flip round, collapse the edges whose errors lie within a factor F of the best one a batch at a time, in memory order (default 10, faster; 1: one at a time in priority order, as the paper does)", "F"},
        {"flip-threshold", true, "a flip needs the old and new triangles' unit normals to have dot >= D, in [-1, 1] (default 0.7)", "D"},
@@ -52,6 +53,7 @@ int simplify(const Args& raw) {
   const int target = args.get_int("target-vertices", 0, 0, std::numeric_limits<int>::max());
   options.edge_removal = !args.has("no-edge-removal");
   options.valence_flips = !args.has("no-flips");
+  options.boundary_curve_error = !args.has("no-boundary-curve-error");
   options.lazy_stencil = !args.has("eager-stencil");
   options.batch_error_factor = args.get_double("batch-factor", options.batch_error_factor);
   if (!(options.batch_error_factor >= 1 && options.batch_error_factor <= 1e20))

@@ -468,7 +468,26 @@ Evaluation CollapseMesh::evaluate(std::uint32_t e, FanCache& cache, int max_vale
   result.legality = Legality::Legal;
   result.geometry_computed = true;
   result.position = p;
-  result.delta_error = collapse_error_terms(pj - pi, cross_products, squared_norms, k).delta_e;
+  const CollapseErrorTerms terms = collapse_error_terms(pj - pi, cross_products, squared_norms, k);
+  result.delta_error = terms.delta_e;
+  if (boundary_edge && rules_.boundary_curve_error) {
+    // How far each endpoint's other boundary edge sees the boundary move
+    // within the surface: the move's component along the edge's in-surface
+    // normal (edge x triangle normal). The endpoint's fan runs from one
+    // boundary neighbour (ring 0) to the other (the closing ring entry).
+    const auto curve_move = [&](const FanCache::Entry* ring, std::uint32_t corners, std::uint32_t other,
+                                const Vec3& from) {
+      const bool first_is_other = ring[0].vertex == other;
+      const FanCache::Entry& end = first_is_other ? ring[corners] : ring[0];
+      const FanCache::Entry& triangle = first_is_other ? ring[corners - 1] : ring[0];
+      const Vec3 in_surface =
+          cross(Vec3{end.x, end.y, end.z} - from, Vec3{triangle.cross_x, triangle.cross_y, triangle.cross_z});
+      const double length = norm(in_surface);
+      return length > 0 ? std::abs(dot(p - from, in_surface)) / length : 0.0;
+    };
+    const double boundary_move = std::max(curve_move(ring_i, fi.corners, vj, pi), curve_move(ring_j, fj.corners, vi, pj));
+    result.delta_error = terms.weight * std::max(terms.delta_e1, boundary_move);
+  }
   return result;
 }
 

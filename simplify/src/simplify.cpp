@@ -589,6 +589,7 @@ SimplifyResult simplify(const PolygonMesh& input, const SimplifyOptions& options
   CollapseRules rules;
   rules.max_valence = options.max_valence;
   rules.min_normal_dot = options.collapse_min_normal_dot;
+  rules.boundary_curve_error = options.boundary_curve_error;
   rules.flip_min_normal_dot = options.flip_min_normal_dot;
   CollapseMesh mesh = build_table(input, rules, source);
   if (options.valence_flips) {

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <map>
 #include <numeric>
 #include <utility>
 #include <vector>
@@ -521,8 +522,10 @@ TEST(EdgeFlip, FlipCapacityCountsFlippableSpokesAndZeroMeansNoFlip) {
 
 // --- (4.1)-(4.3) through the mesh, and the error propagation ---
 
-// Reference (4.1)-(4.2) written out independently for the test.
-double reference_delta_error(const Vec3& d, const std::vector<Vec3>& c) {
+// Reference (4.1)-(4.2) written out independently for the test; a boundary
+// collapse's curve move (SimplifyOptions::boundary_curve_error) joins the
+// maximum that the weight multiplies.
+double reference_delta_error(const Vec3& d, const std::vector<Vec3>& c, double boundary_move = 0) {
   double e0 = 0, max_length = 0;
   Vec3 average;
   for (const Vec3& ci : c) {
@@ -534,7 +537,24 @@ double reference_delta_error(const Vec3& d, const std::vector<Vec3>& c) {
   average = average * (1.0 / norm(average));
   double min_projection = 1e300;
   for (const Vec3& ci : c) min_projection = std::min(min_projection, dot(ci, average));
-  return std::pow(2.0 - min_projection / max_length, 16) * std::max(e0, 1e-8);
+  return std::pow(2.0 - min_projection / max_length, 16) * std::max({e0, 1e-8, boundary_move});
+}
+
+// The ring triangles' cross products after collapsing (vi, vj) to p, straight
+// from the face list: faces with exactly one endpoint, that endpoint replaced
+// by p, rotated to start at p.
+std::vector<Vec3> cross_products_after_collapse(const PolygonMesh& mesh, std::uint32_t vi, std::uint32_t vj,
+                                                const Vec3& p) {
+  std::vector<Vec3> c;
+  for (std::size_t f = 0; f < mesh.face_count(); ++f) {
+    const std::uint32_t* t = mesh.face_begin(f);
+    int hits = 0, at = -1;
+    for (int k = 0; k < 3; ++k)
+      if (t[k] == vi || t[k] == vj) ++hits, at = k;
+    if (hits != 1) continue;
+    c.push_back(cross(mesh.positions[t[(at + 1) % 3]] - p, mesh.positions[t[(at + 2) % 3]] - p));
+  }
+  return c;
 }
 
 TEST(CollapseError, MeshEvaluationMatchesTheFormulasOnTheRingAfterCollapse) {
@@ -548,17 +568,7 @@ TEST(CollapseError, MeshEvaluationMatchesTheFormulasOnTheRingAfterCollapse) {
     const std::uint32_t h = mesh.edge_halfedge(e);
     const std::uint32_t vi = mesh.origin(h), vj = mesh.target(h);
     const Vec3 p = (sphere.positions[vi] + sphere.positions[vj]) * 0.5;
-    // Ring after collapse straight from the face list: faces with exactly one
-    // endpoint, that endpoint replaced by p, rotated to start at p.
-    std::vector<Vec3> c;
-    for (std::size_t f = 0; f < sphere.face_count(); ++f) {
-      const std::uint32_t* t = sphere.face_begin(f);
-      int hits = 0, at = -1;
-      for (int k = 0; k < 3; ++k)
-        if (t[k] == vi || t[k] == vj) ++hits, at = k;
-      if (hits != 1) continue;
-      c.push_back(cross(sphere.positions[t[(at + 1) % 3]] - p, sphere.positions[t[(at + 2) % 3]] - p));
-    }
+    const std::vector<Vec3> c = cross_products_after_collapse(sphere, vi, vj, p);
     const double expected = reference_delta_error(sphere.positions[vj] - sphere.positions[vi], c);
     EXPECT_NEAR(evaluation.delta_error, expected, 1e-9 * expected) << "edge " << e;
     EXPECT_EQ(evaluation.position, p);
@@ -659,6 +669,67 @@ TEST(FanCache, SharedCacheGivesBitIdenticalEvaluationsAcrossCollapses) {
     EXPECT_GT(collapses, 60u);
     EXPECT_GT(legal, 500u);
   }
+}
+
+// A flat disc whose boundary is a circle: (4.1) gives every collapse there
+// the clamped minimum, so only the boundary curve's move can tell a boundary
+// collapse that keeps the circle from one that cuts into it.
+TEST(CollapseError, BoundaryCollapseAlsoCountsTheMoveOfTheBoundaryCurve) {
+  PolygonMesh disc = fan_triangulate(test::quad_grid(12, 12));
+  for (Vec3& p : disc.positions) {  // the square [0, 12]^2 onto the disc of radius 6 (elliptical grid map)
+    const double u = p.x / 6 - 1, v = p.y / 6 - 1;
+    p = {6 * u * std::sqrt(1 - v * v / 2), 6 * v * std::sqrt(1 - u * u / 2), 0};
+  }
+  // The ring after the collapse and the boundary edges, from the face list.
+  std::map<std::pair<std::uint32_t, std::uint32_t>, std::uint32_t> edge_face;
+  std::map<std::pair<std::uint32_t, std::uint32_t>, int> edge_count;
+  for (std::uint32_t f = 0; f < disc.face_count(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      const std::uint32_t a = disc.face_begin(f)[k], b = disc.face_begin(f)[(k + 1) % 3];
+      edge_face[{std::min(a, b), std::max(a, b)}] = f;
+      ++edge_count[{std::min(a, b), std::max(a, b)}];
+    }
+  const auto move_along = [&](std::uint32_t v, std::uint32_t other, const Vec3& p) {
+    for (const auto& [edge, count] : edge_count) {
+      if (count != 1 || (edge.first != v && edge.second != v)) continue;
+      const std::uint32_t w = edge.first == v ? edge.second : edge.first;
+      if (w == other) continue;
+      const std::uint32_t* t = disc.face_begin(edge_face.at(edge));
+      const Vec3 normal = cross(disc.positions[t[1]] - disc.positions[t[0]], disc.positions[t[2]] - disc.positions[t[0]]);
+      const Vec3 m = normalized(cross(disc.positions[w] - disc.positions[v], normal));
+      return std::fabs(dot(p - disc.positions[v], m));
+    }
+    ADD_FAILURE() << "no second boundary edge at " << v;
+    return 0.0;
+  };
+  CollapseRules paper_rules;
+  paper_rules.boundary_curve_error = false;
+  const CollapseMesh mesh(disc), paper(disc, paper_rules);
+  std::size_t boundary_compared = 0, interior_compared = 0;
+  for (std::uint32_t e = 0; e < mesh.edge_slots(); ++e) {
+    const Evaluation evaluation = mesh.evaluate(e), paper_evaluation = paper.evaluate(e);
+    ASSERT_EQ(evaluation.legality, paper_evaluation.legality);
+    if (evaluation.legality != Legality::Legal) continue;
+    const std::uint32_t h = mesh.edge_halfedge(e);
+    const std::uint32_t vi = mesh.origin(h), vj = mesh.target(h);
+    const bool boundary_edge = edge_count.at({std::min(vi, vj), std::max(vi, vj)}) == 1;
+    if (!boundary_edge) {
+      EXPECT_EQ(evaluation.delta_error, paper_evaluation.delta_error);
+      ++interior_compared;
+      continue;
+    }
+    const Vec3 p = (disc.positions[vi] + disc.positions[vj]) * 0.5;
+    const std::vector<Vec3> c = cross_products_after_collapse(disc, vi, vj, p);
+    const Vec3 d = disc.positions[vj] - disc.positions[vi];
+    const double move = std::max(move_along(vi, vj, p), move_along(vj, vi, p));
+    EXPECT_GT(move, 1e-3) << "a chord of the circle moves the curve";
+    EXPECT_NEAR(evaluation.delta_error, reference_delta_error(d, c, move), 1e-9 * evaluation.delta_error);
+    EXPECT_NEAR(paper_evaluation.delta_error, reference_delta_error(d, c), 1e-9 * paper_evaluation.delta_error);
+    EXPECT_GT(evaluation.delta_error, 1e4 * paper_evaluation.delta_error);
+    ++boundary_compared;
+  }
+  EXPECT_GT(boundary_compared, 10u);
+  EXPECT_GT(interior_compared, 100u);
 }
 
 TEST(CollapseError, SuppliedSquaredNormsGiveTheSameTerms) {

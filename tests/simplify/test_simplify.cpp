@@ -268,6 +268,59 @@ TEST(Simplify, BoundaryVerticesStayOnTheInputBoundaryPolyline) {
   }
 }
 
+// A flat ring (an isosurface grazing a box face is nearly flat near its
+// boundary loop there, as on the engine's z = 0 face): (4.1) alone sees no
+// cost in any collapse of it, so the paper's rules may shrink the hole's
+// boundary loop to a sliver. Counting the boundary curve's move keeps the
+// hole round.
+TEST(Simplify, FlatRingKeepsItsHoleRound) {
+  PolygonMesh ring;
+  const int sectors = 48, circles = 12;
+  const double pi = std::acos(-1.0), inner = 3, outer = 10;
+  for (int j = 0; j <= circles; ++j)
+    for (int i = 0; i < sectors; ++i) {
+      const double r = inner + (outer - inner) * j / circles, a = 2 * pi * i / sectors;
+      ring.positions.push_back({r * std::cos(a), r * std::sin(a), 0});
+    }
+  const auto id = [&](int i, int j) { return static_cast<std::uint32_t>(j * sectors + i % sectors); };
+  for (int j = 0; j < circles; ++j)
+    for (int i = 0; i < sectors; ++i) {
+      ring.add_face({id(i, j), id(i + 1, j), id(i + 1, j + 1)});
+      ring.add_face({id(i, j), id(i + 1, j + 1), id(i, j + 1)});
+    }
+  // Area inside the boundary loop nearest the centre: the hole.
+  const auto hole_area = [](const PolygonMesh& mesh) {
+    std::map<std::pair<std::uint32_t, std::uint32_t>, int> count;
+    for (std::size_t f = 0; f < mesh.face_count(); ++f)
+      for (std::uint32_t k = 0; k < mesh.face_size(f); ++k) {
+        const std::uint32_t u = mesh.face_begin(f)[k], w = mesh.face_begin(f)[(k + 1) % mesh.face_size(f)];
+        ++count[{std::min(u, w), std::max(u, w)}];
+      }
+    double area = 0;  // shoelace over the hole's boundary edges, each once, oriented by its face
+    for (std::size_t f = 0; f < mesh.face_count(); ++f)
+      for (std::uint32_t k = 0; k < mesh.face_size(f); ++k) {
+        const std::uint32_t u = mesh.face_begin(f)[k], w = mesh.face_begin(f)[(k + 1) % mesh.face_size(f)];
+        const Vec3 &a = mesh.positions[u], &b = mesh.positions[w];
+        if (count[{std::min(u, w), std::max(u, w)}] == 1 && norm(a) < 6.5 && norm(b) < 6.5)
+          area += 0.5 * (a.x * b.y - b.x * a.y);  // the hole's loop runs counter-clockwise seen from +z
+      }
+    return area;
+  };
+  SimplifyOptions options;
+  options.target_vertices = 32;
+  const SimplifyResult result = simplify(ring, options);
+  expect_valid_base_mesh(ring, result, "flat ring");
+  options.boundary_curve_error = false;
+  const SimplifyResult paper = simplify(ring, options);
+  const double circle = pi * inner * inner;
+  std::printf("hole area %.2f: base %.2f, paper's rules %.2f\n", circle, hole_area(result.base), hole_area(paper.base));
+  // A regular octagon on the circle keeps 0.90 of its area. Measured: 0.91
+  // of it kept, 0.73 with the paper's rules (0.72 against 0.57 at 24
+  // vertices, 0.98 against 0.85 at 100).
+  EXPECT_GE(hole_area(result.base), 0.85 * circle);
+  EXPECT_GT(hole_area(result.base), hole_area(paper.base));
+}
+
 TEST(Simplify, EdgeRemovalMakesQuadsAndPentagonsAndCanBeTurnedOff) {
   PolygonMesh torus = test::fan_triangulate(test::quad_grid(40, 20, true, true));
   SimplifyOptions options;

@@ -64,6 +64,8 @@ struct CollapseRules {
   // dot(n_old, n_new) < min_normal_dot (Hoppe's face-flip test); 0 allows
   // turns up to 90 degrees.
   double min_normal_dot = 0.0;
+  // See SimplifyOptions::boundary_curve_error.
+  bool boundary_curve_error = true;
 };
 
 class CollapseMesh;

@@ -67,6 +67,15 @@ struct SimplifyOptions {
   // Collapse face-flip test: every surviving ring triangle needs
   // dot(n_old, n_new) >= this; in [-1, 1).
   double collapse_min_normal_dot = 0.0;
+  // A boundary-edge collapse also counts how far it moves the boundary curve
+  // within the surface: (4.1) measures moves along the face normals only, so
+  // on a flat stretch of surface (an isosurface grazing a box face) it sees
+  // no cost in shrinking a boundary loop to a sliver, which the fit cannot
+  // open again. The move is max over the endpoints' other boundary edges of
+  // |(p - v) . m|, m the edge's unit normal within its triangle; (4.2)'s
+  // weight then applies to max(delta_e1, that move). Not in the paper; false
+  // reproduces it.
+  bool boundary_curve_error = true;
   // When the paper's rules stall (typically at mean valence ~7 on high-genus
   // surfaces, where most edges would make a new vertex of valence > 8), go on:
   // an edge blocked only by its new vertex's valence first flips up to 4 edges
