@@ -215,9 +215,19 @@ CoveragePullStatistics CoveragePull::apply(const WrapLevelMesh& mesh, std::vecto
     Vec3 sum;
     std::size_t j = i;
     for (; j < picks.size() && picks[j].first == v; ++j) sum += samples_[picks[j].second];
-    if (mesh.role[v] == WrapRole::Free && mesh.box_face[v] < 0) {
+    if (mesh.role[v] != WrapRole::Fixed) {
       if (pulled) pulled->push_back({v, positions[v]});
-      positions[v] = (1.0 / double(j - i)) * sum;
+      Vec3 mean = (1.0 / double(j - i)) * sum;
+      // A point held on a box face moves within it (its boundary curve
+      // stretches toward what it left out there).
+      if (const int face = mesh.box_face[v]; face >= 0) {
+        const int axis = face >> 1;
+        const double plane = positions[v][axis];
+        if (axis == 0) mean.x = plane;
+        else if (axis == 1) mean.y = plane;
+        else mean.z = plane;
+      }
+      positions[v] = mean;
       ++stats.pulled_vertices;
     }
     i = j;

@@ -42,8 +42,9 @@ class CoveragePull {
   // covered in world units, > 0.
   CoveragePull(const std::vector<Vec3>& samples, const Volume& grid, double covered);
 
-  // One pull of the free control points of `mesh` not held on a box face
-  // toward the uncovered samples within `reach` (world units, >= covered),
+  // One pull of the control points of `mesh` that are not fixed (those held
+  // on a box face keep their coordinate across it, so that boundary curves
+  // there stretch along the face) toward the uncovered samples within `reach` (world units, >= covered),
   // in place (measured first, moved after); with `pulled`, the moved points
   // are listed there, ascending. Deterministic for any thread count;
   // O(samples * bins scanned + vertices) time, the bins scanned for an

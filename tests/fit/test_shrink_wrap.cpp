@@ -218,6 +218,41 @@ TEST(ShrinkWrap, CoveragePullCoversWhatTheBaseMeshCutOff) {
   EXPECT_LE(off.far, pulled.correction.failed);
 }
 
+// A finger lying on a box face: a half ball of radius 8 cells on the z = 0
+// face with a half cylinder of radius 1.5 cells along it, 16 cells long, so
+// the isosurface meets the face in a keyhole-shaped loop whose long, thin
+// strip the fit's boundary curve shortens (subdivision and relaxation shrink
+// a closed curve, the attraction moves along the curve's normal only). The
+// pull moves box-held points too, within their face, toward the strip's end
+// (the engine's z = 0 face: 471 -> 93 extracted vertices over 2 cells from
+// the decoded surface).
+TEST(ShrinkWrap, CoveragePullStretchesBoundaryCurvesOnABoxFace) {
+  Volume field = test::sampled_volume({40, 24, 12}, [](double x, double y, double z) {
+    const Vec3 q{x - 10.0, y - 12.0, z};
+    const double ball = 8.0 - norm(q);
+    const double finger = 1.5 - norm(q - std::clamp(q.x, 0.0, 26.0) * Vec3{1, 0, 0});
+    return std::max(ball, finger);
+  });
+  const Pipeline p = prepare(std::move(field), 0.0, 24);
+  const SubdivisionHierarchy hierarchy(p.base, 3);
+  const ShrinkWrapResult pulled = shrink_wrap(hierarchy, p.base.positions, p.distance, p.field, options_for(p));
+  const SurfaceDistance fit(hierarchy.control_mesh(3, pulled.positions));
+  double farthest = 0;
+  std::size_t on_face = 0;
+  for (const Vec3& v : p.extracted.positions) {
+    if (v.z > 0.5) continue;
+    ++on_face;
+    farthest = std::max(farthest, fit.distance(v));
+  }
+  ASSERT_GT(on_face, 100u);
+  EXPECT_LE(farthest, 2.5);  // 5.87 cells when only points off the box were pulled, 1.97 now
+  const SurfaceDistance reference(p.extracted);
+  const FitQuality q = measure_fit_quality(hierarchy, 3, pulled.positions, p.extracted, reference, p.field, 0.0, false);
+  EXPECT_EQ(q.nonfinite_vertices, 0u);
+  EXPECT_LE(q.isosurface_rms, 0.01);
+  EXPECT_LE(q.tangled_fraction, 0.001);
+}
+
 TEST(ShrinkWrap, ResultDoesNotDependOnThreadCount) {
   const Pipeline p = prepare(make_builtin_field("marschner-lobb", 48), 0.0, 200);
   const SubdivisionHierarchy hierarchy(p.base, 2);
