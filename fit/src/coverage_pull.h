@@ -44,9 +44,10 @@ class CoveragePull {
 
   // One pull of the control points of `mesh` that are not fixed (those held
   // on a box face keep their coordinate across it, so that boundary curves
-  // there stretch along the face) toward the uncovered samples within `reach` (world units, >= covered),
-  // in place (measured first, moved after); with `pulled`, the moved points
-  // are listed there, ascending. Deterministic for any thread count;
+  // there stretch along the face) toward the uncovered samples within
+  // `reach` (world units, >= covered), in place (measured first, moved
+  // after); with `pulled`, the moved points are listed there, ascending.
+  // Deterministic for any thread count;
   // O(samples * bins scanned + vertices) time, the bins scanned for an
   // uncovered sample growing with the cube of reach; 20 bytes of memory per
   // control point, 4 per sample and 4 per bin.
