@@ -220,13 +220,7 @@ CoveragePullStatistics CoveragePull::apply(const WrapLevelMesh& mesh, std::vecto
       Vec3 mean = (1.0 / double(j - i)) * sum;
       // A point held on a box face moves within it (its boundary curve
       // stretches toward what it left out there).
-      if (const int face = mesh.box_face[v]; face >= 0) {
-        const int axis = face >> 1;
-        const double plane = positions[v][axis];
-        if (axis == 0) mean.x = plane;
-        else if (axis == 1) mean.y = plane;
-        else mean.z = plane;
-      }
+      if (const int face = mesh.box_face[v]; face >= 0) mean[face >> 1] = positions[v][face >> 1];
       positions[v] = mean;
       ++stats.pulled_vertices;
     }

@@ -71,16 +71,10 @@ struct Box {
   }
 };
 
-void set_axis(Vec3& p, int axis, double value) {
-  if (axis == 0) p.x = value;
-  else if (axis == 1) p.y = value;
-  else p.z = value;
-}
-
 // Keeps the vertex on its box face and inside the box.
 inline Vec3 place(const WrapLevelMesh& mesh, const Box& box, std::size_t v, Vec3 p) {
   const int face = mesh.box_face[v];
-  if (face >= 0) set_axis(p, face >> 1, box.plane(face));
+  if (face >= 0) p[face >> 1] = box.plane(face);
   return box.clamp(p);
 }
 
@@ -98,7 +92,7 @@ inline Vec3 face_normal(const std::uint32_t* face, std::uint32_t size, const std
 // The direction a vertex may move in: box-held vertices only within their face.
 inline Vec3 allowed_direction(const WrapLevelMesh& mesh, std::size_t v, Vec3 d) {
   const int face = mesh.box_face[v];
-  if (face >= 0) set_axis(d, face >> 1, 0.0);
+  if (face >= 0) d[face >> 1] = 0.0;
   return normalized(d);
 }
 
@@ -701,7 +695,7 @@ bool project_onto_isosurface(const WrapLevelMesh& mesh, const Box& box, const Tr
     return true;
   }
   Vec3 u = s.gradient;
-  if (parallel_axis >= 0) set_axis(u, parallel_axis, 0.0);
+  if (parallel_axis >= 0) u[parallel_axis] = 0.0;
   u = allowed_direction(mesh, v, u);
   const double slope = dot(s.gradient, u);
   if (!(slope > 0)) return false;

@@ -14,6 +14,7 @@ struct Vec3 {
   constexpr Vec3& operator-=(const Vec3& o) { x -= o.x; y -= o.y; z -= o.z; return *this; }
   constexpr Vec3& operator*=(double s) { x *= s; y *= s; z *= s; return *this; }
   constexpr double operator[](int i) const { return i == 0 ? x : (i == 1 ? y : z); }
+  constexpr double& operator[](int i) { return i == 0 ? x : (i == 1 ? y : z); }
 };
 
 constexpr Vec3 operator+(Vec3 a, const Vec3& b) { return a += b; }
