@@ -229,13 +229,53 @@ void build_refined_connectivity(const RefinementStep& s, WrapLevelMesh& mesh,
 
 namespace {
 
+// A boundary vertex this close to two box faces lies on the box edge between
+// them.
+constexpr double kOnBoxEdgeCells = 1e-6;
+
+// The box face, of those that p lies on (within kOnBoxEdgeCells), in which a
+// boundary vertex on a box edge is held. Refinement puts such vertices there
+// when a base boundary edge joins two sharp vertices on the same box edge,
+// while the isosurface's boundary curve between them bulges into one of the
+// two faces (mixing at 96^3: into x = 95 by up to 0.7 cell); held on the
+// other face, they could only stay on the edge. A face qualifies when, from
+// p inward across the edge within it, f - iso changes sign within two cells;
+// of several, the one the surface runs along, judged by `toward_interior`
+// (the vertex's neighbours' centroid minus p) having the smallest component
+// across that face; `fallback` when none qualifies.
+int face_of_boundary_curve(const TrilinearGrid& field, const Box& box, double cell, double iso, const Vec3& p,
+                           const Vec3& toward_interior, int fallback) {
+  constexpr double kStep = 0.05, kReach = 2.0;  // cells
+  const double at_p = field.value(p) - iso;
+  if (!(at_p != 0)) return fallback;  // on the isosurface, or NaN
+  const auto on = [&](int face) { return std::abs(p[face >> 1] - box.plane(face)) <= kOnBoxEdgeCells * cell; };
+  int best = fallback;
+  double best_across = std::numeric_limits<double>::infinity();
+  for (int face = 0; face < 6; ++face) {
+    if (!on(face) || std::abs(toward_interior[face >> 1]) >= best_across) continue;
+    bool crossing = false;
+    for (int other = 0; other < 6 && !crossing; ++other) {
+      if ((other >> 1) == (face >> 1) || !on(other)) continue;
+      Vec3 inward;
+      inward[other >> 1] = (other & 1) ? -cell : cell;
+      for (double t = kStep; t <= kReach && !crossing; t += kStep)
+        crossing = (field.value(p + t * inward) - iso) * at_p <= 0;
+    }
+    if (crossing) {
+      best = face;
+      best_across = std::abs(toward_interior[face >> 1]);
+    }
+  }
+  return best;
+}
+
 // make_wrap_level_mesh() into `mesh`, reusing its buffers where they have
 // room: the shrink-wrap sizes them for the finest level once, since fresh
 // pages are expensive (zeroed by the kernel and, in a virtual machine, often
 // backed by the host on first touch: on the 2-core test VM several seconds
 // per gigabyte).
 void fill_wrap_level_mesh(const SubdivisionHierarchy& hierarchy, int level, const std::vector<Vec3>& positions,
-                          const Volume& box_volume, WrapLevelMesh& mesh) {
+                          const Volume& box_volume, double iso, WrapLevelMesh& mesh) {
   if (level < 0 || level > hierarchy.levels())
     throw Error(ErrorKind::InvalidArgument, "level " + std::to_string(level) + " is not in the hierarchy");
   mesh.level = level;
@@ -329,6 +369,7 @@ void fill_wrap_level_mesh(const SubdivisionHierarchy& hierarchy, int level, cons
   // Roles and box faces.
   const std::vector<std::uint8_t> sharp = hierarchy.sharp_flags(level);
   const Box box(box_volume);
+  const TrilinearGrid field(box_volume);
   const double cell = box_volume.cell_size();
   mesh.role.assign(n, WrapRole::Free);
   mesh.box_face.assign(n, -1);
@@ -337,14 +378,23 @@ void fill_wrap_level_mesh(const SubdivisionHierarchy& hierarchy, int level, cons
       mesh.role[v] = WrapRole::Fixed;
     } else if (boundary_edge_count[v] == 2) {
       mesh.role[v] = WrapRole::Boundary;
-      int nearest = -1;
+      int nearest = -1, on_faces = 0;
       double nearest_distance = cell;  // held only when within one cell of a face
       for (int face = 0; face < 6; ++face) {
         const double d = std::abs(positions[v][face >> 1] - box.plane(face));
+        on_faces += d <= kOnBoxEdgeCells * cell ? 1 : 0;
         if (d <= nearest_distance) {
           nearest = face;
           nearest_distance = d;
         }
+      }
+      if (on_faces >= 2 && std::isfinite(iso)) {
+        Vec3 centroid;
+        for (std::uint32_t k = mesh.neighbour_offsets[v]; k < mesh.neighbour_offsets[v + 1]; ++k)
+          centroid += positions[mesh.neighbours[k]];
+        const double count = double(mesh.neighbour_offsets[v + 1] - mesh.neighbour_offsets[v]);
+        nearest = face_of_boundary_curve(field, box, cell, iso, positions[v], (1.0 / count) * centroid - positions[v],
+                                         nearest);
       }
       mesh.box_face[v] = static_cast<std::int8_t>(nearest);
     }
@@ -373,9 +423,9 @@ void reserve_finest_wrap_level_mesh(const SubdivisionHierarchy& hierarchy, WrapL
 }  // namespace
 
 WrapLevelMesh make_wrap_level_mesh(const SubdivisionHierarchy& hierarchy, int level,
-                                   const std::vector<Vec3>& positions, const Volume& box_volume) {
+                                   const std::vector<Vec3>& positions, const Volume& box_volume, double iso) {
   WrapLevelMesh mesh;
-  fill_wrap_level_mesh(hierarchy, level, positions, box_volume, mesh);
+  fill_wrap_level_mesh(hierarchy, level, positions, box_volume, iso, mesh);
   return mesh;
 }
 
@@ -1540,7 +1590,7 @@ ShrinkWrapResult shrink_wrap(const SubdivisionHierarchy& hierarchy, const std::v
   for (int level = 0; level <= levels; ++level) {
     const auto start = Clock::now();
     if (level > 0) subdivide_level(hierarchy, level, data);
-    fill_wrap_level_mesh(hierarchy, level, data, field, mesh);
+    fill_wrap_level_mesh(hierarchy, level, data, field, distance.iso, mesh);
     constrain_to_box(mesh, field, data);
     WrapLevelStatistics stats;
     stats.level = level;

@@ -17,6 +17,7 @@
 #include "isowave/fit/trilinear.h"
 #include "isowave/fit/signed_distance.h"
 #include "isowave/simplify/simplify.h"
+#include "isowave/transform/wavelet_transform.h"
 #include "support/test_meshes.h"
 
 namespace isowave {
@@ -251,6 +252,63 @@ TEST(ShrinkWrap, CoveragePullStretchesBoundaryCurvesOnABoxFace) {
   EXPECT_EQ(q.nonfinite_vertices, 0u);
   EXPECT_LE(q.isosurface_rms, 0.01);
   EXPECT_LE(q.tangled_fraction, 0.001);
+}
+
+TEST(ShrinkWrap, BoundaryCurvesLeaveABoxEdgeIntoTheFaceTheyLieIn) {
+  // The sheet y = 15 - 0.7 (1 - ((z - 7.5) / 4)^2) (inside above it) meets
+  // the box edges x = 0, y = 15 and x = 15, y = 15 at z = 3.5 and 11.5, and
+  // between them its boundary curves bulge 0.7 cell into the faces x = 0 and
+  // x = 15. The base is two quads lying on the face y = 15, so each of those
+  // curves starts as one edge along a box edge; refinement puts its new
+  // vertices on that box edge, and only held on x = 0 or x = 15 (rather than
+  // on y = 15, where the isosurface stays on the box edge) can they reach
+  // the curve.
+  const auto sheet = [](double, double y, double z) {
+    const double s = (z - 7.5) / 4.0;
+    return y - 15.0 + 0.7 * (1.0 - s * s);
+  };
+  Pipeline p;
+  p.field = test::sampled_volume({16, 16, 16}, sheet);
+  IsosurfaceOptions extract_options;
+  p.extracted = extract_isosurface(p.field, extract_options).mesh;
+  p.base.positions = {{0, 15, 3.5}, {7.5, 15, 3.5}, {15, 15, 3.5}, {0, 15, 11.5}, {7.5, 15, 11.5}, {15, 15, 11.5}};
+  p.base.sharp = {1, 0, 1, 1, 0, 1};
+  p.base.add_face({0, 1, 4, 3});  // normal -y: outward, toward lower values
+  p.base.add_face({1, 2, 5, 4});
+  SignedDistanceOptions distance_options;
+  distance_options.surface = &p.extracted;
+  p.distance = compute_signed_distance(p.field, distance_options);
+  const SubdivisionHierarchy hierarchy(p.base, 3);
+
+  // The rule itself: level 1's vertex on the edge x = 15, y = 15 is held on
+  // x = 15 (face 1), and without an isovalue on the last face, y = 15 (3).
+  std::vector<Vec3> level1 = p.base.positions;
+  level1.resize(hierarchy.vertex_count(3));
+  subdivide_level(hierarchy, 1, level1);
+  std::size_t on_edge = 0;
+  const WrapLevelMesh with_iso = make_wrap_level_mesh(hierarchy, 1, level1, p.field, 0.0);
+  const WrapLevelMesh without = make_wrap_level_mesh(hierarchy, 1, level1, p.field);
+  for (std::size_t v = 0; v < with_iso.vertex_count; ++v) {
+    if (with_iso.role[v] != WrapRole::Boundary || level1[v].y != 15 || (level1[v].x != 0 && level1[v].x != 15)) continue;
+    ++on_edge;
+    EXPECT_EQ(with_iso.box_face[v], level1[v].x == 0 ? 0 : 1) << "vertex " << v;
+    EXPECT_EQ(without.box_face[v], 3) << "vertex " << v;
+  }
+  EXPECT_EQ(on_edge, 2u);
+
+  const ShrinkWrapResult result = shrink_wrap(hierarchy, p.base.positions, p.distance, p.field, options_for(p));
+  const WrapLevelMesh fine = make_wrap_level_mesh(hierarchy, 3, result.positions, p.field, 0.0);
+  const TrilinearGrid field(p.field);
+  std::size_t on_curves = 0;
+  for (std::size_t v = 0; v < fine.vertex_count; ++v) {
+    if (fine.role[v] != WrapRole::Boundary || (fine.box_face[v] >> 1) != 0) continue;
+    ++on_curves;
+    const Vec3& x = result.positions[v];
+    const TrilinearSample s = field.sample(x);
+    EXPECT_LE(std::abs(s.value) / norm(s.gradient), 0.01) << "vertex " << v << " at " << x.y << ", " << x.z;
+    EXPECT_NEAR(x.y, 15.0 - 0.7 * (1.0 - std::pow((x.z - 7.5) / 4.0, 2)), 0.02) << "vertex " << v;
+  }
+  EXPECT_EQ(on_curves, 2u * 7u);  // 2^3 - 1 new vertices along each curve
 }
 
 TEST(ShrinkWrap, ResultDoesNotDependOnThreadCount) {

@@ -49,6 +49,7 @@
 // Large buffers live on transparent huge pages, faulted in on all threads.
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 #include "isowave/core/mesh.h"
@@ -88,10 +89,17 @@ struct WrapLevelMesh {
 };
 
 // Connectivity of level `level` of the hierarchy; box faces are assigned from
-// `positions` (at least vertex_count(level) of them) and the volume's box.
-// O(vertices of the level) for level >= 1 and O(n log n) for the base.
+// `positions` (at least vertex_count(level) of them) and the volume's box: a
+// boundary vertex is held on the nearest face within one cell. One on a box
+// edge is held on a face in which the isosurface `iso` of the volume's field
+// comes within two cells of it (across the edge), so that it can follow the
+// isosurface's boundary curve there; of two such faces the one its
+// neighbours lie along. With iso NaN, or no isosurface that near: the last
+// of its faces in the order x low, x high, y low, ... O(vertices of the
+// level) for level >= 1 and O(n log n) for the base.
 WrapLevelMesh make_wrap_level_mesh(const SubdivisionHierarchy& hierarchy, int level,
-                                   const std::vector<Vec3>& positions, const Volume& box);
+                                   const std::vector<Vec3>& positions, const Volume& box,
+                                   double iso = std::numeric_limits<double>::quiet_NaN());
 
 // Moves box-held vertices onto their face and every vertex into the box.
 void constrain_to_box(const WrapLevelMesh& mesh, const Volume& box, std::vector<Vec3>& positions);
