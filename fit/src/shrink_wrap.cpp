@@ -849,20 +849,38 @@ struct CorrectionPartial {
   std::vector<std::uint32_t> failed;  // no root found: left where they were
 };
 
-// The nearest point of the zero set of `distance` (Newton steps along its
-// gradient, kept in the box) within `range` of p; false if they do not settle.
-bool nearest_zero(const TrilinearGrid& distance, const Box& box, double cell, double range, const Vec3& p, Vec3& x) {
+// A point of the zero set of `distance` reached from p by steps along its
+// gradient (kept in the box, within `range` of p); false if they do not
+// settle. Newton's steps, or with `unit_steps` the distance itself along
+// the unit gradient wherever the gradient is shorter than 1: the field is a
+// distance, and where its gradient is short (near the medial axis between
+// two sheets, where the corrections that need this sit) Newton's step
+// overshoots (miranda: zeros 1.2 cells away found 2-3 cells off).
+bool zero_along_gradient(const TrilinearGrid& distance, const Box& box, double cell, double range, const Vec3& p,
+                         bool unit_steps, Vec3& x) {
   x = p;
-  for (int step = 0; step < 10; ++step) {
+  for (int step = 0; step < 20; ++step) {
     const TrilinearSample s = distance.sample(x);
-    const double gg = dot(s.gradient, s.gradient);
-    if (!(gg > 0) || !std::isfinite(s.value)) return false;
-    const Vec3 move = (s.value / gg) * s.gradient;
+    const double length = norm(s.gradient);
+    if (!(length > 0) || !std::isfinite(s.value)) return false;
+    const Vec3 move = (s.value / (length * (unit_steps ? std::max(length, 1.0) : length))) * s.gradient;
     x = box.clamp(x - move);
     if (!(norm(x - p) <= range)) return false;
     if (norm(move) <= 1e-4 * cell) return true;
   }
   return false;
+}
+
+// Zeros of `distance` near p from both step rules (see
+// zero_along_gradient), nearer first; returns how many (0 to 2).
+int nearest_zeros(const TrilinearGrid& distance, const Box& box, double cell, double range, const Vec3& p,
+                  Vec3 zeros[2]) {
+  int count = 0;
+  Vec3 x;
+  for (const bool unit_steps : {true, false})
+    if (zero_along_gradient(distance, box, cell, range, p, unit_steps, x)) zeros[count++] = x;
+  if (count == 2 && squared_norm(zeros[1] - p) < squared_norm(zeros[0] - p)) std::swap(zeros[0], zeros[1]);
+  return count;
 }
 
 // The axis of the box face within one cell of p (the nearest), or -1.
@@ -885,11 +903,15 @@ bool correct_vertex(const WrapLevelMesh& mesh, const TrilinearGrid& field, const
                     CorrectionPartial& partial) {
   ++partial.movable;
   const Vec3 p = positions[v];
-  Vec3 target, start;
+  Vec3 target, starts[2];
   if (!project_onto_isosurface(mesh, box, field, cell, iso, range, v, p, target)) {
     const bool free = mesh.role[v] == WrapRole::Free && mesh.box_face[v] < 0;
-    if (free && nearest && nearest_zero(*nearest, box, cell, range, p, start) &&
-        project_onto_isosurface(mesh, box, field, cell, iso, range, v, start, target)) {
+    // The distance field's zeros a little farther (see
+    // ShrinkWrapOptions::correction_from_nearest_point).
+    const int zeros = free && nearest ? nearest_zeros(*nearest, box, cell, 1.5 * range, p, starts) : 0;
+    int from = 0;
+    while (from < zeros && !project_onto_isosurface(mesh, box, field, cell, iso, range, v, starts[from], target)) ++from;
+    if (from < zeros) {
       ++partial.nearest;
     } else {
       const int axis = free ? near_box_axis(box, cell, p) : -1;
@@ -909,8 +931,9 @@ bool correct_vertex(const WrapLevelMesh& mesh, const TrilinearGrid& field, const
 }
 
 // correct_to_isosurface(); with `nearest` (the signed-distance field), a free
-// vertex whose gradient line has no root within range starts again from the
-// nearest point of the distance field's zero set. A free vertex still without
+// vertex whose gradient line has no root within range starts again from a
+// nearby point of the distance field's zero set (see
+// ShrinkWrapOptions::correction_from_nearest_point). A free vertex still without
 // a root searches within the plane parallel to the nearest box face within a
 // cell (see CorrectionStatistics::along_box_face).
 CorrectionStatistics correct_with(const WrapLevelMesh& mesh, const TrilinearGrid& field, const Box& box, double cell,
