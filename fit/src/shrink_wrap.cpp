@@ -1065,8 +1065,8 @@ void clear_flags(HugePageVector<std::uint8_t>& flags, std::size_t n) {
 
 // untangle() with a buffer for the moved vertices' positions supplied by the
 // caller (the shrink-wrap lends its second position buffer). Each round works
-// on lists of the selected vertices (about a third of the level on miranda)
-// rather than on whole-level passes: the new positions are computed into
+// on lists of the corners of tangled faces (a sixth of the level on
+// miranda) rather than on whole-level passes: the new positions are computed into
 // `moved` and swapped into place, and only the faces around them are
 // checked again; a vertex around which that check finds more tangled faces
 // than before goes back, and a dropped round swaps the old positions back.
@@ -1082,25 +1082,18 @@ UntangleStatistics untangle_with(const WrapLevelMesh& mesh, const TrilinearGrid&
   HugePageVector<std::uint8_t> tangled;
   stats.tangled_before = find_tangled_faces(mesh, field, flip, positions, tangled);
   stats.tangled_after = stats.tangled_before;
-  HugePageVector<std::uint8_t> corner, selected, face_state;
+  HugePageVector<std::uint8_t> corner, face_state;
   HugePageVector<std::uint32_t> list;
   const std::size_t faces = mesh.face_count();
   for (int round = 0; round < rounds && stats.tangled_after > 0; ++round) {
-    // The corners of tangled faces and their neighbours.
+    // The corners of tangled faces.
     clear_flags(corner, mesh.vertex_count);
-    clear_flags(selected, mesh.vertex_count);
     for_vertices(faces, [&](std::size_t f) {
       if (!tangled[f]) return;
       for (std::uint32_t k = mesh.face_offsets[f]; k < mesh.face_offsets[f + 1]; ++k)
         raise_flag(corner[mesh.face_vertices[k]]);
     });
-    for_vertices(mesh.vertex_count, [&](std::size_t v) {
-      if (!corner[v]) return;
-      raise_flag(selected[v]);
-      for (std::uint32_t k = mesh.neighbour_offsets[v]; k < mesh.neighbour_offsets[v + 1]; ++k)
-        raise_flag(selected[mesh.neighbours[k]]);
-    });
-    collect_flagged(selected, list);
+    collect_flagged(corner, list);
     const std::size_t count = list.size();
     moved.resize(std::max(moved.size(), count));
     // New positions from the old ones (Jacobi).
