@@ -896,6 +896,48 @@ int near_box_axis(const Box& box, double cell, const Vec3& p) {
   return axis;
 }
 
+// The nearest root of f - iso within the plane through p normal to `axis`
+// (a box face's), within `range`: 16 directions in that plane probed every
+// quarter cell, the nearest bracket refined. For points pressed onto a box
+// face where the field's gradient is normal to it, so that the search along
+// its part within the face has nowhere to go (engine CT: the cut through the
+// material on the z = 0 face, whose gradient points into the box).
+bool nearest_root_in_plane(const TrilinearGrid& field, const Box& box, double cell, double iso, double range,
+                           const Vec3& p, int axis, Vec3& target) {
+  const double h0 = field.value(p) - iso;
+  if (!std::isfinite(h0)) return false;
+  if (h0 == 0) {
+    target = p;
+    return true;
+  }
+  constexpr int kDirections = 16;
+  const double step = 0.25 * cell, tolerance = 1e-4 * cell;
+  double nearest = range;
+  bool found = false;
+  for (int k = 0; k < kDirections; ++k) {
+    const double angle = 2.0 * M_PI * k / kDirections;
+    Vec3 d;
+    d[(axis + 1) % 3] = std::cos(angle);
+    d[(axis + 2) % 3] = std::sin(angle);
+    double t_low, t_high;
+    box.clip(p, d, t_low, t_high);
+    const double limit = std::min(nearest, t_high);
+    const auto h = [&](double t) { return field.value(p + t * d) - iso; };
+    double a = 0, ha = h0;
+    for (double b = std::min(step, limit); b > a; a = b, b = std::min(b + step, limit)) {
+      const double hb = h(b);
+      if (detail::root_side(hb) != detail::root_side(ha)) {
+        nearest = detail::refine_bracket(h, a, ha, b, hb, tolerance);
+        target = p + nearest * d;
+        found = true;
+        break;
+      }
+      ha = hb;
+    }
+  }
+  return found;
+}
+
 // The correction of one movable vertex v (see correct_with), in place and
 // counted in `partial`; false if it found no root and left v where it was.
 bool correct_vertex(const WrapLevelMesh& mesh, const TrilinearGrid& field, const Box& box, double cell, double iso,
@@ -914,11 +956,15 @@ bool correct_vertex(const WrapLevelMesh& mesh, const TrilinearGrid& field, const
     if (from < zeros) {
       ++partial.nearest;
     } else {
-      const int axis = free ? near_box_axis(box, cell, p) : -1;
-      if (axis < 0 || !project_onto_isosurface(mesh, box, field, cell, iso, range, v, p, target, axis)) {
+      // Within the plane of a box face: the vertex's own, or for a free one
+      // the nearest face's within a cell.
+      const int axis = free ? near_box_axis(box, cell, p) : mesh.box_face[v] >= 0 ? mesh.box_face[v] >> 1 : -1;
+      if (axis < 0 || !((free && project_onto_isosurface(mesh, box, field, cell, iso, range, v, p, target, axis)) ||
+                        nearest_root_in_plane(field, box, cell, iso, range, p, axis, target))) {
         partial.failed.push_back(static_cast<std::uint32_t>(v));
         return false;
       }
+      target = place(mesh, box, v, target);
       ++partial.along_box;
     }
   }

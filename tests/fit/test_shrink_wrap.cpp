@@ -454,6 +454,39 @@ TEST(ShrinkWrap, CorrectionSearchesAlongABoxFaceWhenTheGradientLeavesTheBox) {
   EXPECT_NEAR(positions[centre].z, 2.0, 1e-12);
 }
 
+TEST(ShrinkWrap, CorrectionSearchesWithinABoxFaceWhereTheGradientIsNormalToIt) {
+  // Field min(3 - r, 1 + z), r the distance from the axis x = y = 8, iso 0:
+  // a cylinder of radius 3 cut open by the face z = 0, inside which the
+  // gradient is (0, 0, 1) where r < 2 + z. A 2 x 2 quad grid on that face
+  // around the axis (vertices 1.5 cells apart): the four corners (r = 2.1)
+  // find the circle along the gradient; the four edge midpoints (r = 1.5)
+  // find no root along it or its part within the face, only by searching
+  // the face; the centre is 3 cells from the circle, out of range.
+  const Volume field = test::sampled_volume({16, 16, 8}, [](double x, double y, double z) {
+    return std::min(3.0 - std::hypot(x - 8.0, y - 8.0), 1.0 + z);
+  });
+  PolygonMesh grid = test::quad_grid(2, 2);
+  for (Vec3& p : grid.positions) p = Vec3{8.0 + 1.5 * (p.x - 1.0), 8.0 + 1.5 * (p.y - 1.0), 0.0};
+  const SubdivisionHierarchy hierarchy(grid, 1);
+  std::vector<Vec3> positions = grid.positions;
+  const WrapLevelMesh mesh = make_wrap_level_mesh(hierarchy, 0, positions, field);
+  const CorrectionStatistics stats = correct_to_isosurface(mesh, field, 0.0, 2.0, positions);
+  EXPECT_EQ(stats.along_box_face, 4u);
+  EXPECT_EQ(stats.failed, 1u);
+  for (std::size_t v = 0; v < positions.size(); ++v) {
+    const Vec3 from = grid.positions[v] - Vec3{8, 8, 0}, to = positions[v] - Vec3{8, 8, 0};
+    EXPECT_EQ(positions[v].z, 0.0) << "vertex " << v;
+    if (norm(from) == 0) {
+      EXPECT_TRUE(to == from);  // the centre: no root within 2 cells
+      continue;
+    }
+    // Radially out onto the trilinear interpolant's circle (the samples' r
+    // interpolated: within 0.05 of radius 3).
+    EXPECT_NEAR(norm(to), 3.0, 0.05) << "vertex " << v;
+    EXPECT_NEAR(dot(to, from) / (norm(to) * norm(from)), 1.0, 1e-9) << "vertex " << v;
+  }
+}
+
 TEST(FitQuality, FineFacesAreNumberedByParentFace) {
   // The evenness figure assigns level-l face j to level-1 face j >> 2(l-1):
   // each quad's first corner (a v vertex) must be a corner of that parent.

@@ -154,7 +154,13 @@ struct CorrectionStatistics {
   // correction_from_nearest_point, from the nearest point), found instead
   // along the gradient's part parallel to that face. Mixing at 96^3: 38 of
   // the 78 failures (free vertices pressed onto the x = 0 and x = 95 faces),
-  // isosurface RMS 0.0109 -> 0.0073 cells.
+  // isosurface RMS 0.0109 -> 0.0073 cells. Failing that, and for vertices
+  // held on a face, the nearest root within the face's plane (16
+  // directions): engine CT (base 1/16 of its isosurface, 3 levels), where
+  // the fit lay on the z = 0 face across the cut through the material and
+  // the gradient there is normal to the face: failures 185 -> 5, isosurface
+  // RMS 0.0026 -> 0.0001 cells, maximum distance to the extracted mesh 1.56
+  // -> 0.59 cells.
   std::size_t along_box_face = 0;
   double mean_move_cells = 0;
   double max_move_cells = 0;
