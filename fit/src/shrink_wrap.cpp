@@ -911,11 +911,12 @@ bool nearest_root_in_plane(const TrilinearGrid& field, const Box& box, double ce
     return true;
   }
   constexpr int kDirections = 16;
+  constexpr double kPi = 3.14159265358979323846;
   const double step = 0.25 * cell, tolerance = 1e-4 * cell;
   double nearest = range;
   bool found = false;
   for (int k = 0; k < kDirections; ++k) {
-    const double angle = 2.0 * M_PI * k / kDirections;
+    const double angle = 2.0 * kPi * k / kDirections;
     Vec3 d;
     d[(axis + 1) % 3] = std::cos(angle);
     d[(axis + 2) % 3] = std::sin(angle);
