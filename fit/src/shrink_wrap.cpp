@@ -8,6 +8,7 @@
 #include <limits>
 #include <memory>
 #include <numeric>
+#include <optional>
 #include <string>
 #include <utility>
 
@@ -369,7 +370,9 @@ void fill_wrap_level_mesh(const SubdivisionHierarchy& hierarchy, int level, cons
   // Roles and box faces.
   const std::vector<std::uint8_t> sharp = hierarchy.sharp_flags(level);
   const Box box(box_volume);
-  const TrilinearGrid field(box_volume);
+  // Only read with an isovalue (the box alone may come without samples).
+  const std::optional<TrilinearGrid> field =
+      std::isfinite(iso) ? std::optional<TrilinearGrid>(std::in_place, box_volume) : std::nullopt;
   const double cell = box_volume.cell_size();
   mesh.role.assign(n, WrapRole::Free);
   mesh.box_face.assign(n, -1);
@@ -388,12 +391,12 @@ void fill_wrap_level_mesh(const SubdivisionHierarchy& hierarchy, int level, cons
           nearest_distance = d;
         }
       }
-      if (on_faces >= 2 && std::isfinite(iso)) {
+      if (on_faces >= 2 && field) {
         Vec3 centroid;
         for (std::uint32_t k = mesh.neighbour_offsets[v]; k < mesh.neighbour_offsets[v + 1]; ++k)
           centroid += positions[mesh.neighbours[k]];
         const double count = double(mesh.neighbour_offsets[v + 1] - mesh.neighbour_offsets[v]);
-        nearest = face_of_boundary_curve(field, box, cell, iso, positions[v], (1.0 / count) * centroid - positions[v],
+        nearest = face_of_boundary_curve(*field, box, cell, iso, positions[v], (1.0 / count) * centroid - positions[v],
                                          nearest);
       }
       mesh.box_face[v] = static_cast<std::int8_t>(nearest);
