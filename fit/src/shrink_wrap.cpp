@@ -259,8 +259,9 @@ int face_of_boundary_curve(const TrilinearGrid& field, const Box& box, double ce
       if ((other >> 1) == (face >> 1) || !on(other)) continue;
       Vec3 inward;
       inward[other >> 1] = (other & 1) ? -cell : cell;
-      for (double t = kStep; t <= kReach && !crossing; t += kStep)
-        crossing = (field.value(p + t * inward) - iso) * at_p <= 0;
+      double t;
+      crossing = detail::find_root_along_line([&](double s) { return field.value(p + s * inward) - iso; }, at_p, kStep,
+                                              kReach, kStep, kStep, t);
     }
     if (crossing) {
       best = face;
@@ -909,34 +910,24 @@ bool nearest_root_in_plane(const TrilinearGrid& field, const Box& box, double ce
                            const Vec3& p, int axis, Vec3& target) {
   const double h0 = field.value(p) - iso;
   if (!std::isfinite(h0)) return false;
-  if (h0 == 0) {
-    target = p;
-    return true;
-  }
   constexpr int kDirections = 16;
   constexpr double kPi = 3.14159265358979323846;
   const double step = 0.25 * cell, tolerance = 1e-4 * cell;
   double nearest = range;
   bool found = false;
-  for (int k = 0; k < kDirections; ++k) {
+  for (int k = 0; k < kDirections && nearest > 0; ++k) {
     const double angle = 2.0 * kPi * k / kDirections;
     Vec3 d;
     d[(axis + 1) % 3] = std::cos(angle);
     d[(axis + 2) % 3] = std::sin(angle);
     double t_low, t_high;
-    box.clip(p, d, t_low, t_high);
-    const double limit = std::min(nearest, t_high);
+    box.clip(p, d, t_low, t_high);  // d lies in the face's plane: the target stays on the face, in the box
     const auto h = [&](double t) { return field.value(p + t * d) - iso; };
-    double a = 0, ha = h0;
-    for (double b = std::min(step, limit); b > a; a = b, b = std::min(b + step, limit)) {
-      const double hb = h(b);
-      if (detail::root_side(hb) != detail::root_side(ha)) {
-        nearest = detail::refine_bracket(h, a, ha, b, hb, tolerance);
-        target = p + nearest * d;
-        found = true;
-        break;
-      }
-      ha = hb;
+    double t;
+    if (detail::find_root_along_line(h, h0, step, std::min(nearest, t_high), step, tolerance, t)) {
+      nearest = t;
+      target = p + t * d;
+      found = true;
     }
   }
   return found;
@@ -968,7 +959,6 @@ bool correct_vertex(const WrapLevelMesh& mesh, const TrilinearGrid& field, const
         partial.failed.push_back(static_cast<std::uint32_t>(v));
         return false;
       }
-      target = place(mesh, box, v, target);
       ++partial.along_box;
     }
   }
