@@ -53,6 +53,9 @@ bool near_faces(const WrapLevelMesh& mesh, const std::vector<Vec3>& positions, s
       const std::uint32_t f = mesh.vertex_faces[k];
       const std::uint32_t* face = mesh.face_vertices.data() + mesh.face_offsets[f];
       const std::uint32_t size = mesh.face_offsets[f + 1] - mesh.face_offsets[f];
+      // A neighbour's face around v was tested with v's own (on a regular
+      // quad mesh 8 of the 20 faces visited).
+      if (u != v && std::find(face, face + size, v) != face + size) continue;
       // Most faces are far: their bounding box, no nearer than the face,
       // rules them out with no closest-point computation.
       Vec3 low = positions[face[0]], high = low;
@@ -83,7 +86,8 @@ CoveragePull::CoveragePull(const std::vector<Vec3>& samples, const Volume& grid,
       origin_(grid.origin),
       spacing_(kBinCells * grid.spacing),
       covered_squared_(covered * covered),
-      min_spacing_(std::min({spacing_.x, spacing_.y, spacing_.z})) {
+      min_spacing_(std::min({spacing_.x, spacing_.y, spacing_.z})),
+      hint_(samples.size(), kNone) {
   assert(covered > 0 && min_spacing_ > 0);
   for (int a = 0; a < 3; ++a) {
     const std::int64_t grid_cells = std::max<std::int64_t>(1, static_cast<std::int64_t>(grid.dims[a]) - 1);
@@ -91,11 +95,13 @@ CoveragePull::CoveragePull(const std::vector<Vec3>& samples, const Volume& grid,
   }
 }
 
+std::int64_t CoveragePull::bin_along(int axis, double coordinate) const {
+  const double c = std::floor((coordinate - origin_[axis]) / spacing_[axis]);
+  return c >= 0 ? std::min<std::int64_t>(bins_[axis] - 1, static_cast<std::int64_t>(std::min(c, 1e15))) : 0;
+}
+
 std::size_t CoveragePull::bin_of(const Vec3& p, std::int64_t bin[3]) const {
-  for (int a = 0; a < 3; ++a) {
-    const double c = std::floor((p[a] - origin_[a]) / spacing_[a]);
-    bin[a] = c >= 0 ? std::min<std::int64_t>(bins_[a] - 1, static_cast<std::int64_t>(std::min(c, 1e15))) : 0;
-  }
+  for (int a = 0; a < 3; ++a) bin[a] = bin_along(a, p[a]);
   return static_cast<std::size_t>(bin[0] + bins_[0] * (bin[1] + bins_[1] * bin[2]));
 }
 
@@ -130,74 +136,99 @@ CoveragePullStatistics CoveragePull::apply(const WrapLevelMesh& mesh, std::vecto
   sorted_.resize(n);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
     for (std::size_t i = r.begin(); i < r.end(); ++i) {
-      const Vec3& p = positions[order_[i]];
-      sorted_[i] = {float(p.x - origin_.x), float(p.y - origin_.y), float(p.z - origin_.z)};
+      sorted_[i] = to_local(positions[order_[i]]);
     }
   });
   for (std::size_t c = bin_count; c > 0; --c) first_[c] = first_[c - 1];
   first_[0] = 0;
 
-  // Each sample's nearest control point when the sample is uncovered.
-  const std::int64_t shells = static_cast<std::int64_t>(std::ceil(reach / min_spacing_));
+  // Each sample's nearest control point when the sample is uncovered. The
+  // bins of one row (fixed y and z) are consecutive in bin order, so the
+  // control points of any run of bins along x are one contiguous range of
+  // sorted_: the scans below go row by row, with no per-bin work (miranda,
+  // both pulls' scans with the hints: 1.6 -> 1.0 s).
   const double covered_distance = std::sqrt(covered_squared_);
+  const std::int64_t max_ring = static_cast<std::int64_t>(std::ceil(reach / min_spacing_));
   std::vector<std::uint32_t> nearest(samples_.size(), kNone);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, samples_.size(), 1024), [&](const tbb::blocked_range<std::size_t>& r) {
     for (std::size_t s = r.begin(); s < r.end(); ++s) {
       const Vec3& p = samples_[s];
       const Vec3 local = p - origin_;
-      const auto bin_index = [&](std::int64_t x, std::int64_t y, std::int64_t z) {
-        return static_cast<std::size_t>(x + bins_[0] * (y + bins_[1] * z));
-      };
-      const auto squared_distance = [&](std::uint32_t i) {
-        const FloatPoint& q = sorted_[i];
+      const auto squared_distance_to = [&](const FloatPoint& q) {
         const double dx = q.x - local.x, dy = q.y - local.y, dz = q.z - local.z;
         return dx * dx + dy * dy + dz * dz;
       };
-      // Covered: a control point within `covered`, in the (at most 8) bins
-      // that the ball around p overlaps.
+      const auto squared_distance = [&](std::uint32_t i) { return squared_distance_to(sorted_[i]); };
+      // The control point that covered the sample, or was its nearest, on
+      // the last call (a coarser level's vertex keeps its index on the finer
+      // ones): tried first, it often settles the covered test at once and
+      // otherwise bounds the search.
+      const std::uint32_t hint = hint_[s] < n ? hint_[s] : kNone;
+      const double hint_distance = hint != kNone ? squared_distance_to(to_local(positions[hint])) : 0.0;
+      if (hint != kNone && hint_distance <= covered_squared_) continue;
+      // The control points of bins x0 .. x1 of row (y, z).
+      const auto row = [&](std::int64_t y, std::int64_t z, std::int64_t x0, std::int64_t x1) {
+        const std::size_t start = static_cast<std::size_t>(bins_[0] * (y + bins_[1] * z));
+        return std::pair<std::uint32_t, std::uint32_t>{first_[start + static_cast<std::size_t>(x0)],
+                                                       first_[start + static_cast<std::size_t>(x1) + 1]};
+      };
+      // Covered: a control point within `covered`, in the (at most 2 x 2)
+      // rows of bins that the ball around p overlaps.
       std::int64_t low[3], high[3], centre[3];
       bin_of(p - Vec3{covered_distance, covered_distance, covered_distance}, low);
       bin_of(p + Vec3{covered_distance, covered_distance, covered_distance}, high);
-      bool covered = false;
-      for (std::int64_t z = low[2]; z <= high[2] && !covered; ++z)
-        for (std::int64_t y = low[1]; y <= high[1] && !covered; ++y)
-          for (std::int64_t x = low[0]; x <= high[0] && !covered; ++x) {
-            const std::size_t c = bin_index(x, y, z);
-            for (std::uint32_t i = first_[c]; i < first_[c + 1]; ++i)
-              if (squared_distance(i) <= covered_squared_) {
-                covered = true;
-                break;
-              }
-          }
-      if (covered) continue;
-      // Uncovered: the nearest control point within reach, shell by shell of
-      // bins around p's, skipping bins farther than the best so far.
+      std::uint32_t covering = kNone;
+      for (std::int64_t z = low[2]; z <= high[2] && covering == kNone; ++z)
+        for (std::int64_t y = low[1]; y <= high[1] && covering == kNone; ++y) {
+          const auto [begin, end] = row(y, z, low[0], high[0]);
+          for (std::uint32_t i = begin; i < end; ++i)
+            if (squared_distance(i) <= covered_squared_) {
+              covering = order_[i];
+              break;
+            }
+        }
+      if (covering != kNone) {
+        hint_[s] = covering;
+        continue;
+      }
+      // Uncovered: the nearest control point within reach (ties to the
+      // lower index, so the result does not depend on the scan's order).
+      // Rows ring by ring around p's (ring k: rows k bins away in y or z),
+      // each scanned only where it overlaps the ball of the best distance
+      // so far.
       bin_of(p, centre);
       double best = reach * reach;
       std::uint32_t best_vertex = kNone;
-      for (std::int64_t k = 0; k <= shells; ++k) {
-        for (std::int64_t z = std::max<std::int64_t>(0, centre[2] - k); z <= std::min(bins_[2] - 1, centre[2] + k); ++z)
-          for (std::int64_t y = std::max<std::int64_t>(0, centre[1] - k); y <= std::min(bins_[1] - 1, centre[1] + k); ++y)
-            for (std::int64_t x = std::max<std::int64_t>(0, centre[0] - k); x <= std::min(bins_[0] - 1, centre[0] + k); ++x) {
-              const std::int64_t bin[3] = {x, y, z};
-              if (std::max({std::abs(x - centre[0]), std::abs(y - centre[1]), std::abs(z - centre[2])}) != k)
-                continue;  // an inner shell's bin, already scanned
-              double box = 0;
-              for (int a = 0; a < 3; ++a) {
-                const double lo = origin_[a] + double(bin[a]) * spacing_[a], gap = std::max({0.0, lo - p[a], p[a] - lo - spacing_[a]});
-                box += gap * gap;
-              }
-              if (box >= best) continue;
-              const std::size_t c = bin_index(x, y, z);
-              for (std::uint32_t i = first_[c]; i < first_[c + 1]; ++i) {
-                const double d = squared_distance(i);
-                if (d < best) best = d, best_vertex = order_[i];
-              }
-            }
-        // A control point in a farther shell lies at least k bins away.
-        const double bound = double(k) * min_spacing_;
-        if (best <= bound * bound) break;
+      if (hint != kNone && hint_distance < best) best = hint_distance, best_vertex = hint;
+      const auto gap = [&](int axis, std::int64_t bin) {
+        const double lo = origin_[axis] + double(bin) * spacing_[axis];
+        return std::max({0.0, lo - p[axis], p[axis] - lo - spacing_[axis]});
+      };
+      const auto scan_row = [&](std::int64_t y, std::int64_t z) {
+        if (y < 0 || y >= bins_[1]) return;
+        const double gy = gap(1, y), gz = gap(2, z), across = gy * gy + gz * gz;
+        if (across > best) return;
+        const double half = std::sqrt(best - across);
+        const auto [begin, end] = row(y, z, bin_along(0, p.x - half), bin_along(0, p.x + half));
+        for (std::uint32_t i = begin; i < end; ++i) {
+          const double d = squared_distance(i);
+          if (d < best || (d == best && best_vertex != kNone && order_[i] < best_vertex)) best = d, best_vertex = order_[i];
+        }
+      };
+      for (std::int64_t k = 0; k <= max_ring; ++k) {
+        for (std::int64_t z = std::max<std::int64_t>(0, centre[2] - k); z <= std::min(bins_[2] - 1, centre[2] + k); ++z) {
+          if (std::abs(z - centre[2]) == k) {
+            for (std::int64_t y = centre[1] - k; y <= centre[1] + k; ++y) scan_row(y, z);
+          } else {
+            scan_row(centre[1] - k, z);
+            scan_row(centre[1] + k, z);
+          }
+        }
+        // A control point in a farther ring lies at least k bins away.
+        const double bound = double(k) * std::min(spacing_.y, spacing_.z);
+        if (best < bound * bound) break;
       }
+      hint_[s] = best_vertex;
       if (best_vertex != kNone && !near_faces(mesh, positions, best_vertex, p, covered_squared_))
         nearest[s] = best_vertex;
     }

@@ -14,7 +14,13 @@
 // Control points are binned by 2 x 2 x 2 volume cells (a counting sort,
 // arrays reused for every level), so a covered extracted vertex costs a scan
 // of the at most 8 bins its `covered` ball overlaps; only uncovered ones
-// search farther, shell by shell.
+// search farther, ring by ring of rows of bins. A row's bins are consecutive
+// in bin order, so each row is one contiguous run of points, clipped to the
+// ball of the best distance so far. Each extracted vertex remembers the
+// control point that covered it or was its nearest, which on the next
+// (finer) level keeps its index: tried first, it settles most covered tests
+// at once and bounds the search of the others. Neither changes which point
+// is picked (nearest within reach, ties to the lower index).
 #include <cstddef>
 #include <cstdint>
 #include <vector>
@@ -48,15 +54,18 @@ class CoveragePull {
   // `reach` (world units, >= covered), in place (measured first, moved
   // after); with `pulled`, the moved points are listed there, ascending.
   // Deterministic for any thread count;
-  // O(samples * bins scanned + vertices) time, the bins scanned for an
-  // uncovered sample growing with the cube of reach; 20 bytes of memory per
-  // control point, 4 per sample and 4 per bin.
+  // O(samples * rows scanned + vertices) time, the rows scanned for an
+  // uncovered sample growing with the square of reach and the points with
+  // the cube of its distance to the nearest; 20 bytes of memory per control
+  // point, 8 per sample and 4 per bin.
   CoveragePullStatistics apply(const WrapLevelMesh& mesh, std::vector<Vec3>& positions, double reach,
                                std::vector<PulledPoint>* pulled = nullptr);
 
  private:
   // The bin holding p (clamped into the grid), its coordinates into `bin`.
   std::size_t bin_of(const Vec3& p, std::int64_t bin[3]) const;
+  // The bin coordinate along one axis (clamped into the grid).
+  std::int64_t bin_along(int axis, double coordinate) const;
 
   const std::vector<Vec3>& samples_;
   Vec3 origin_, spacing_;
@@ -68,7 +77,14 @@ class CoveragePull {
   struct FloatPoint {
     float x, y, z;
   };
-  std::vector<FloatPoint> sorted_;  // positions[order_[i]] - origin_
+  std::vector<FloatPoint> sorted_;  // to_local(positions[order_[i]])
+  // Per sample, the control point that covered it or was its nearest on
+  // the last call (kNone before the first).
+  std::vector<std::uint32_t> hint_;
+
+  FloatPoint to_local(const Vec3& p) const {
+    return {float(p.x - origin_.x), float(p.y - origin_.y), float(p.z - origin_.z)};
+  }
 };
 
 }  // namespace isowave
