@@ -383,7 +383,7 @@ struct WrapLevelStatistics {
   double seconds_untangle = 0;    // untangle() on level L, coarse_untangle_rounds below
   double seconds_pull = 0;        // all rounds
   double seconds_unfold = 0;      // level L only
-  double mean_edge_cells = 0;     // after refinement, before the rounds (measured with `surface` only)
+  double mean_edge_cells = 0;     // after refinement, before the rounds (measured with `surface` only; from at most about 2^18 vertices)
   std::size_t uncovered_samples = 0;  // the level's pull (0 if it did not pull)
   std::size_t pulled_vertices = 0;
   std::size_t pulled_back = 0;  // level L: pulled points returned (no root on the isosurface, or folding)
