@@ -167,11 +167,11 @@ int fit(const Args& raw) {
   }
   if (wrap_options.final_correction)
     std::printf("  correction: %zu vertices onto the isosurface (mean %.4f, max %.4f cell; %zu from the nearest zero "
-                "of the distance field, %zu along a box face, %zu from their neighbours' centroid), %zu left in "
-                "place\n",
+                "of the distance field, %zu along a box face, %zu from their neighbours' centroid, %zu by the "
+                "wide search), %zu left in place\n",
                 result.correction.corrected, result.correction.mean_move_cells, result.correction.max_move_cells,
                 result.correction.from_nearest_point, result.correction.along_box_face,
-                result.correction.from_neighbours, result.correction.failed);
+                result.correction.from_neighbours, result.correction.from_wide_search, result.correction.failed);
   if (result.untangle.tangled_before > 0)
     std::printf("  untangle: %zu tangled faces on level %d before, %zu after %d rounds\n", result.untangle.tangled_before,
                 levels, result.untangle.tangled_after, result.untangle.rounds);

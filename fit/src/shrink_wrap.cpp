@@ -846,6 +846,8 @@ std::size_t find_tangled_faces(const WrapLevelMesh& mesh, const TrilinearGrid& f
 // Rounds of retrying failed corrections from the neighbours' centroid: on the
 // engine CT (base 1/16, 3 levels) the fifth fixed none.
 constexpr int kCorrectionRetryRounds = 5;
+// The last search of the correction reaches this many times its range.
+constexpr double kWideSearchRanges = 3.0;
 
 struct CorrectionPartial {
   std::size_t movable = 0, corrected = 0, nearest = 0, along_box = 0;
@@ -900,38 +902,76 @@ int near_box_axis(const Box& box, double cell, const Vec3& p) {
   return axis;
 }
 
+// A root of f - iso along a direction from p.
+struct Root {
+  double distance;
+  Vec3 at;
+};
+
+// The first root of f - iso from p along each of `count` unit directions
+// (within the box and `range`), each probed every quarter cell and its
+// bracket refined; stored in `roots` nearest first, returns their number.
+int roots_along(const TrilinearGrid& field, const Box& box, double cell, double iso, double range, const Vec3& p,
+                const Vec3* directions, int count, Root* roots) {
+  const double h0 = field.value(p) - iso;
+  if (!std::isfinite(h0)) return 0;
+  const double step = 0.25 * cell, tolerance = 1e-4 * cell;
+  int found = 0;
+  for (int k = 0; k < count; ++k) {
+    const Vec3& d = directions[k];
+    double t_low, t_high, t;
+    box.clip(p, d, t_low, t_high);
+    const auto h = [&](double s) { return field.value(p + s * d) - iso; };
+    if (detail::find_root_along_line(h, h0, step, std::min(range, t_high), step, tolerance, t))
+      roots[found++] = {t, p + t * d};
+  }
+  std::sort(roots, roots + found, [](const Root& a, const Root& b) { return a.distance < b.distance; });
+  return found;
+}
+
+constexpr int kPlaneDirections = 16;
+
+// The kPlaneDirections unit directions of the plane normal to `axis`.
+void plane_directions(int axis, Vec3 directions[kPlaneDirections]) {
+  constexpr double kPi = 3.14159265358979323846;
+  for (int k = 0; k < kPlaneDirections; ++k) {
+    const double angle = 2.0 * kPi * k / kPlaneDirections;
+    directions[k] = Vec3{};
+    directions[k][(axis + 1) % 3] = std::cos(angle);
+    directions[k][(axis + 2) % 3] = std::sin(angle);
+  }
+}
+
 // The nearest root of f - iso within the plane through p normal to `axis`
-// (a box face's), within `range`: 16 directions in that plane probed every
-// quarter cell, the nearest bracket refined. For points pressed onto a box
-// face where the field's gradient is normal to it, so that the search along
-// its part within the face has nowhere to go (engine CT: the cut through the
+// (a box face's; the target stays on the face), within `range`
+// (roots_along the plane's directions). For points pressed onto a box face
+// where the field's gradient is normal to it, so that the search along its
+// part within the face has nowhere to go (engine CT: the cut through the
 // material on the z = 0 face, whose gradient points into the box).
 bool nearest_root_in_plane(const TrilinearGrid& field, const Box& box, double cell, double iso, double range,
                            const Vec3& p, int axis, Vec3& target) {
-  const double h0 = field.value(p) - iso;
-  if (!std::isfinite(h0)) return false;
-  constexpr int kDirections = 16;
-  constexpr double kPi = 3.14159265358979323846;
-  const double step = 0.25 * cell, tolerance = 1e-4 * cell;
-  double nearest = range;
-  bool found = false;
-  for (int k = 0; k < kDirections && nearest > 0; ++k) {
-    const double angle = 2.0 * kPi * k / kDirections;
-    Vec3 d;
-    d[(axis + 1) % 3] = std::cos(angle);
-    d[(axis + 2) % 3] = std::sin(angle);
-    double t_low, t_high;
-    box.clip(p, d, t_low, t_high);  // d lies in the face's plane: the target stays on the face, in the box
-    const auto h = [&](double t) { return field.value(p + t * d) - iso; };
-    double t;
-    if (detail::find_root_along_line(h, h0, step, std::min(nearest, t_high), step, tolerance, t)) {
-      nearest = t;
-      target = p + t * d;
-      found = true;
-    }
-  }
-  return found;
+  Vec3 directions[kPlaneDirections];
+  plane_directions(axis, directions);
+  Root roots[kPlaneDirections];
+  if (roots_along(field, box, cell, iso, range, p, directions, kPlaneDirections, roots) == 0) return false;
+  target = roots[0].at;
+  return true;
 }
+
+// The 26 unit directions to a cube's neighbours.
+struct CubeDirections {
+  Vec3 directions[26];
+  CubeDirections() {
+    int k = 0;
+    for (int z = -1; z <= 1; ++z)
+      for (int y = -1; y <= 1; ++y)
+        for (int x = -1; x <= 1; ++x)
+          if (x || y || z) {
+            const Vec3 d{double(x), double(y), double(z)};
+            directions[k++] = (1.0 / norm(d)) * d;
+          }
+  }
+};
 
 // The correction of one movable vertex v (see correct_with), in place and
 // counted in `partial`; false if it found no root and left v where it was.
@@ -978,7 +1018,7 @@ bool correct_vertex(const WrapLevelMesh& mesh, const TrilinearGrid& field, const
 // cell (see CorrectionStatistics::along_box_face).
 CorrectionStatistics correct_with(const WrapLevelMesh& mesh, const TrilinearGrid& field, const Box& box, double cell,
                                   double iso, double max_move_cells, std::vector<Vec3>& positions,
-                                  const TrilinearGrid* nearest = nullptr) {
+                                  const TrilinearGrid* nearest = nullptr, double wide_search_sign = 0) {
   assert(positions.size() >= mesh.vertex_count);
   const double range = max_move_cells * cell;
   const std::vector<CorrectionPartial> partials = for_blocks<CorrectionPartial>(
@@ -1028,6 +1068,60 @@ CorrectionStatistics correct_with(const WrapLevelMesh& mesh, const TrilinearGrid
       ++stats.from_neighbours;
     }
     if (kept == failed.size()) break;
+    failed.resize(kept);
+  }
+  // Last, with wide_search_sign (the expected sign of face normals against
+  // the gradient, see face_tangled), the roots within kWideSearchRanges
+  // ranges along the 26 directions to a cube's neighbours (within its face's
+  // plane for a vertex held on a box face): the nearest at which no more of
+  // the vertex's faces are tangled than before. Each vertex is judged with
+  // the others where they were (Jacobi).
+  if (wide_search_sign != 0 && !failed.empty()) {
+    const CubeDirections cube;
+    target.resize(failed.size());
+    found.assign(failed.size(), 0);
+    for_vertices(failed.size(), [&](std::size_t i) {
+      const std::uint32_t v = failed[i];
+      Vec3 in_plane[kPlaneDirections];
+      const Vec3* directions = cube.directions;
+      int count = 26;
+      if (mesh.box_face[v] >= 0) {
+        plane_directions(mesh.box_face[v] >> 1, in_plane);
+        directions = in_plane;
+        count = kPlaneDirections;
+      }
+      Root roots[26];
+      const int found_roots =
+          roots_along(field, box, cell, iso, kWideSearchRanges * range, positions[v], directions, count, roots);
+      int before = 0;
+      for (std::uint32_t k = mesh.vertex_face_offsets[v]; k < mesh.vertex_face_offsets[v + 1]; ++k)
+        before += face_tangled(mesh, field, wide_search_sign, positions, mesh.vertex_faces[k]);
+      for (int r = 0; r < found_roots && !found[i]; ++r) {
+        const Vec3& at = roots[r].at;
+        if (!is_finite(at)) continue;
+        int after = 0;
+        for (std::uint32_t k = mesh.vertex_face_offsets[v]; k < mesh.vertex_face_offsets[v + 1]; ++k)
+          after += face_tangled_at(mesh, field, wide_search_sign, mesh.vertex_faces[k],
+                                   [&](std::uint32_t u) -> const Vec3& { return u == v ? at : positions[u]; });
+        if (after <= before) {
+          target[i] = at;
+          found[i] = 1;
+        }
+      }
+    });
+    std::size_t kept = 0;
+    for (std::size_t i = 0; i < failed.size(); ++i) {
+      if (!found[i]) {
+        failed[kept++] = failed[i];
+        continue;
+      }
+      const double moved = norm(target[i] - positions[failed[i]]) / cell;
+      positions[failed[i]] = target[i];
+      sum += moved;
+      stats.max_move_cells = std::max(stats.max_move_cells, moved);
+      ++stats.corrected;
+      ++stats.from_wide_search;
+    }
     failed.resize(kept);
   }
   stats.failed = failed.size();
@@ -1391,8 +1485,10 @@ UnfoldStatistics unfold_with(const WrapLevelMesh& mesh, const TrilinearGrid& fie
 }  // namespace
 
 CorrectionStatistics correct_to_isosurface(const WrapLevelMesh& mesh, const Volume& field, double iso,
-                                           double max_move_cells, std::vector<Vec3>& positions) {
-  return correct_with(mesh, TrilinearGrid(field), Box(field), field.cell_size(), iso, max_move_cells, positions);
+                                           double max_move_cells, std::vector<Vec3>& positions, bool wide_search,
+                                           bool flip) {
+  return correct_with(mesh, TrilinearGrid(field), Box(field), field.cell_size(), iso, max_move_cells, positions,
+                      nullptr, wide_search ? (flip ? 1.0 : -1.0) : 0.0);
 }
 
 UntangleStatistics untangle(const WrapLevelMesh& mesh, const Volume& field, double iso, bool flip, int rounds,
@@ -1727,7 +1823,8 @@ ShrinkWrapResult shrink_wrap(const SubdivisionHierarchy& hierarchy, const std::v
           for (const std::uint32_t v : list) scratch[v] = data[v];
         result.correction =
             correct_with(mesh, field_grid, box, cell, distance.iso, options.correction_max_cells, data,
-                         options.correction_from_nearest_point ? &distance_grid : nullptr);
+                         options.correction_from_nearest_point ? &distance_grid : nullptr,
+                         distance.flip ? 1.0 : -1.0);
         if (!small.empty()) fit_small_components(mesh, small, field_grid, box, cell, distance.iso, scratch, data);
         stats.seconds_correction = seconds_since(phase);
       }

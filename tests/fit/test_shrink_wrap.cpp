@@ -416,6 +416,34 @@ TEST(ShrinkWrap, CorrectionRetriesFromTheNeighboursCentroid) {
   EXPECT_NEAR(stats.max_move_cells, 5.0, 1e-9);
 }
 
+TEST(ShrinkWrap, CorrectionsWideSearchFindsRootsBeyondItsRange) {
+  // The plane z = 4 (field 10 - z, iso 6: normals toward +z, as the grid's)
+  // and a 4 x 4 quad grid 3 cells above it: every vertex's root along the
+  // gradient, and its neighbours' centroid's, lies beyond the 2-cell search;
+  // the wide search (6 cells, 26 directions) finds each straight below,
+  // which tangles no face (a vertical move keeps a face's projected area).
+  const Volume field = test::sampled_volume({12, 12, 12}, [](double, double, double z) { return 10.0 - z; });
+  PolygonMesh grid = test::quad_grid(4, 4);
+  for (Vec3& p : grid.positions) p += Vec3{3, 3, 7};
+  const SubdivisionHierarchy hierarchy(grid, 1);
+  const WrapLevelMesh mesh = make_wrap_level_mesh(hierarchy, 0, grid.positions, field);
+  std::vector<Vec3> narrow = grid.positions;
+  EXPECT_EQ(correct_to_isosurface(mesh, field, 6.0, 2.0, narrow).failed, grid.vertex_count());
+  std::vector<Vec3> wide = grid.positions;
+  const CorrectionStatistics stats = correct_to_isosurface(mesh, field, 6.0, 2.0, wide, true, false);
+  EXPECT_EQ(stats.from_wide_search, grid.vertex_count());
+  EXPECT_EQ(stats.failed, 0u);
+  for (std::size_t v = 0; v < wide.size(); ++v) {
+    EXPECT_NEAR(wide[v].z, 4.0, 1e-4) << "vertex " << v;
+    EXPECT_NEAR(wide[v].x, grid.positions[v].x, 1e-12) << "vertex " << v;
+    EXPECT_NEAR(wide[v].y, grid.positions[v].y, 1e-12) << "vertex " << v;
+  }
+  // Beyond three times the range it gives up: 7 cells above the plane.
+  std::vector<Vec3> far = grid.positions;
+  for (Vec3& p : far) p.z = 11.0;
+  EXPECT_EQ(correct_to_isosurface(mesh, field, 6.0, 2.0, far, true, false).failed, grid.vertex_count());
+}
+
 TEST(ShrinkWrap, UnfoldOpensAFoldAndKeepsThePointsOnTheIsosurface) {
   // A fold on the plane z = 4 (field 10 - z, iso 6: normals toward +z): an
   // interior column of an 8 x 8 quad grid pushed 0.7 past the next, which
