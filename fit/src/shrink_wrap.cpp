@@ -1075,12 +1075,15 @@ CorrectionStatistics correct_with(const WrapLevelMesh& mesh, const TrilinearGrid
   // ranges along the 26 directions to a cube's neighbours (within its face's
   // plane for a vertex held on a box face): the nearest at which no more of
   // the vertex's faces are tangled than before. Each vertex is judged with
-  // the others where they were (Jacobi).
+  // the others where they were (Jacobi). A last resort for the few a fit
+  // leaves off the surface (up to 624 samples each, about 15 microseconds):
+  // for at most 1% of the vertices (at least 10,000), the first by index.
   if (wide_search_sign != 0 && !failed.empty()) {
     const CubeDirections cube;
-    target.resize(failed.size());
+    const std::size_t searched = std::min(failed.size(), std::max<std::size_t>(10000, mesh.vertex_count / 100));
+    target.resize(searched);
     found.assign(failed.size(), 0);
-    for_vertices(failed.size(), [&](std::size_t i) {
+    for_vertices(searched, [&](std::size_t i) {
       const std::uint32_t v = failed[i];
       Vec3 in_plane[kPlaneDirections];
       const Vec3* directions = cube.directions;

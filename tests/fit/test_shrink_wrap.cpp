@@ -444,6 +444,22 @@ TEST(ShrinkWrap, CorrectionsWideSearchFindsRootsBeyondItsRange) {
   EXPECT_EQ(correct_to_isosurface(mesh, field, 6.0, 2.0, far, true, false).failed, grid.vertex_count());
 }
 
+TEST(ShrinkWrap, CorrectionsWideSearchIsALastResortForFewVertices) {
+  // As above with a 110 x 100 grid (11,211 vertices): the wide search takes
+  // the first 10,000 failures (1% of the vertices, but at least 10,000).
+  const Volume field = test::sampled_volume({114, 104, 12}, [](double, double, double z) { return 10.0 - z; });
+  PolygonMesh grid = test::quad_grid(110, 100);
+  for (Vec3& p : grid.positions) p += Vec3{2, 2, 7};
+  const SubdivisionHierarchy hierarchy(grid, 1);
+  const WrapLevelMesh mesh = make_wrap_level_mesh(hierarchy, 0, grid.positions, field);
+  std::vector<Vec3> positions = grid.positions;
+  const CorrectionStatistics stats = correct_to_isosurface(mesh, field, 6.0, 2.0, positions, true, false);
+  EXPECT_EQ(stats.from_wide_search, 10000u);
+  EXPECT_EQ(stats.failed, grid.vertex_count() - 10000);
+  for (std::size_t v = 0; v < positions.size(); ++v)
+    ASSERT_NEAR(positions[v].z, v < 10000 ? 4.0 : 7.0, 1e-4) << "vertex " << v;
+}
+
 TEST(ShrinkWrap, UnfoldOpensAFoldAndKeepsThePointsOnTheIsosurface) {
   // A fold on the plane z = 4 (field 10 - z, iso 6: normals toward +z): an
   // interior column of an 8 x 8 quad grid pushed 0.7 past the next, which
