@@ -14,7 +14,8 @@
 // and is then refined to the next level with the wavelet subdivision
 // operator S (subdivide_level), up to level L. Finally (optional, on by
 // default) every level-L vertex moves along the scalar-field gradient onto
-// the isosurface of the trilinearly interpolated field, and folds left on
+// the isosurface of the trilinearly interpolated field (with fallbacks for
+// the few without a root there, see CorrectionStatistics), and folds left on
 // level L are repaired locally (untangle(), not in the paper; also on every
 // coarser level, against the signed-distance field: coarse_untangle_rounds).
 // With the extracted surface (ShrinkWrapOptions::surface), the fine levels
