@@ -818,6 +818,17 @@ inline std::uint8_t face_tangled(const WrapLevelMesh& mesh, const TrilinearGrid&
   return face_tangled_at(mesh, field, expected_sign, f, [&](std::uint32_t v) -> const Vec3& { return positions[v]; });
 }
 
+// How many of vertex v's faces are tangled (face_tangled_at) with v at `at`
+// and the other corners where `positions` has them.
+int tangled_faces_around(const WrapLevelMesh& mesh, const TrilinearGrid& field, double expected_sign,
+                         const std::vector<Vec3>& positions, std::uint32_t v, const Vec3& at) {
+  const auto position = [&](std::uint32_t u) -> const Vec3& { return u == v ? at : positions[u]; };
+  int count = 0;
+  for (std::uint32_t k = mesh.vertex_face_offsets[v]; k < mesh.vertex_face_offsets[v + 1]; ++k)
+    count += face_tangled_at(mesh, field, expected_sign, mesh.vertex_faces[k], position);
+  return count;
+}
+
 // The centroid's samples are near those of the first corner.
 inline void prefetch_face(const WrapLevelMesh& mesh, const TrilinearGrid& field, const std::vector<Vec3>& positions,
                           std::size_t f) {
@@ -1041,19 +1052,11 @@ CorrectionStatistics correct_with(const WrapLevelMesh& mesh, const TrilinearGrid
     stats.max_move_cells = std::max(stats.max_move_cells, partial.move_max);
     failed.insert(failed.end(), partial.failed.begin(), partial.failed.end());
   }
-  // A vertex without a root tries again from its neighbours' centroid, most
-  // of whose corners found the isosurface; Jacobi rounds while they help.
   std::vector<Vec3> target;
   std::vector<std::uint8_t> found;
-  for (int round = 0; round < kCorrectionRetryRounds && !failed.empty(); ++round) {
-    target.resize(failed.size());
-    found.assign(failed.size(), 0);
-    for_vertices(failed.size(), [&](std::size_t i) {
-      const std::uint32_t v = failed[i];
-      Vec3 centroid;
-      found[i] = relaxation_centroid(mesh, v, positions, centroid) &&
-                 project_onto_isosurface(mesh, box, field, cell, iso, range, v, place(mesh, box, v, centroid), target[i]);
-    });
+  // Moves each failed vertex with found[i] to target[i], counted also in
+  // `counter`; the rest stay failed. False if none moved.
+  const auto move_found = [&](std::size_t& counter) {
     std::size_t kept = 0;
     for (std::size_t i = 0; i < failed.size(); ++i) {
       if (!found[i]) {
@@ -1065,10 +1068,24 @@ CorrectionStatistics correct_with(const WrapLevelMesh& mesh, const TrilinearGrid
       sum += moved;
       stats.max_move_cells = std::max(stats.max_move_cells, moved);
       ++stats.corrected;
-      ++stats.from_neighbours;
+      ++counter;
     }
-    if (kept == failed.size()) break;
+    const bool any = kept < failed.size();
     failed.resize(kept);
+    return any;
+  };
+  // A vertex without a root tries again from its neighbours' centroid, most
+  // of whose corners found the isosurface; Jacobi rounds while they help.
+  for (int round = 0; round < kCorrectionRetryRounds && !failed.empty(); ++round) {
+    target.resize(failed.size());
+    found.assign(failed.size(), 0);
+    for_vertices(failed.size(), [&](std::size_t i) {
+      const std::uint32_t v = failed[i];
+      Vec3 centroid;
+      found[i] = relaxation_centroid(mesh, v, positions, centroid) &&
+                 project_onto_isosurface(mesh, box, field, cell, iso, range, v, place(mesh, box, v, centroid), target[i]);
+    });
+    if (!move_found(stats.from_neighbours)) break;
   }
   // Last, with wide_search_sign (the expected sign of face normals against
   // the gradient, see face_tangled), the roots within kWideSearchRanges
@@ -1096,36 +1113,16 @@ CorrectionStatistics correct_with(const WrapLevelMesh& mesh, const TrilinearGrid
       Root roots[26];
       const int found_roots =
           roots_along(field, box, cell, iso, kWideSearchRanges * range, positions[v], directions, count, roots);
-      int before = 0;
-      for (std::uint32_t k = mesh.vertex_face_offsets[v]; k < mesh.vertex_face_offsets[v + 1]; ++k)
-        before += face_tangled(mesh, field, wide_search_sign, positions, mesh.vertex_faces[k]);
+      const int before = tangled_faces_around(mesh, field, wide_search_sign, positions, v, positions[v]);
       for (int r = 0; r < found_roots && !found[i]; ++r) {
         const Vec3& at = roots[r].at;
-        if (!is_finite(at)) continue;
-        int after = 0;
-        for (std::uint32_t k = mesh.vertex_face_offsets[v]; k < mesh.vertex_face_offsets[v + 1]; ++k)
-          after += face_tangled_at(mesh, field, wide_search_sign, mesh.vertex_faces[k],
-                                   [&](std::uint32_t u) -> const Vec3& { return u == v ? at : positions[u]; });
-        if (after <= before) {
+        if (is_finite(at) && tangled_faces_around(mesh, field, wide_search_sign, positions, v, at) <= before) {
           target[i] = at;
           found[i] = 1;
         }
       }
     });
-    std::size_t kept = 0;
-    for (std::size_t i = 0; i < failed.size(); ++i) {
-      if (!found[i]) {
-        failed[kept++] = failed[i];
-        continue;
-      }
-      const double moved = norm(target[i] - positions[failed[i]]) / cell;
-      positions[failed[i]] = target[i];
-      sum += moved;
-      stats.max_move_cells = std::max(stats.max_move_cells, moved);
-      ++stats.corrected;
-      ++stats.from_wide_search;
-    }
-    failed.resize(kept);
+    move_found(stats.from_wide_search);
   }
   stats.failed = failed.size();
   stats.mean_move_cells = stats.corrected ? sum / double(stats.corrected) : 0.0;
@@ -1151,16 +1148,8 @@ std::size_t settle_pulled_points(const WrapLevelMesh& mesh, const TrilinearGrid&
   for_vertices(pulled.size(), [&](std::size_t i) {
     if (back[i]) return;
     const std::uint32_t v = pulled[i].vertex;
-    const std::uint32_t begin = mesh.vertex_face_offsets[v], end = mesh.vertex_face_offsets[v + 1];
-    int now = 0;
-    for (std::uint32_t k = begin; k < end; ++k)
-      now += face_tangled(mesh, field, expected_sign, positions, mesh.vertex_faces[k]);
-    if (now == 0) return;
-    const auto old_place = [&](std::uint32_t u) { return u == v ? pulled[i].from : positions[u]; };
-    int was = 0;
-    for (std::uint32_t k = begin; k < end; ++k)
-      was += face_tangled_at(mesh, field, expected_sign, mesh.vertex_faces[k], old_place);
-    back[i] = now > was;
+    const int now = tangled_faces_around(mesh, field, expected_sign, positions, v, positions[v]);
+    back[i] = now > 0 && now > tangled_faces_around(mesh, field, expected_sign, positions, v, pulled[i].from);
   });
   std::size_t count = 0;
   for (std::size_t i = 0; i < pulled.size(); ++i)
