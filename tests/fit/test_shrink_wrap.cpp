@@ -416,46 +416,53 @@ TEST(ShrinkWrap, CorrectionRetriesFromTheNeighboursCentroid) {
   EXPECT_NEAR(stats.max_move_cells, 5.0, 1e-9);
 }
 
+// An nx x ny quad grid 3 cells above the plane z = 4 (field 10 - z, iso 6:
+// normals toward +z, as the grid's): every vertex's root along the gradient,
+// and its neighbours' centroid's, lies beyond a 2-cell search.
+struct GridAbovePlane {
+  Volume field;
+  PolygonMesh grid;
+  WrapLevelMesh mesh;
+};
+GridAbovePlane grid_above_plane(int nx, int ny) {
+  GridAbovePlane g;
+  g.field = test::sampled_volume({std::size_t(nx) + 4, std::size_t(ny) + 4, 12},
+                                 [](double, double, double z) { return 10.0 - z; });
+  g.grid = test::quad_grid(nx, ny);
+  for (Vec3& p : g.grid.positions) p += Vec3{2, 2, 7};
+  g.mesh = make_wrap_level_mesh(SubdivisionHierarchy(g.grid, 1), 0, g.grid.positions, g.field);
+  return g;
+}
+
 TEST(ShrinkWrap, CorrectionsWideSearchFindsRootsBeyondItsRange) {
-  // The plane z = 4 (field 10 - z, iso 6: normals toward +z, as the grid's)
-  // and a 4 x 4 quad grid 3 cells above it: every vertex's root along the
-  // gradient, and its neighbours' centroid's, lies beyond the 2-cell search;
-  // the wide search (6 cells, 26 directions) finds each straight below,
+  // The wide search (6 cells, 26 directions) finds each root straight below,
   // which tangles no face (a vertical move keeps a face's projected area).
-  const Volume field = test::sampled_volume({12, 12, 12}, [](double, double, double z) { return 10.0 - z; });
-  PolygonMesh grid = test::quad_grid(4, 4);
-  for (Vec3& p : grid.positions) p += Vec3{3, 3, 7};
-  const SubdivisionHierarchy hierarchy(grid, 1);
-  const WrapLevelMesh mesh = make_wrap_level_mesh(hierarchy, 0, grid.positions, field);
-  std::vector<Vec3> narrow = grid.positions;
-  EXPECT_EQ(correct_to_isosurface(mesh, field, 6.0, 2.0, narrow).failed, grid.vertex_count());
-  std::vector<Vec3> wide = grid.positions;
-  const CorrectionStatistics stats = correct_to_isosurface(mesh, field, 6.0, 2.0, wide, true, false);
-  EXPECT_EQ(stats.from_wide_search, grid.vertex_count());
+  const GridAbovePlane g = grid_above_plane(4, 4);
+  std::vector<Vec3> narrow = g.grid.positions;
+  EXPECT_EQ(correct_to_isosurface(g.mesh, g.field, 6.0, 2.0, narrow).failed, g.grid.vertex_count());
+  std::vector<Vec3> wide = g.grid.positions;
+  const CorrectionStatistics stats = correct_to_isosurface(g.mesh, g.field, 6.0, 2.0, wide, true, false);
+  EXPECT_EQ(stats.from_wide_search, g.grid.vertex_count());
   EXPECT_EQ(stats.failed, 0u);
   for (std::size_t v = 0; v < wide.size(); ++v) {
     EXPECT_NEAR(wide[v].z, 4.0, 1e-4) << "vertex " << v;
-    EXPECT_NEAR(wide[v].x, grid.positions[v].x, 1e-12) << "vertex " << v;
-    EXPECT_NEAR(wide[v].y, grid.positions[v].y, 1e-12) << "vertex " << v;
+    EXPECT_NEAR(wide[v].x, g.grid.positions[v].x, 1e-12) << "vertex " << v;
+    EXPECT_NEAR(wide[v].y, g.grid.positions[v].y, 1e-12) << "vertex " << v;
   }
   // Beyond three times the range it gives up: 7 cells above the plane.
-  std::vector<Vec3> far = grid.positions;
+  std::vector<Vec3> far = g.grid.positions;
   for (Vec3& p : far) p.z = 11.0;
-  EXPECT_EQ(correct_to_isosurface(mesh, field, 6.0, 2.0, far, true, false).failed, grid.vertex_count());
+  EXPECT_EQ(correct_to_isosurface(g.mesh, g.field, 6.0, 2.0, far, true, false).failed, g.grid.vertex_count());
 }
 
 TEST(ShrinkWrap, CorrectionsWideSearchIsALastResortForFewVertices) {
-  // As above with a 110 x 100 grid (11,211 vertices): the wide search takes
-  // the first 10,000 failures (1% of the vertices, but at least 10,000).
-  const Volume field = test::sampled_volume({114, 104, 12}, [](double, double, double z) { return 10.0 - z; });
-  PolygonMesh grid = test::quad_grid(110, 100);
-  for (Vec3& p : grid.positions) p += Vec3{2, 2, 7};
-  const SubdivisionHierarchy hierarchy(grid, 1);
-  const WrapLevelMesh mesh = make_wrap_level_mesh(hierarchy, 0, grid.positions, field);
-  std::vector<Vec3> positions = grid.positions;
-  const CorrectionStatistics stats = correct_to_isosurface(mesh, field, 6.0, 2.0, positions, true, false);
+  // A 110 x 100 grid (11,211 vertices): the wide search takes the first
+  // 10,000 failures (1% of the vertices, but at least 10,000).
+  const GridAbovePlane g = grid_above_plane(110, 100);
+  std::vector<Vec3> positions = g.grid.positions;
+  const CorrectionStatistics stats = correct_to_isosurface(g.mesh, g.field, 6.0, 2.0, positions, true, false);
   EXPECT_EQ(stats.from_wide_search, 10000u);
-  EXPECT_EQ(stats.failed, grid.vertex_count() - 10000);
+  EXPECT_EQ(stats.failed, g.grid.vertex_count() - 10000);
   for (std::size_t v = 0; v < positions.size(); ++v)
     ASSERT_NEAR(positions[v].z, v < 10000 ? 4.0 : 7.0, 1e-4) << "vertex " << v;
 }
