@@ -1,6 +1,7 @@
 // isowave fit: extract the isosurface, build its signed-distance field and
 // shrink-wrap a base mesh's subdivision hierarchy onto it (paper Sec. 4.2);
 // writes the fine control mesh and prints the quality report per level.
+#include <algorithm>
 #include <chrono>
 #include <climits>
 #include <cstdio>
@@ -181,7 +182,18 @@ int fit(const Args& raw) {
   else if (result.unfold.tangled_before > 0)
     std::printf("  unfold: %zu tangled faces before, %zu after %d rounds\n", result.unfold.tangled_before,
                 result.unfold.tangled_after, result.unfold.rounds);
-  if (smooth == 0 && result.tangled_faces > fine.face_count() / 1000)
+  // A fine mesh with far fewer vertices than the isosurface cannot follow
+  // it: a sphere of radius 8 cells simplified to a tetrahedron, 3 levels
+  // (194 fine vertices for 1,210 extracted), stays up to 5 cells inside
+  // with a third of its faces folded, where a base of 1/64 of the extracted
+  // vertices (18) comes within 0.015 cell of the extracted mesh, no fold.
+  const bool coarse = 2 * fine.vertex_count() < surface.mesh.vertex_count();
+  const std::size_t suggested = std::max<std::size_t>(4, surface.mesh.vertex_count() >> (2 * levels));
+  if (coarse)
+    std::printf("  note: %zu fine vertices for an isosurface of %zu: %d levels of this base are too coarse to follow it "
+                "(a base of about %zu vertices, or more levels, would)\n",
+                fine.vertex_count(), surface.mesh.vertex_count(), levels, suggested);
+  else if (smooth == 0 && result.tangled_faces > fine.face_count() / 1000)
     std::printf("  note: %.2f%% of the fine faces stay tangled; folds sit mostly on necks and tunnels thinner than a "
                 "cell, which a one-voxel pre-filter (--smooth 1) removes\n",
                 100.0 * double(result.tangled_faces) / double(fine.face_count()));

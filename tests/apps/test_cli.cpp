@@ -7,6 +7,7 @@
 #include <fcntl.h>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -19,6 +20,7 @@
 #include "isowave/codec/isw_format.h"
 #include "isowave/codec/statistics.h"
 #include "isowave/core/mesh_io.h"
+#include "isowave/core/vec3.h"
 #include "isowave/transform/wavelet_transform.h"
 
 namespace isowave {
@@ -58,18 +60,39 @@ class CliTest : public ::testing::Test {
   fs::path dir_;
 };
 
-// A small NRRD volume of a sphere (surface at 0), written by the test.
-void write_sphere_nrrd(const std::string& file, int n, double radius) {
+// A small raw float NRRD volume of n^3 samples at `spacing`, value
+// field(i, j, k) at sample (i, j, k), written by the test.
+template <class Field>
+void write_nrrd(const std::string& file, int n, double spacing, const Field& field) {
   std::ofstream out(file, std::ios::binary);
   out << "NRRD0004\ntype: float\ndimension: 3\nsizes: " << n << " " << n << " " << n
-      << "\nencoding: raw\nendian: little\nspacings: 0.5 0.5 0.5\n\n";
+      << "\nencoding: raw\nendian: little\nspacings: " << spacing << " " << spacing << " " << spacing << "\n\n";
   for (int k = 0; k < n; ++k)
     for (int j = 0; j < n; ++j)
       for (int i = 0; i < n; ++i) {
-        const double x = i - n / 2.0 + 0.31, y = j - n / 2.0 + 0.17, z = k - n / 2.0 + 0.23;
-        const float v = static_cast<float>(radius - std::sqrt(x * x + y * y + z * z));
+        const float v = static_cast<float>(field(double(i), double(j), double(k)));
         out.write(reinterpret_cast<const char*>(&v), 4);
       }
+}
+
+// The sphere of write_sphere_nrrd: its centre in sample units.
+Vec3 sphere_centre(int n) { return {n / 2.0 - 0.31, n / 2.0 - 0.17, n / 2.0 - 0.23}; }
+
+// A sphere's distance field (surface at 0, radius in samples), spacing 0.5.
+void write_sphere_nrrd(const std::string& file, int n, double radius) {
+  const Vec3 centre = sphere_centre(n);
+  write_nrrd(file, n, 0.5, [&](double i, double j, double k) { return radius - norm(Vec3{i, j, k} - centre); });
+}
+
+// Each undirected edge of a polygon mesh and how many faces use it.
+std::map<std::pair<std::uint32_t, std::uint32_t>, int> edge_uses(const PolygonMesh& mesh) {
+  std::map<std::pair<std::uint32_t, std::uint32_t>, int> uses;
+  for (std::size_t f = 0; f < mesh.face_count(); ++f)
+    for (std::uint32_t k = 0; k < mesh.face_size(f); ++k) {
+      const std::uint32_t a = mesh.face_begin(f)[k], b = mesh.face_begin(f)[(k + 1) % mesh.face_size(f)];
+      ++uses[{std::min(a, b), std::max(a, b)}];
+    }
+  return uses;
 }
 
 TEST_F(CliTest, ConvertDecodeStatsAndInfoRoundTrip) {
@@ -229,6 +252,120 @@ TEST_F(CliTest, AnInterruptedRunLeavesNoPartialOutput) {
   }
 }
 
+// extract -> simplify -> fit on a sphere, with a base of 1/64 of the
+// extracted vertices: the fine control mesh is a closed all-quad mesh
+// (Euler: V = F + 2), every fine vertex lies on the sphere to within the
+// trilinear interpolant's error (at most h^2 / 8 times the distance field's
+// second derivative, 1 / R, along each of the 3 axes: 0.047 cell), and the
+// report covers every level. The base simplified as far as it goes (a
+// tetrahedron) is far too coarse for 3 levels, and the fit says so.
+TEST_F(CliTest, FitWritesAClosedQuadMeshOnTheSphere) {
+  const int n = 24;
+  const double radius = 8;
+  write_sphere_nrrd(path("s.nrrd"), n, radius);
+  ASSERT_EQ(run({"extract", path("s.nrrd"), "--iso", "0", "-o", path("s.ply"), "--quiet"}, dir_).exit_code, 0);
+  const std::size_t extracted = read_mesh(path("s.ply")).vertex_count();
+  for (const std::size_t target : {extracted / 64, std::size_t{0}}) {
+    SCOPED_TRACE("base of " + std::to_string(target) + " vertices");
+    const RunResult simplify = run({"simplify", path("s.ply"), "--target-vertices", std::to_string(target), "-o",
+                                    path("base.ply"), "--quiet", "--force"},
+                                   dir_);
+    ASSERT_EQ(simplify.exit_code, 0) << simplify.err;
+    const RunResult fit = run(
+        {"fit", path("s.nrrd"), "--iso", "0", "--base", path("base.ply"), "--levels", "3", "-o", path("fine.ply"), "--force"},
+        dir_);
+    ASSERT_EQ(fit.exit_code, 0) << fit.err;
+    for (const char* line : {"quality:", "  level 0:", "  level 3:", "tangled faces:", "to the extracted mesh:"})
+      EXPECT_NE(fit.out.find(line), std::string::npos) << line << " missing from:\n" << fit.out;
+    const PolygonMesh fine = read_mesh(path("fine.ply"));
+    EXPECT_EQ(fine.vertex_count(), fine.face_count() + 2);
+    for (std::size_t f = 0; f < fine.face_count(); ++f) ASSERT_EQ(fine.face_size(f), 4u) << "face " << f;
+    for (const auto& [edge, uses] : edge_uses(fine)) ASSERT_EQ(uses, 2) << edge.first << "-" << edge.second;
+    const bool coarse = 2 * fine.vertex_count() < extracted;
+    EXPECT_EQ(fit.out.find("too coarse") != std::string::npos, coarse) << fit.out;
+    if (coarse) continue;
+    EXPECT_GT(fine.vertex_count(), extracted / 2);
+    const Vec3 centre = sphere_centre(n);
+    double worst = 0;
+    for (const Vec3& p : fine.positions) worst = std::max(worst, std::abs(norm(2.0 * p - centre) - radius));
+    EXPECT_LE(worst, 3.0 / (8.0 * radius)) << "cells off the sphere";
+  }
+}
+
+// A tilted plane through the box: its boundary loop lies on the box's side
+// faces, and the four vertices where it turns a box edge are sharp. In the
+// fine mesh the base's sharp vertices keep their flag and their place, every
+// boundary vertex stays on a side face, and every vertex lies on the plane
+// (trilinear interpolation of a linear field is exact).
+TEST_F(CliTest, FitKeepsSharpVerticesAndTheBoundaryOnTheBox) {
+  const int n = 20;
+  const auto plane = [](double x, double y, double z) { return (z - 9.6) - 0.2 * (x - 9.5) - 0.1 * (y - 9.5); };
+  write_nrrd(path("p.nrrd"), n, 1.0, plane);
+  ASSERT_EQ(run({"extract", path("p.nrrd"), "--iso", "0", "-o", path("p.ply"), "--quiet"}, dir_).exit_code, 0);
+  ASSERT_EQ(run({"simplify", path("p.ply"), "--target-vertices", "0", "-o", path("base.ply"), "--quiet"}, dir_).exit_code, 0);
+  const RunResult fit = run({"fit", path("p.nrrd"), "--iso", "0", "--base", path("base.ply"), "--levels", "2", "-o",
+                             path("fine.ply"), "--quiet"},
+                            dir_);
+  ASSERT_EQ(fit.exit_code, 0) << fit.err;
+  EXPECT_TRUE(fit.out.empty()) << fit.out;
+
+  const PolygonMesh base = read_mesh(path("base.ply"));
+  const PolygonMesh fine = read_mesh(path("fine.ply"));
+  ASSERT_EQ(base.sharp_count(), 4u);
+  ASSERT_EQ(fine.sharp.size(), fine.vertex_count());
+  EXPECT_EQ(fine.sharp_count(), 4u);
+  for (std::size_t v = 0; v < base.vertex_count(); ++v)
+    if (base.is_sharp(v)) {
+      EXPECT_TRUE(fine.is_sharp(v)) << v;
+      EXPECT_EQ(fine.positions[v], base.positions[v]) << v;
+    }
+  for (const Vec3& p : fine.positions) ASSERT_LE(std::abs(plane(p.x, p.y, p.z)), 1e-4);
+  std::size_t boundary_edges = 0;
+  for (const auto& [edge, uses] : edge_uses(fine)) {
+    if (uses != 1) continue;
+    ++boundary_edges;
+    for (const std::uint32_t v : {edge.first, edge.second}) {
+      const Vec3& p = fine.positions[v];
+      EXPECT_LE(std::min({std::abs(p.x), std::abs(p.x - (n - 1)), std::abs(p.y), std::abs(p.y - (n - 1))}), 1e-5) << v;
+    }
+  }
+  EXPECT_GT(boundary_edges, 0u);
+}
+
+// Bad fit input: one line, a non-zero exit code and no output file.
+TEST_F(CliTest, FitRejectsBadInputWithOneLine) {
+  write_sphere_nrrd(path("s.nrrd"), 16, 5);
+  ASSERT_EQ(run({"extract", path("s.nrrd"), "--iso", "0", "-o", path("s.ply"), "--quiet"}, dir_).exit_code, 0);
+  std::ofstream(path("garbage.ply")) << "ply\nformat ascii 1.0\nelement vertex 99\n";
+  std::ofstream(path("nan.ply")) << "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                                     "property float z\nelement face 1\nproperty list uchar int vertex_indices\n"
+                                     "end_header\n1 1 1\nnan 2 1\n1 2 2\n3 0 1 2\n";
+  const std::string out = path("x.ply");
+  const std::vector<std::vector<std::string>> cases = {
+      {"fit", path("s.nrrd"), "--iso", "0", "--levels", "1", "-o", out},                                 // no base
+      {"fit", path("s.nrrd"), "--iso", "0", "--base", path("s.ply"), "-o", out},                         // no levels
+      {"fit", path("s.nrrd"), "--base", path("s.ply"), "--levels", "1", "-o", out},                      // no iso
+      {"fit", path("s.nrrd"), "--iso", "0", "--base", path("s.ply"), "--levels", "9", "-o", out},        // too deep
+      {"fit", path("s.nrrd"), "--iso", "0", "--base", path("garbage.ply"), "--levels", "1", "-o", out},  // truncated
+      {"fit", path("s.nrrd"), "--iso", "0", "--base", path("nan.ply"), "--levels", "1", "-o", out},      // NaN
+      {"fit", path("s.nrrd"), "--iso", "0", "--base", path("missing.ply"), "--levels", "1", "-o", out},
+      {"fit", path("missing.nrrd"), "--iso", "0", "--base", path("s.ply"), "--levels", "1", "-o", out},
+      {"fit", path("s.nrrd"), "--iso", "1000", "--base", path("s.ply"), "--levels", "1", "-o", out},     // empty
+      {"fit", path("s.nrrd"), "--iso", "0", "--base", path("s.ply"), "--levels", "1", "--band", "-1", "-o", out},
+      {"fit", path("s.nrrd"), "--iso", "0", "--base", path("s.ply"), "--levels", "1", "-o", path("x.xyz")},
+  };
+  for (const auto& arguments : cases) {
+    const RunResult r = run(arguments, dir_);
+    std::string command;
+    for (const std::string& a : arguments) command += a + " ";
+    EXPECT_GT(r.exit_code, 0) << command;
+    EXPECT_LT(r.exit_code, 128) << command << "crashed";
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << command << ": " << r.err;
+  }
+  EXPECT_FALSE(fs::exists(out));
+  EXPECT_FALSE(fs::exists(path("x.xyz")));
+}
+
 // Every command that writes refuses an existing file without --force (the
 // user's file, or the command's own input, stays as it was), and checks its
 // outputs before the work.
@@ -245,6 +382,7 @@ TEST_F(CliTest, ExistingFilesAreKeptWithoutForce) {
       {"stats", path("s.isw"), "--plot", path("s.isw")},
       {"extract", "builtin:sphere:24", "-o", path("mine.ply")},
       {"extract", "builtin:sphere:24", "-o", path("new.ply"), "--stats-json", path("new.ply")},
+      {"fit", "builtin:sphere:24", "--base", path("any.ply"), "--levels", "1", "-o", path("mine.ply")},
       {"decode", path("s.isw"), "--percent", "50", "-o", path("missing_directory/out.ply")},
   };
   for (const auto& arguments : refused) {
