@@ -1,6 +1,7 @@
 #include "isowave/fit/shrink_wrap.h"
 
 #include <algorithm>
+#include <sstream>
 #include <cassert>
 #include <chrono>
 #include <cmath>
@@ -1686,6 +1687,25 @@ ShrinkWrapResult shrink_wrap(const SubdivisionHierarchy& hierarchy, const std::v
     throw Error(ErrorKind::InvalidArgument, "the signed-distance field and the scalar field have different grids");
   if (field.dims[0] < 2 || field.dims[1] < 2 || field.dims[2] < 2)
     throw Error(ErrorKind::InvalidArgument, "shrink-wrap needs at least 2 samples along each axis");
+  {
+    // A base from another volume (other spacing or origin) would be pressed
+    // onto the box and fitted to nothing; one from this volume's isosurface
+    // lies inside its box.
+    const Vec3 low = volume_box_min(field), high = volume_box_max(field);
+    const double cell = field.cell_size();
+    for (std::size_t v = 0; v < base_count; ++v) {
+      const Vec3& p = base_positions[v];
+      const double outside = norm(component_max(Vec3{}, component_max(low - p, p - high)));
+      if (outside > cell) {
+        std::ostringstream message;
+        message << "base vertex " << v << " at (" << p.x << ", " << p.y << ", " << p.z << ") lies "
+                << outside / cell << " cells outside the volume's box (" << low.x << ", " << low.y << ", " << low.z
+                << ") .. (" << high.x << ", " << high.y << ", " << high.z
+                << "): is the base mesh from this volume (same spacing and origin)?";
+        throw Error(ErrorKind::InvalidArgument, message.str());
+      }
+    }
+  }
   if (options.iterations < 0 || options.iterations > 100 || options.final_level_iterations < 0 ||
       options.final_level_iterations > 100)
     throw Error(ErrorKind::InvalidArgument, "shrink-wrap iterations must be in 0..100");

@@ -340,6 +340,10 @@ TEST_F(CliTest, FitRejectsBadInputWithOneLine) {
   std::ofstream(path("nan.ply")) << "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
                                      "property float z\nelement face 1\nproperty list uchar int vertex_indices\n"
                                      "end_header\n1 1 1\nnan 2 1\n1 2 2\n3 0 1 2\n";
+  std::ofstream(path("far.ply")) << "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
+                                     "property float z\nelement face 4\nproperty list uchar int vertex_indices\n"
+                                     "end_header\n100 100 100\n105 100 100\n100 105 100\n100 100 105\n"
+                                     "3 0 2 1\n3 0 1 3\n3 1 2 3\n3 2 0 3\n";
   const std::string out = path("x.ply");
   const std::vector<std::vector<std::string>> cases = {
       {"fit", path("s.nrrd"), "--iso", "0", "--levels", "1", "-o", out},                                 // no base
@@ -348,6 +352,7 @@ TEST_F(CliTest, FitRejectsBadInputWithOneLine) {
       {"fit", path("s.nrrd"), "--iso", "0", "--base", path("s.ply"), "--levels", "9", "-o", out},        // too deep
       {"fit", path("s.nrrd"), "--iso", "0", "--base", path("garbage.ply"), "--levels", "1", "-o", out},  // truncated
       {"fit", path("s.nrrd"), "--iso", "0", "--base", path("nan.ply"), "--levels", "1", "-o", out},      // NaN
+      {"fit", path("s.nrrd"), "--iso", "0", "--base", path("far.ply"), "--levels", "1", "-o", out},      // elsewhere
       {"fit", path("s.nrrd"), "--iso", "0", "--base", path("missing.ply"), "--levels", "1", "-o", out},
       {"fit", path("missing.nrrd"), "--iso", "0", "--base", path("s.ply"), "--levels", "1", "-o", out},
       {"fit", path("s.nrrd"), "--iso", "1000", "--base", path("s.ply"), "--levels", "1", "-o", out},     // empty

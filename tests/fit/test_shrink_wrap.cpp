@@ -602,6 +602,14 @@ TEST(ShrinkWrap, RejectsBadInput) {
   positions = p.base.positions;
   positions[0].x = std::nan("");
   EXPECT_THROW(shrink_wrap(hierarchy, positions, p.distance, p.field), Error);
+  // A base from another volume: more than a cell outside the box (within
+  // a cell is tolerated, as rounding in a written base mesh would be).
+  const double cell = p.field.cell_size();
+  positions = p.base.positions;
+  positions[0].x = volume_box_max(p.field).x + 1.5 * cell;
+  EXPECT_THROW(shrink_wrap(hierarchy, positions, p.distance, p.field), Error);
+  positions[0].x = volume_box_max(p.field).x + 0.5 * cell;
+  EXPECT_NO_THROW(shrink_wrap(hierarchy, positions, p.distance, p.field));
   ShrinkWrapOptions options;
   options.relaxation_weight = 0;
   EXPECT_THROW(shrink_wrap(hierarchy, p.base.positions, p.distance, p.field, options), Error);
