@@ -205,7 +205,8 @@ int fit(const Args& raw) {
           hierarchy, level, level < levels ? result.level_positions[static_cast<std::size_t>(level)] : result.positions,
           surface.mesh, reference, field, extract_options.iso, extract_options.flip));
   }
-  std::printf("%s: level %d, %zu vertices, %zu quads\n", output.c_str(), levels, fine.vertex_count(), fine.face_count());
+  std::printf("%s: level %d, %zu vertices, %zu %s\n", output.c_str(), levels, fine.vertex_count(), fine.face_count(),
+              levels > 0 ? "quads" : "faces (the base's polygons)");
   return 0;
 }
 
