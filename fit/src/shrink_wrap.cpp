@@ -1,7 +1,6 @@
 #include "isowave/fit/shrink_wrap.h"
 
 #include <algorithm>
-#include <sstream>
 #include <cassert>
 #include <chrono>
 #include <cmath>
@@ -10,6 +9,7 @@
 #include <memory>
 #include <numeric>
 #include <optional>
+#include <sstream>
 #include <string>
 #include <utility>
 
@@ -1645,6 +1645,25 @@ void fit_small_components(const WrapLevelMesh& mesh, const SmallComponents& smal
   });
 }
 
+// Throws Error(InvalidArgument) naming the first of positions[0 .. count)
+// more than a cell outside the volume's box. A base from another volume
+// (other spacing or origin) would be pressed onto the box and fitted to
+// nothing; one from this volume's isosurface lies inside its box.
+void require_inside_box(const std::vector<Vec3>& positions, std::size_t count, const Volume& field) {
+  const Vec3 low = volume_box_min(field), high = volume_box_max(field);
+  const double cell = field.cell_size();
+  for (std::size_t v = 0; v < count; ++v) {
+    const Vec3& p = positions[v];
+    const double outside = norm(component_max(Vec3{}, component_max(low - p, p - high)));
+    if (!(outside > cell)) continue;
+    std::ostringstream message;
+    message << "base vertex " << v << " at (" << p.x << ", " << p.y << ", " << p.z << ") lies " << outside / cell
+            << " cells outside the volume's box (" << low.x << ", " << low.y << ", " << low.z << ") .. (" << high.x
+            << ", " << high.y << ", " << high.z << "): is the base mesh from this volume (same spacing and origin)?";
+    throw Error(ErrorKind::InvalidArgument, message.str());
+  }
+}
+
 // Mean length of the level's edges (each counted from both ends), world
 // units; from the edges of every stride-th vertex, so that at most about
 // 2^18 vertices are read (the whole of miranda's level 3 took 0.1 s).
@@ -1687,25 +1706,7 @@ ShrinkWrapResult shrink_wrap(const SubdivisionHierarchy& hierarchy, const std::v
     throw Error(ErrorKind::InvalidArgument, "the signed-distance field and the scalar field have different grids");
   if (field.dims[0] < 2 || field.dims[1] < 2 || field.dims[2] < 2)
     throw Error(ErrorKind::InvalidArgument, "shrink-wrap needs at least 2 samples along each axis");
-  {
-    // A base from another volume (other spacing or origin) would be pressed
-    // onto the box and fitted to nothing; one from this volume's isosurface
-    // lies inside its box.
-    const Vec3 low = volume_box_min(field), high = volume_box_max(field);
-    const double cell = field.cell_size();
-    for (std::size_t v = 0; v < base_count; ++v) {
-      const Vec3& p = base_positions[v];
-      const double outside = norm(component_max(Vec3{}, component_max(low - p, p - high)));
-      if (outside > cell) {
-        std::ostringstream message;
-        message << "base vertex " << v << " at (" << p.x << ", " << p.y << ", " << p.z << ") lies "
-                << outside / cell << " cells outside the volume's box (" << low.x << ", " << low.y << ", " << low.z
-                << ") .. (" << high.x << ", " << high.y << ", " << high.z
-                << "): is the base mesh from this volume (same spacing and origin)?";
-        throw Error(ErrorKind::InvalidArgument, message.str());
-      }
-    }
-  }
+  require_inside_box(base_positions, base_count, field);
   if (options.iterations < 0 || options.iterations > 100 || options.final_level_iterations < 0 ||
       options.final_level_iterations > 100)
     throw Error(ErrorKind::InvalidArgument, "shrink-wrap iterations must be in 0..100");
