@@ -6,9 +6,11 @@
 #include <climits>
 #include <cstdio>
 #include <string>
+#include <vector>
 
 #include "cli.h"
 #include "commands.h"
+#include "console_progress.h"
 #include "isowave/codec/convert.h"
 #include "isowave/core/error.h"
 #include "isowave/core/mesh_io.h"
@@ -114,13 +116,20 @@ int fit(const Args& raw) {
   cli::check_memory(static_cast<double>(fine_vertex_count(base, levels)), 300, "--levels " + std::to_string(levels));
   const SubdivisionHierarchy hierarchy(base, levels);
 
+  // A live line per stage on a terminal (miranda: the quality report alone
+  // takes about a minute); nothing otherwise, as the report below has the
+  // times.
+  const bool live = cli::default_progress_mode(args.has("quiet")) == cli::ProgressMode::LiveBar;
+  cli::ConsoleProgress progress(input, live ? cli::ProgressMode::LiveBar : cli::ProgressMode::Quiet);
   auto start = Clock::now();
+  progress.begin_stage("load");
   Volume field = read_volume(input, read_options);
+  progress.end_stage();
   if (field.dims[0] < 2 || field.dims[1] < 2 || field.dims[2] < 2)
     throw Error(ErrorKind::InvalidArgument, input + ": fitting needs at least 2 samples along each axis");
   // The fit sees the same (pre-filtered) field the surface is extracted from.
   if (smooth > 0) field = gaussian_smoothed(field, smooth);
-  const Isosurface surface = extract_isosurface(field, extract_options);
+  const Isosurface surface = extract_isosurface(field, extract_options, progress);
   if (surface.mesh.face_count() == 0)
     throw Error(ErrorKind::InvalidArgument,
                 input + ": the isosurface at " + args.get("iso", "0") + " is empty" + value_range_note(field));
@@ -132,18 +141,20 @@ int fit(const Args& raw) {
   distance_options.flip = extract_options.flip;
   distance_options.band_cells = band;
   distance_options.surface = &surface.mesh;
-  const SignedDistanceField distance = compute_signed_distance(field, distance_options);
+  const SignedDistanceField distance = compute_signed_distance(field, distance_options, progress);
   const double distance_seconds = seconds_since(start);
 
   start = Clock::now();
   if (!args.has("no-coverage-pull")) wrap_options.surface = &surface.mesh;
-  const ShrinkWrapResult result = shrink_wrap(hierarchy, base.positions, distance, field, wrap_options);
+  const ShrinkWrapResult result = shrink_wrap(hierarchy, base.positions, distance, field, wrap_options, progress);
   const double wrap_seconds = seconds_since(start);
 
   const PolygonMesh fine = hierarchy.control_mesh(levels, result.positions);
   MeshWriteOptions write_options;
   write_options.ascii = args.has("ascii");
+  progress.begin_stage("write");
   write_mesh(output, fine, write_options);
+  progress.end_stage();
   if (args.has("quiet")) return 0;
 
   std::printf("%s: %zu vertices, %zu faces, %zu sharp%s\n", base_path.c_str(), base.vertex_count(), base.face_count(),
@@ -198,12 +209,22 @@ int fit(const Args& raw) {
                 "cell, which a one-voxel pre-filter (--smooth 1) removes\n",
                 100.0 * double(result.tangled_faces) / double(fine.face_count()));
   if (report) {
-    std::printf("quality:\n");
+    std::fflush(stdout);  // the report so far before the live line of the measurement
+    progress.begin_stage("quality");
     const SurfaceDistance reference(surface.mesh);
-    for (int level = 0; level <= levels; ++level)
-      print_quality(measure_fit_quality(
+    std::vector<FitQuality> qualities;
+    double work = 0, total = 0;  // each level's measurement takes about as long as its vertices
+    for (int level = 0; level <= levels; ++level) total += double(hierarchy.vertex_count(level));
+    for (int level = 0; level <= levels; ++level) {
+      qualities.push_back(measure_fit_quality(
           hierarchy, level, level < levels ? result.level_positions[static_cast<std::size_t>(level)] : result.positions,
           surface.mesh, reference, field, extract_options.iso, extract_options.flip));
+      work += double(hierarchy.vertex_count(level));
+      progress.update(work / total);
+    }
+    progress.end_stage();
+    std::printf("quality:\n");
+    for (const FitQuality& quality : qualities) print_quality(quality);
   }
   std::printf("%s: level %d, %zu vertices, %zu %s\n", output.c_str(), levels, fine.vertex_count(), fine.face_count(),
               levels > 0 ? "quads" : "faces (the base's polygons)");
