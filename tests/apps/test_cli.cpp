@@ -336,6 +336,7 @@ TEST_F(CliTest, FitKeepsSharpVerticesAndTheBoundaryOnTheBox) {
 TEST_F(CliTest, FitRejectsBadInputWithOneLine) {
   write_sphere_nrrd(path("s.nrrd"), 16, 5);
   ASSERT_EQ(run({"extract", path("s.nrrd"), "--iso", "0", "-o", path("s.ply"), "--quiet"}, dir_).exit_code, 0);
+  ASSERT_EQ(run({"extract", path("s.nrrd"), "--iso", "0", "--flip", "-o", path("flipped.ply"), "--quiet"}, dir_).exit_code, 0);
   std::ofstream(path("garbage.ply")) << "ply\nformat ascii 1.0\nelement vertex 99\n";
   std::ofstream(path("nan.ply")) << "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
                                      "property float z\nelement face 1\nproperty list uchar int vertex_indices\n"
@@ -353,6 +354,7 @@ TEST_F(CliTest, FitRejectsBadInputWithOneLine) {
       {"fit", path("s.nrrd"), "--iso", "0", "--base", path("garbage.ply"), "--levels", "1", "-o", out},  // truncated
       {"fit", path("s.nrrd"), "--iso", "0", "--base", path("nan.ply"), "--levels", "1", "-o", out},      // NaN
       {"fit", path("s.nrrd"), "--iso", "0", "--base", path("far.ply"), "--levels", "1", "-o", out},      // elsewhere
+      {"fit", path("s.nrrd"), "--iso", "0", "--base", path("flipped.ply"), "--levels", "1", "-o", out},  // --flip
       {"fit", path("s.nrrd"), "--iso", "0", "--base", path("missing.ply"), "--levels", "1", "-o", out},
       {"fit", path("missing.nrrd"), "--iso", "0", "--base", path("s.ply"), "--levels", "1", "-o", out},
       {"fit", path("s.nrrd"), "--iso", "1000", "--base", path("s.ply"), "--levels", "1", "-o", out},     // empty

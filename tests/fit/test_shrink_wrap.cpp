@@ -610,6 +610,13 @@ TEST(ShrinkWrap, RejectsBadInput) {
   EXPECT_THROW(shrink_wrap(hierarchy, positions, p.distance, p.field), Error);
   positions[0].x = volume_box_max(p.field).x + 0.5 * cell;
   EXPECT_NO_THROW(shrink_wrap(hierarchy, positions, p.distance, p.field));
+  // A base facing the other way (extracted with the other flip): every
+  // face reversed.
+  PolygonMesh reversed = p.base;
+  for (std::size_t f = 0; f < reversed.face_count(); ++f)
+    std::reverse(reversed.face_vertices.begin() + reversed.face_offsets[f],
+                 reversed.face_vertices.begin() + reversed.face_offsets[f + 1]);
+  EXPECT_THROW(shrink_wrap(SubdivisionHierarchy(reversed, 1), reversed.positions, p.distance, p.field), Error);
   ShrinkWrapOptions options;
   options.relaxation_weight = 0;
   EXPECT_THROW(shrink_wrap(hierarchy, p.base.positions, p.distance, p.field, options), Error);

@@ -423,8 +423,10 @@ struct ShrinkWrapResult {
 // whose grid it must share) starting from the base control points.
 // Throws Error(InvalidArgument) if base_positions has fewer than
 // vertex_count(0) entries or a non-finite one, or one more than a cell
-// outside the volume's box, the grids differ, or an option is out of range
-// (iterations 0..100, weight in (0, 1], reaches > 0).
+// outside the volume's box, if the base faces against the field (most
+// vertex normals toward higher values, or lower ones with distance.flip),
+// the grids differ, or an option is out of range (iterations 0..100, weight
+// in (0, 1], reaches > 0).
 ShrinkWrapResult shrink_wrap(const SubdivisionHierarchy& hierarchy, const std::vector<Vec3>& base_positions,
                              const SignedDistanceField& distance, const Volume& field,
                              const ShrinkWrapOptions& options = {}, ProgressSink& progress = no_progress());
