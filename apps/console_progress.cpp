@@ -10,6 +10,10 @@ ProgressMode default_progress_mode(bool quiet) {
   return isatty(fileno(stderr)) ? ProgressMode::LiveBar : ProgressMode::Lines;
 }
 
+ConsoleProgress::~ConsoleProgress() {
+  if (line_open_) std::fputc('\n', stderr);
+}
+
 void ConsoleProgress::begin_stage(std::string_view name) {
   std::lock_guard<std::mutex> lock(mutex_);
   stage_ = std::string(name);
@@ -48,6 +52,7 @@ void ConsoleProgress::draw(double fraction, bool final_line) {
     std::snprintf(eta, sizeof eta, "  ETA %.0f s", elapsed * (1.0 - fraction) / fraction);
   std::fprintf(stderr, "\r\033[K%s  %-24s [%s] %3.0f%%  %.1f s%s%s", label_.c_str(), stage_.c_str(), bar.c_str(),
                100.0 * fraction, elapsed, eta, final_line ? "\n" : "");
+  line_open_ = !final_line;
   std::fflush(stderr);
 }
 

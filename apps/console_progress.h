@@ -18,6 +18,11 @@ ProgressMode default_progress_mode(bool quiet);
 class ConsoleProgress : public ProgressSink {
  public:
   ConsoleProgress(std::string label, ProgressMode mode) : label_(std::move(label)), mode_(mode) {}
+  // Ends a live line left open by a stage that threw, so that the error
+  // message starts on a line of its own.
+  ~ConsoleProgress();
+  ConsoleProgress(const ConsoleProgress&) = delete;
+  ConsoleProgress& operator=(const ConsoleProgress&) = delete;
   void begin_stage(std::string_view name) override;
   void update(double fraction) override;
   void end_stage() override;
@@ -29,6 +34,7 @@ class ConsoleProgress : public ProgressSink {
   std::string label_;
   ProgressMode mode_;
   std::string stage_;
+  bool line_open_ = false;  // a live line without its newline yet
   Clock::time_point stage_start_{};
   Clock::time_point last_draw_{};
   std::mutex mutex_;
