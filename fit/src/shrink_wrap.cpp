@@ -80,15 +80,20 @@ inline Vec3 place(const WrapLevelMesh& mesh, const Box& box, std::size_t v, Vec3
   return box.clamp(p);
 }
 
-// Unit normal of a polygon by Newell's method (zero if degenerate).
-inline Vec3 face_normal(const std::uint32_t* face, std::uint32_t size, const std::vector<Vec3>& p) {
+// A polygon's Newell vector: twice its area vector.
+inline Vec3 newell_vector(const std::uint32_t* face, std::uint32_t size, const std::vector<Vec3>& p) {
   Vec3 n;
   for (std::uint32_t k = 0; k < size; ++k) {
     const Vec3& a = p[face[k]];
     const Vec3& b = p[face[k + 1 == size ? 0 : k + 1]];
     n += cross(a, b);
   }
-  return normalized(n);
+  return n;
+}
+
+// Unit normal of a polygon by Newell's method (zero if degenerate).
+inline Vec3 face_normal(const std::uint32_t* face, std::uint32_t size, const std::vector<Vec3>& p) {
+  return normalized(newell_vector(face, size, p));
 }
 
 // The direction a vertex may move in: box-held vertices only within their face.
@@ -1677,8 +1682,7 @@ void require_oriented_as_the_field(const PolygonMesh& base, const std::vector<Ve
   for (std::size_t f = 0; f < base.face_count(); ++f) {
     const std::uint32_t* face = base.face_begin(f);
     const std::uint32_t size = base.face_size(f);
-    Vec3 newell;
-    for (std::uint32_t k = 0; k < size; ++k) newell += cross(positions[face[k]], positions[face[k + 1 == size ? 0 : k + 1]]);
+    const Vec3 newell = newell_vector(face, size, positions);
     for (std::uint32_t k = 0; k < size; ++k) normals[face[k]] += newell;
   }
   const TrilinearGrid grid(field);
