@@ -19,7 +19,7 @@
 #include "isowave/fit/fit_quality.h"
 #include "isowave/fit/shrink_wrap.h"
 #include "isowave/fit/signed_distance.h"
-#include "isowave/core/surface_distance.h"
+#include "isowave/core/binned_surface_distance.h"
 #include "isowave/transform/hierarchy.h"
 #include "volume_options.h"
 
@@ -211,7 +211,7 @@ int fit(const Args& raw) {
   if (report) {
     std::fflush(stdout);  // the report so far before the live line of the measurement
     progress.begin_stage("quality");
-    const SurfaceDistance reference(surface.mesh);
+    const BinnedSurfaceDistance reference(surface.mesh);
     std::vector<FitQuality> qualities;
     double work = 0, total = 0;  // each level's measurement takes about as long as its vertices
     for (int level = 0; level <= levels; ++level) total += double(hierarchy.vertex_count(level));

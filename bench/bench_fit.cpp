@@ -50,7 +50,7 @@
 #include "isowave/fit/fit_quality.h"
 #include "isowave/fit/shrink_wrap.h"
 #include "isowave/fit/signed_distance.h"
-#include "isowave/core/surface_distance.h"
+#include "isowave/core/binned_surface_distance.h"
 #include "isowave/fit/trilinear.h"
 #include "isowave/simplify/simplify.h"
 #include "isowave/transform/hierarchy.h"
@@ -325,7 +325,7 @@ int main(int argc, char** argv) {
 
     if (quality) {
       start = std::chrono::steady_clock::now();
-      const SurfaceDistance reference(extracted);
+      const BinnedSurfaceDistance reference(extracted);
       for (int level = final_quality_only ? levels : 0; level <= levels; ++level)
         print_quality(measure_fit_quality(hierarchy, level,
                                           level < levels ? wrapped.level_positions[std::size_t(level)] : wrapped.positions,

@@ -9,6 +9,7 @@
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
 
+#include "isowave/core/binned_surface_distance.h"
 #include "isowave/core/huge_page_vector.h"
 
 namespace isowave {
@@ -19,28 +20,6 @@ constexpr std::uint32_t kNone = WrapLevelMesh::kNone;
 // then scans at most 125 bins (729 of single cells took 1 s per pull on
 // miranda's level 2, most of it waiting for the bins' offsets).
 constexpr int kBinCells = 2;
-
-// Closest point of triangle abc to p (Ericson, Real-Time Collision Detection, 5.1.5).
-Vec3 closest_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
-  const Vec3 ab = b - a, ac = c - a, ap = p - a;
-  const double d1 = dot(ab, ap), d2 = dot(ac, ap);
-  if (d1 <= 0 && d2 <= 0) return a;
-  const Vec3 bp = p - b;
-  const double d3 = dot(ab, bp), d4 = dot(ac, bp);
-  if (d3 >= 0 && d4 <= d3) return b;
-  const double vc = d1 * d4 - d3 * d2;
-  if (vc <= 0 && d1 >= 0 && d3 <= 0) return a + (d1 / (d1 - d3)) * ab;
-  const Vec3 cp = p - c;
-  const double d5 = dot(ab, cp), d6 = dot(ac, cp);
-  if (d6 >= 0 && d5 <= d6) return c;
-  const double vb = d5 * d2 - d1 * d6;
-  if (vb <= 0 && d2 >= 0 && d6 <= 0) return a + (d2 / (d2 - d6)) * ac;
-  const double va = d3 * d6 - d5 * d4;
-  if (va <= 0 && d4 - d3 >= 0 && d5 - d6 >= 0) return b + ((d4 - d3) / ((d4 - d3) + (d5 - d6))) * (c - b);
-  const double denominator = va + vb + vc;
-  if (!(denominator > 0)) return a;  // degenerate triangle
-  return a + (vb / denominator) * ab + (vc / denominator) * ac;
-}
 
 // Whether p lies within sqrt(squared) of a face around control point v or
 // around one of its neighbours (polygons as fans). The neighbours' faces
@@ -67,7 +46,7 @@ bool near_faces(const WrapLevelMesh& mesh, const std::vector<Vec3>& positions, s
       const Vec3 gap = component_max(Vec3{}, component_max(low - p, p - high));
       if (squared_norm(gap) > squared) continue;
       for (std::uint32_t j = 1; j + 1 < size; ++j)
-        if (squared_norm(p - closest_on_triangle(p, positions[face[0]], positions[face[j]], positions[face[j + 1]])) <=
+        if (squared_norm(p - closest_point_on_triangle(p, positions[face[0]], positions[face[j]], positions[face[j + 1]])) <=
             squared)
           return true;
     }

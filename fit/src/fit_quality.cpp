@@ -122,7 +122,7 @@ double share_farther_than(const std::vector<Vec3>& reference, std::size_t stride
 }
 
 FitQuality measure_fit_quality(const SubdivisionHierarchy& hierarchy, int level, const std::vector<Vec3>& positions,
-                               const PolygonMesh& extracted, const SurfaceDistance& extracted_distance,
+                               const PolygonMesh& extracted, const BinnedSurfaceDistance& extracted_distance,
                                const Volume& field, double iso, bool flip) {
   if (level < 0 || level > hierarchy.levels())
     throw Error(ErrorKind::InvalidArgument, "level " + std::to_string(level) + " is not in the hierarchy");
@@ -146,16 +146,7 @@ FitQuality measure_fit_quality(const SubdivisionHierarchy& hierarchy, int level,
 
   // Coverage of the extracted surface by the fitted one.
   {
-    PolygonMesh triangles;
-    triangles.positions = mesh.positions;
-    triangles.face_offsets.reserve(2 * q.faces + 1);
-    triangles.face_vertices.reserve(6 * q.faces);
-    for (std::size_t f = 0; f < q.faces; ++f) {
-      const std::uint32_t* face = mesh.face_begin(f);
-      for (std::uint32_t k = 1; k + 1 < mesh.face_size(f); ++k) triangles.add_face({face[0], face[k], face[k + 1]});
-    }
-    const SurfaceDistance fitted(triangles);
-    std::vector<double> coverage = fitted.distances(extracted.positions);
+    std::vector<double> coverage = BinnedSurfaceDistance(mesh).distances(extracted.positions);
     rms_and_max(coverage, inverse_cell, q.coverage_rms, q.coverage_max);
     q.coverage_p99 = percentile(coverage, 0.99) * inverse_cell;
   }

@@ -8,6 +8,7 @@
 
 #include "isowave/codec/convert.h"
 #include "isowave/codec/statistics.h"
+#include "isowave/core/binned_surface_distance.h"
 #include "isowave/core/surface_distance.h"
 #include "isowave/extract/builtin_fields.h"
 #include "isowave/fit/fit_quality.h"
@@ -106,7 +107,7 @@ TEST(Convert, ReportsTheShareOfFoldedFineFaces) {
   const ConvertResult result = convert_volume(field, "mixing", options);
   ASSERT_FALSE(result.fit.unfold.skipped);
   const IswDecoded decoded = decode_isw(result.bytes, "test");
-  const SurfaceDistance reference(result.extracted_mesh);
+  const BinnedSurfaceDistance reference(result.extracted_mesh);
   const FitQuality quality = measure_fit_quality(*decoded.hierarchy, decoded.hierarchy->levels(), result.fit.positions,
                                                  result.extracted_mesh, reference, field, options.iso, options.flip);
   EXPECT_GT(quality.tangled_faces, 0u);

@@ -8,7 +8,9 @@
 
 #include <tbb/global_control.h>
 
+#include "isowave/core/binned_surface_distance.h"
 #include "isowave/core/error.h"
+#include "isowave/core/surface_distance.h"
 #include "isowave/extract/builtin_fields.h"
 #include "isowave/extract/isosurface.h"
 #include "isowave/extract/volume_io.h"
@@ -62,7 +64,7 @@ void expect_targets(const Pipeline& p, const std::string& name) {
   const ShrinkWrapResult result = shrink_wrap(hierarchy, p.base.positions, p.distance, p.field, options_for(p));
   ASSERT_EQ(result.positions.size(), hierarchy.fine_vertex_count());
   for (const Vec3& v : result.positions) ASSERT_TRUE(is_finite(v));
-  const SurfaceDistance reference(p.extracted);
+  const BinnedSurfaceDistance reference(p.extracted);
   const FitQuality q = measure_fit_quality(hierarchy, 3, result.positions, p.extracted, reference, p.field, p.iso, false);
   EXPECT_EQ(q.nonfinite_vertices, 0u);
   EXPECT_LE(q.isosurface_rms, 0.01);
@@ -105,7 +107,7 @@ TEST(ShrinkWrap, MixingStaysFiniteAndMostlyOnTheIsosurface) {
   const ShrinkWrapResult result = shrink_wrap(hierarchy, p.base.positions, p.distance, p.field, options_for(p));
   for (const Vec3& v : result.positions) ASSERT_TRUE(is_finite(v));
   EXPECT_GE(double(result.correction.corrected), 0.97 * double(result.correction.movable));
-  const SurfaceDistance reference(p.extracted);
+  const BinnedSurfaceDistance reference(p.extracted);
   const FitQuality q = measure_fit_quality(hierarchy, 3, result.positions, p.extracted, reference, p.field, p.iso, false);
   EXPECT_EQ(q.nonfinite_vertices, 0u);
   EXPECT_LE(q.surface_rms, 0.2);
@@ -216,7 +218,7 @@ TEST(ShrinkWrap, CoveragePullCoversWhatTheBaseMeshCutOff) {
   const SubdivisionHierarchy hierarchy(p.base, 3);
   const ShrinkWrapResult paper = shrink_wrap(hierarchy, p.base.positions, p.distance, p.field);
   const ShrinkWrapResult pulled = shrink_wrap(hierarchy, p.base.positions, p.distance, p.field, options_for(p));
-  const SurfaceDistance reference(p.extracted);
+  const BinnedSurfaceDistance reference(p.extracted);
   const FitQuality before = measure_fit_quality(hierarchy, 3, paper.positions, p.extracted, reference, p.field, 0.0, false);
   const FitQuality after = measure_fit_quality(hierarchy, 3, pulled.positions, p.extracted, reference, p.field, 0.0, false);
   EXPECT_GT(before.coverage_rms, 1.0);  // the fingers are left out without the pull
@@ -261,7 +263,7 @@ TEST(ShrinkWrap, CoveragePullStretchesBoundaryCurvesOnABoxFace) {
   }
   ASSERT_GT(on_face, 100u);
   EXPECT_LE(farthest, 2.5);  // 5.87 cells when only points off the box were pulled, 1.97 now
-  const SurfaceDistance reference(p.extracted);
+  const BinnedSurfaceDistance reference(p.extracted);
   const FitQuality q = measure_fit_quality(hierarchy, 3, pulled.positions, p.extracted, reference, p.field, 0.0, false);
   EXPECT_EQ(q.nonfinite_vertices, 0u);
   EXPECT_LE(q.isosurface_rms, 0.01);
@@ -566,12 +568,28 @@ TEST(FitQuality, FineFacesAreNumberedByParentFace) {
 TEST(FitQuality, ReportsDistancesTanglesAndEvenness) {
   const Pipeline p = prepare(make_builtin_field("sphere", 40), 0.0, 60);
   const SubdivisionHierarchy hierarchy(p.base, 2);
-  const SurfaceDistance reference(p.extracted);
+  const BinnedSurfaceDistance reference(p.extracted);
   // Perfect fit: the sphere's own subdivided control points pulled onto the isosurface.
   const ShrinkWrapResult result = shrink_wrap(hierarchy, p.base.positions, p.distance, p.field, options_for(p));
   const FitQuality good = measure_fit_quality(hierarchy, 2, result.positions, p.extracted, reference, p.field, 0.0, false);
   EXPECT_EQ(good.tangled_faces, 0u);
   EXPECT_LT(good.surface_max, 0.5);
+  // The distances both ways are CGAL's (AABB trees, the reference).
+  {
+    const PolygonMesh fitted = hierarchy.control_mesh(2, result.positions);
+    const auto rms_max = [&](const std::vector<double>& d) {
+      double sum = 0, max = 0;
+      for (double x : d) sum += x * x, max = std::max(max, x);
+      return std::pair<double, double>{std::sqrt(sum / double(d.size())) / p.field.cell_size(), max / p.field.cell_size()};
+    };
+    const auto [surface_rms, surface_max] = rms_max(SurfaceDistance(p.extracted).distances(fitted.positions));
+    const auto [coverage_rms, coverage_max] = rms_max(SurfaceDistance(fitted).distances(p.extracted.positions));
+    EXPECT_NEAR(good.surface_rms, surface_rms, 1e-9);
+    EXPECT_NEAR(good.surface_max, surface_max, 1e-9);
+    EXPECT_NEAR(good.coverage_rms, coverage_rms, 1e-9);
+    EXPECT_NEAR(good.coverage_max, coverage_max, 1e-9);
+    EXPECT_GT(coverage_max, 0.0);
+  }
   // The same mesh with reversed orientation is entirely tangled.
   const FitQuality flipped = measure_fit_quality(hierarchy, 2, result.positions, p.extracted, reference, p.field, 0.0, true);
   EXPECT_EQ(flipped.tangled_faces, flipped.faces);

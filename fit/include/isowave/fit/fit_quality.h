@@ -19,7 +19,7 @@
 
 #include "isowave/core/mesh.h"
 #include "isowave/core/volume.h"
-#include "isowave/core/surface_distance.h"
+#include "isowave/core/binned_surface_distance.h"
 #include "isowave/transform/hierarchy.h"
 
 namespace isowave {
@@ -74,9 +74,11 @@ double share_farther_than(const std::vector<Vec3>& reference, std::size_t stride
 // Measures level `level` of `hierarchy` with control points `positions` (at
 // least vertex_count(level)) against the extracted mesh (`extracted`, and
 // `extracted_distance` built from it) and the scalar field. Parallel (TBB),
-// deterministic. O(n log n) for the fitted mesh's distance tree.
+// deterministic. O(n) for the fitted mesh's bins, then a distance query per
+// vertex each way (BinnedSurfaceDistance: exact, as CGAL's AABB tree, which
+// took a minute and 5 GB on miranda's finest level).
 FitQuality measure_fit_quality(const SubdivisionHierarchy& hierarchy, int level, const std::vector<Vec3>& positions,
-                               const PolygonMesh& extracted, const SurfaceDistance& extracted_distance,
+                               const PolygonMesh& extracted, const BinnedSurfaceDistance& extracted_distance,
                                const Volume& field, double iso, bool flip);
 
 // The value below which `fraction` (in [0, 1]) of `values` lie (nearest rank);
