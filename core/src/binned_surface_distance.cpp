@@ -133,9 +133,15 @@ std::int64_t BinnedSurfaceDistance::bin_along(int axis, double coordinate) const
   return std::min<std::int64_t>(dims_[axis] - 1, static_cast<std::int64_t>(std::min(c, 1e15)));
 }
 
-double BinnedSurfaceDistance::squared_distance_to_triangle(const Vec3& p, std::uint32_t triangle) const {
+double BinnedSurfaceDistance::squared_distance_to_triangle(const Vec3& p, std::uint32_t triangle, double best) const {
   const std::uint32_t* t = triangles_.data() + 3 * std::size_t{triangle};
-  return squared_norm(p - closest_point_on_triangle(p, positions_[t[0]], positions_[t[1]], positions_[t[2]]));
+  const Vec3 &a = positions_[t[0]], &b = positions_[t[1]], &c = positions_[t[2]];
+  // Most triangles of a bin are farther than the best so far: their bounding
+  // box, no nearer than the triangle, rules them out more cheaply.
+  const Vec3 gap = component_max(Vec3{}, component_max(component_min(a, component_min(b, c)) - p,
+                                                       p - component_max(a, component_max(b, c))));
+  if (squared_norm(gap) >= best) return best;
+  return std::min(best, squared_norm(p - closest_point_on_triangle(p, a, b, c)));
 }
 
 double BinnedSurfaceDistance::squared_distance(const Vec3& p) const {
@@ -151,7 +157,7 @@ double BinnedSurfaceDistance::squared_distance(const Vec3& p) const {
     const std::size_t row = static_cast<std::size_t>(dims_[0] * (y + dims_[1] * z));
     for (std::uint32_t i = first_[row + static_cast<std::size_t>(x0)], end = first_[row + static_cast<std::size_t>(x1) + 1];
          i < end; ++i)
-      best = std::min(best, squared_distance_to_triangle(p, listed_[i]));
+      best = squared_distance_to_triangle(p, listed_[i], best);
   };
   for (std::int64_t k = 0;; ++k) {
     // Ring k: the bins k steps from the centre's in at least one axis.
