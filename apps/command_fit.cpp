@@ -116,8 +116,8 @@ int fit(const Args& raw) {
   cli::check_memory(static_cast<double>(fine_vertex_count(base, levels)), 300, "--levels " + std::to_string(levels));
   const SubdivisionHierarchy hierarchy(base, levels);
 
-  // A live line per stage on a terminal (miranda: the quality report alone
-  // takes about a minute); nothing otherwise, as the report below has the
+  // A live line per stage on a terminal (miranda: the shrink-wrap and the
+  // quality report take 10 and 20 s); nothing otherwise, as the report below has the
   // times.
   const bool live = cli::default_progress_mode(args.has("quiet")) == cli::ProgressMode::LiveBar;
   cli::ConsoleProgress progress(input, live ? cli::ProgressMode::LiveBar : cli::ProgressMode::Quiet);
