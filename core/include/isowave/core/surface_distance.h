@@ -1,8 +1,11 @@
 #pragma once
 // Exact Euclidean distance from points to a polygon mesh (faces fanned into
 // triangles from their first vertex), through a CGAL AABB tree: the base-mesh
-// report, the fit quality report, tests and benchmarks measure surfaces with
-// it. CGAL stays inside the .cpp.
+// report, tests and benchmarks measure surfaces with it (the fit's quality
+// report, on millions of small triangles, uses BinnedSurfaceDistance). CGAL
+// stays inside the .cpp. Its primitives must not be degenerate: a triangle of
+// collinear corners is measured by its corners only (BinnedSurfaceDistance
+// measures its edges).
 #include <memory>
 #include <vector>
 
