@@ -117,8 +117,8 @@ int fit(const Args& raw) {
   const SubdivisionHierarchy hierarchy(base, levels);
 
   // A live line per stage on a terminal (miranda: the shrink-wrap and the
-  // quality report take 10 and 20 s); nothing otherwise, as the report below has the
-  // times.
+  // quality report take 10 and 20 s); nothing otherwise, as the report below
+  // has the times.
   const bool live = cli::default_progress_mode(args.has("quiet")) == cli::ProgressMode::LiveBar;
   cli::ConsoleProgress progress(input, live ? cli::ProgressMode::LiveBar : cli::ProgressMode::Quiet);
   auto start = Clock::now();

@@ -23,11 +23,11 @@ namespace isowave {
 class BinnedSurfaceDistance {
  public:
   // Bins of twice the mean triangle edge (larger if the mesh's bounding box
-  // would need more than 8 bins per triangle). O(T + B) time and about
-  // 4 bytes per bin plus 4 per (triangle, overlapped bin) pair, 12 per
-  // triangle and 24 per vertex, for T triangles and B bins; parallel where it
-  // pays. Throws Error(InvalidArgument) for a mesh without faces or with a
-  // non-finite position.
+  // would need more than 8 bins per triangle). O(T + B) time, serial, and
+  // about 4 bytes per bin plus 4 per (triangle, overlapped bin) pair, 12 per
+  // triangle and 24 per vertex, for T triangles and B bins. Throws
+  // Error(InvalidArgument) for a mesh without faces or with a non-finite
+  // position.
   explicit BinnedSurfaceDistance(const PolygonMesh& mesh);
 
   std::size_t triangle_count() const { return triangles_.size() / 3; }
