@@ -20,7 +20,7 @@
 #include "isowave/simplify/bucket_queue.h"
 #include "isowave/simplify/collapse_error.h"
 #include "isowave/simplify/collapse_mesh.h"
-#include "isowave/core/surface_distance.h"
+#include "isowave/core/binned_surface_distance.h"
 
 namespace isowave::simplify {
 
@@ -756,7 +756,7 @@ SimplifyResult simplify(const PolygonMesh& input, const SimplifyOptions& options
 
   if (options.compute_distance) {
     progress.begin_stage("simplify: distance");
-    const std::vector<double> distances = SurfaceDistance(result.base).distances(input.positions);
+    const std::vector<double> distances = BinnedSurfaceDistance(result.base).distances(input.positions);
     double sum = 0;
     for (double d : distances) {
       sum += d * d;

@@ -1,8 +1,8 @@
 #pragma once
 // Exact Euclidean distance from points to a polygon mesh (faces fanned into
-// triangles from their first vertex), through a CGAL AABB tree: the base-mesh
-// report, tests and benchmarks measure surfaces with it (the fit's quality
-// report, on millions of small triangles, uses BinnedSurfaceDistance). CGAL
+// triangles from their first vertex), through a CGAL AABB tree: the
+// reference of tests and benchmarks (the base-mesh and fit quality reports
+// use the faster BinnedSurfaceDistance, which tests compare with it). CGAL
 // stays inside the .cpp. Its primitives must not be degenerate: a triangle of
 // collinear corners is measured by its corners only (BinnedSurfaceDistance
 // measures its edges).

@@ -132,7 +132,7 @@ struct SimplifyOptions {
   // start other work on the core that is left idle. Must not throw.
   std::function<void()> serial_phase_begins;
   std::uint32_t bucket_count = 100000;  // >= 1
-  // Distance from every input vertex to the base mesh surface (CGAL AABB tree).
+  // Distance from every input vertex to the base mesh surface (BinnedSurfaceDistance).
   bool compute_distance = true;
   // Test hook: check every corner-table invariant after each collapse (O(n)
   // per collapse: small meshes only); a failure throws std::logic_error.
