@@ -31,7 +31,6 @@ class BinnedSurfaceDistance {
   explicit BinnedSurfaceDistance(const PolygonMesh& mesh);
 
   std::size_t triangle_count() const { return triangles_.size() / 3; }
-  double bin_size() const { return bin_; }
 
   // Distance from p to the nearest point of the mesh (NaN for a non-finite
   // p). Thread-safe. Scans the bins ring by ring around p's bin until no
