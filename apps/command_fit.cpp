@@ -213,6 +213,7 @@ int fit(const Args& raw) {
     progress.begin_stage("quality");
     const BinnedSurfaceDistance reference(surface.mesh);
     std::vector<FitQuality> qualities;
+    const SurfaceDeviation deviation = extracted_surface_deviation(surface.mesh, field, extract_options.iso);
     double work = 0, total = 0;  // each level's measurement takes about as long as its vertices
     for (int level = 0; level <= levels; ++level) total += double(hierarchy.vertex_count(level));
     for (int level = 0; level <= levels; ++level) {
@@ -224,6 +225,9 @@ int fit(const Args& raw) {
     }
     progress.end_stage();
     std::printf("quality:\n");
+    std::printf("  the extracted triangles themselves lie rms %.4f, max %.4f cell off the isosurface (a fit on the "
+                "isosurface lies about as far from them)\n",
+                deviation.rms, deviation.max);
     for (const FitQuality& quality : qualities) print_quality(quality);
   }
   std::printf("%s: level %d, %zu vertices, %zu %s\n", output.c_str(), levels, fine.vertex_count(), fine.face_count(),

@@ -326,6 +326,9 @@ int main(int argc, char** argv) {
     if (quality) {
       start = std::chrono::steady_clock::now();
       const BinnedSurfaceDistance reference(extracted);
+      const SurfaceDeviation deviation = extracted_surface_deviation(extracted, volume, iso);
+      std::printf("extracted triangles off the isosurface: rms %.4f max %.3f cell (area-weighted)\n", deviation.rms,
+                  deviation.max);
       for (int level = final_quality_only ? levels : 0; level <= levels; ++level)
         print_quality(measure_fit_quality(hierarchy, level,
                                           level < levels ? wrapped.level_positions[std::size_t(level)] : wrapped.positions,

@@ -71,6 +71,53 @@ IsosurfaceDistance isosurface_distance(const std::vector<Vec3>& points, std::siz
   return result;
 }
 
+SurfaceDeviation extracted_surface_deviation(const PolygonMesh& extracted, const Volume& field, double iso) {
+  const TrilinearGrid grid(field);
+  // Fixed blocks of faces, their partial sums added in order: the result
+  // does not depend on the thread count.
+  constexpr std::size_t kBlock = 4096;
+  struct Partial {
+    double weighted_squares = 0, weight = 0, max = 0;
+  };
+  const std::size_t faces = extracted.face_count();
+  std::vector<Partial> partials((faces + kBlock - 1) / kBlock);
+  constexpr double kBarycentric[7][3] = {{1.0 / 3, 1.0 / 3, 1.0 / 3}, {0.5, 0.5, 0.0},         {0.0, 0.5, 0.5},
+                                         {0.5, 0.0, 0.5},             {2.0 / 3, 1.0 / 6, 1.0 / 6}, {1.0 / 6, 2.0 / 3, 1.0 / 6},
+                                         {1.0 / 6, 1.0 / 6, 2.0 / 3}};
+  for_each_index(partials.size(), [&](std::size_t block) {
+    Partial& partial = partials[block];
+    for (std::size_t f = block * kBlock; f < std::min(faces, (block + 1) * kBlock); ++f) {
+      const std::uint32_t* face = extracted.face_begin(f);
+      for (std::uint32_t k = 1; k + 1 < extracted.face_size(f); ++k) {
+        const Vec3& a = extracted.positions[face[0]];
+        const Vec3& b = extracted.positions[face[k]];
+        const Vec3& c = extracted.positions[face[k + 1]];
+        const double area = 0.5 * norm(cross(b - a, c - a));
+        for (const auto& w : kBarycentric) {
+          const TrilinearSample s = grid.sample(w[0] * a + w[1] * b + w[2] * c);
+          const double g = norm(s.gradient);
+          if (!(g > 0) || !std::isfinite(s.value)) continue;
+          const double d = std::abs(s.value - iso) / g;
+          partial.weighted_squares += area * d * d;
+          partial.weight += area;
+          partial.max = std::max(partial.max, d);
+        }
+      }
+    }
+  });
+  Partial total;
+  for (const Partial& partial : partials) {
+    total.weighted_squares += partial.weighted_squares;
+    total.weight += partial.weight;
+    total.max = std::max(total.max, partial.max);
+  }
+  SurfaceDeviation deviation;
+  const double inverse_cell = 1.0 / field.cell_size();
+  deviation.rms = total.weight > 0 ? std::sqrt(total.weighted_squares / total.weight) * inverse_cell : 0.0;
+  deviation.max = total.max * inverse_cell;
+  return deviation;
+}
+
 double share_farther_than(const std::vector<Vec3>& reference, std::size_t stride, const std::vector<Vec3>& fitted,
                           std::size_t count, double distance) {
   if (stride == 0 || !(distance > 0) || fitted.size() < count)

@@ -47,5 +47,42 @@ TEST(FitQuality, IsosurfaceDistanceOfPointsAtKnownOffsets) {
   EXPECT_EQ(d.undefined, 0u);
 }
 
+// The same linear field: its isosurface is the plane x = 26, and the
+// first-order distance of any point is its exact distance to that plane. Two
+// triangles parallel to it, areas 2 and 8 (world units squared) at 1 and 4
+// world units (0.5 and 2 cells) from it, and a quad (two triangles, area 1)
+// on it: area-weighted RMS sqrt((2 * 0.25 + 8 * 4 + 1 * 0) / 11) cells,
+// maximum 2 cells.
+TEST(FitQuality, ExtractedSurfaceDeviationWeighsTrianglesByArea) {
+  Volume field = test::sampled_volume({33, 17, 17}, [](double x, double, double) { return 26.0 - 2.0 * x; });
+  field.spacing = Vec3{2.0, 2.0, 2.0};
+  PolygonMesh mesh;
+  const auto add = [&mesh](std::initializer_list<Vec3> corners) {
+    std::vector<std::uint32_t> face;
+    for (const Vec3& p : corners) {
+      face.push_back(static_cast<std::uint32_t>(mesh.positions.size()));
+      mesh.positions.push_back(p);
+    }
+    mesh.add_face(face.data(), face.size());
+  };
+  add({Vec3{27, 2, 2}, Vec3{27, 4, 2}, Vec3{27, 2, 4}});  // area 2, 1 unit off
+  add({Vec3{22, 2, 2}, Vec3{22, 6, 2}, Vec3{22, 2, 6}});  // area 8, 4 units off
+  add({Vec3{26, 10, 10}, Vec3{26, 11, 10}, Vec3{26, 11, 11}, Vec3{26, 10, 11}});  // area 1, on it
+  const SurfaceDeviation d = extracted_surface_deviation(mesh, field, 0.0);
+  EXPECT_NEAR(d.rms, std::sqrt((2 * 0.25 + 8 * 4.0) / 11.0), 1e-12);
+  EXPECT_NEAR(d.max, 2.0, 1e-12);
+
+  // A tilted triangle: its 7 samples lie at known offsets, the mean of their
+  // squares over its area (the same weight for each) is the rule's value.
+  PolygonMesh tilted;
+  tilted.positions = {Vec3{26, 2, 2}, Vec3{30, 2, 2}, Vec3{26, 6, 2}};  // offsets 0, 4, 0 world units
+  tilted.add_face({0, 1, 2});
+  const SurfaceDeviation t = extracted_surface_deviation(tilted, field, 0.0);
+  // Offsets in cells at the barycentric weight of corner 1: 1/3, 1/2, 1/2, 0, 1/6, 2/3, 1/6 of 2 cells.
+  const double squares = (4.0 / 9 + 1 + 1 + 0 + 1.0 / 9 + 16.0 / 9 + 1.0 / 9) / 7.0;
+  EXPECT_NEAR(t.rms, std::sqrt(squares), 1e-12);
+  EXPECT_NEAR(t.max, 4.0 / 3.0, 1e-12);
+}
+
 }  // namespace
 }  // namespace isowave

@@ -58,6 +58,21 @@ struct IsosurfaceDistance {
 IsosurfaceDistance isosurface_distance(const std::vector<Vec3>& points, std::size_t count, const Volume& field,
                                        double iso, double far_cells);
 
+// How far the extracted triangles themselves lie from the isosurface of the
+// trilinear field (as isosurface_distance() measures a point) at 7 points of
+// each triangle (centroid, edge midpoints and the points halfway between the
+// centroid and each corner), in cells: RMS weighted by triangle area, and
+// maximum. Marching cubes' flat triangles cut across the curved trilinear
+// isosurface, so a fit whose points lie on that isosurface cannot come much
+// nearer to them than this: on 16 data sets the fit's distance to the
+// extracted mesh was 0.9-1.25 times it. Polygons count as fans of triangles;
+// samples without a gradient are left out. Parallel, deterministic,
+// O(triangles).
+struct SurfaceDeviation {
+  double rms = 0, max = 0;
+};
+SurfaceDeviation extracted_surface_deviation(const PolygonMesh& extracted, const Volume& field, double iso);
+
 // How much of a surface a fitted mesh leaves out, cheaply: the share of the
 // sampled `reference` points (every `stride`-th, stride >= 1) farther than
 // `distance` from every one of the first `count` `fitted` points. A point
