@@ -91,6 +91,14 @@ TEST(ShrinkWrap, ViscousFingersMeetsTheTargets) {
   expect_targets(prepare(read_volume(path), 30, 874), "viscous fingers");
 }
 
+TEST(ShrinkWrap, IronProteinMeetsTheTargets) {
+  ISOWAVE_REQUIRE_SHARED_FILE(path, "volumes/ironProt.vtk");
+  // A legacy VTK electron density; base of 1/16 of the 7,424 extracted
+  // vertices (2026-11-26: 0.0369 RMS / 0.344 max from the extracted mesh,
+  // coverage p99 0.14, 1 of 26,112 faces tangled).
+  expect_targets(prepare(read_volume(path), 128, 464), "iron protein");
+}
+
 // The built-in mixing layer has droplets and filaments a few cells across,
 // finer than a base mesh of 1/16 of the extracted vertices can follow. The
 // coverage, isosurface and tangle targets are met (tangled 0.32% before the
@@ -98,9 +106,10 @@ TEST(ShrinkWrap, ViscousFingersMeetsTheTargets) {
 // the maximum distance to the extracted mesh (0.395 cells; 1.42 before the
 // correction's second step rule on the distance field, from one vertex
 // pressed onto the x = 0 face); its RMS is not quite (0.0510 against 0.05),
-// because the flat triangles themselves stray 0.040 RMS and up to 0.57
-// cells from the exact isosurface the fit lies on (first order at four
-// points per triangle).
+// because the flat triangles themselves stray 0.046 RMS and up to 1.0 cell
+// from the exact isosurface the fit lies on (extracted_surface_deviation):
+// the fit is asserted to come as near to them as points on that isosurface
+// can (1.10 times that here; 0.92-1.25 on 16 shared and built-in volumes).
 TEST(ShrinkWrap, MixingStaysFiniteAndMostlyOnTheIsosurface) {
   const Pipeline p = prepare(make_builtin_field("mixing", 96), 0.0, 2400);
   const SubdivisionHierarchy hierarchy(p.base, 3);
@@ -110,7 +119,7 @@ TEST(ShrinkWrap, MixingStaysFiniteAndMostlyOnTheIsosurface) {
   const BinnedSurfaceDistance reference(p.extracted);
   const FitQuality q = measure_fit_quality(hierarchy, 3, result.positions, p.extracted, reference, p.field, p.iso, false);
   EXPECT_EQ(q.nonfinite_vertices, 0u);
-  EXPECT_LE(q.surface_rms, 0.2);
+  EXPECT_LE(q.surface_rms, 1.25 * extracted_surface_deviation(p.extracted, p.field, p.iso).rms);
   EXPECT_LE(q.surface_max, 0.5);
   // The droplets no longer fold (small_component_vertices): coverage p99 0.31
   // cells (0.93 with the paper's steps). Tangled 0.06% with the unfold, 0.32%
