@@ -65,9 +65,9 @@ IsosurfaceDistance isosurface_distance(const std::vector<Vec3>& points, std::siz
 // maximum. Marching cubes' flat triangles cut across the curved trilinear
 // isosurface, so a fit whose points lie on that isosurface cannot come much
 // nearer to them than this: in 20 fits of 16 data sets the fit's distance
-// to the extracted mesh was 0.9-1.55 times it. Polygons count as fans of triangles;
-// samples without a gradient are left out. Parallel, deterministic,
-// O(triangles).
+// to the extracted mesh was 0.9-1.55 times it. Polygons count as fans of
+// triangles; samples without a gradient are left out. Parallel,
+// deterministic, O(triangles).
 struct SurfaceDeviation {
   double rms = 0, max = 0;
 };
