@@ -32,8 +32,8 @@ double seconds_since(Clock::time_point start) { return std::chrono::duration<dou
 void print_quality(const FitQuality& q) {
   std::printf("  level %d: %zu vertices, %zu faces%s\n", q.level, q.vertices, q.faces,
               q.nonfinite_vertices ? " (NON-FINITE VERTICES)" : "");
-  std::printf("    on the isosurface (|f - iso| / |grad f|): rms %.4f, max %.4f cell%s\n", q.isosurface_rms,
-              q.isosurface_max,
+  std::printf("    on the isosurface (|f - iso| / |grad f|): rms %.4f, max %.4f cell, %zu vertices over a cell off%s\n",
+              q.isosurface_rms, q.isosurface_max, q.isosurface_far,
               q.isosurface_undefined ? (" (" + std::to_string(q.isosurface_undefined) + " without gradient)").c_str() : "");
   std::printf("    to the extracted mesh: rms %.4f, max %.4f cell\n", q.surface_rms, q.surface_max);
   std::printf("    coverage (extracted vertices to the fit): rms %.4f, 99th percentile %.4f, max %.4f cell\n",

@@ -189,6 +189,7 @@ FitQuality measure_fit_quality(const SubdivisionHierarchy& hierarchy, int level,
   q.isosurface_rms = on_isosurface.rms;
   q.isosurface_max = on_isosurface.max;
   q.isosurface_undefined = on_isosurface.undefined;
+  q.isosurface_far = on_isosurface.far;
   rms_and_max(extracted_distance.distances(mesh.positions), inverse_cell, q.surface_rms, q.surface_max);
 
   // Coverage of the extracted surface by the fitted one.
