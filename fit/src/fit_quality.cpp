@@ -34,6 +34,15 @@ void rms_and_max(const std::vector<double>& values, double scale, double& rms, d
   max *= scale;
 }
 
+// First-order distance |f(p) - iso| / |grad f(p)| of p to the isosurface of
+// the trilinear field, world units; -1 where the gradient is zero or the
+// value not finite.
+double first_order_distance(const TrilinearGrid& grid, const Vec3& p, double iso) {
+  const TrilinearSample s = grid.sample(p);
+  const double g = norm(s.gradient);
+  return g > 0 && std::isfinite(s.value) ? std::abs(s.value - iso) / g : -1.0;
+}
+
 }  // namespace
 
 double percentile(std::vector<double>& values, double fraction) {
@@ -50,11 +59,7 @@ IsosurfaceDistance isosurface_distance(const std::vector<Vec3>& points, std::siz
   if (points.size() < count) throw Error(ErrorKind::InvalidArgument, "isosurface distance: too few points");
   const TrilinearGrid grid(field);
   std::vector<double> first_order(count);
-  for_each_index(count, [&](std::size_t v) {
-    const TrilinearSample s = grid.sample(points[v]);
-    const double g = norm(s.gradient);
-    first_order[v] = g > 0 && std::isfinite(s.value) ? std::abs(s.value - iso) / g : -1.0;
-  });
+  for_each_index(count, [&](std::size_t v) { first_order[v] = first_order_distance(grid, points[v], iso); });
   IsosurfaceDistance result;
   std::vector<double> defined;
   defined.reserve(count);
@@ -94,10 +99,8 @@ SurfaceDeviation extracted_surface_deviation(const PolygonMesh& extracted, const
         const Vec3& c = extracted.positions[face[k + 1]];
         const double area = 0.5 * norm(cross(b - a, c - a));
         for (const auto& w : kBarycentric) {
-          const TrilinearSample s = grid.sample(w[0] * a + w[1] * b + w[2] * c);
-          const double g = norm(s.gradient);
-          if (!(g > 0) || !std::isfinite(s.value)) continue;
-          const double d = std::abs(s.value - iso) / g;
+          const double d = first_order_distance(grid, w[0] * a + w[1] * b + w[2] * c, iso);
+          if (!(d >= 0 && std::isfinite(d))) continue;
           partial.weighted_squares += area * d * d;
           partial.weight += area;
           partial.max = std::max(partial.max, d);
