@@ -145,7 +145,8 @@ int fit(const Args& raw) {
   const double distance_seconds = seconds_since(start);
 
   start = Clock::now();
-  if (!args.has("no-coverage-pull")) wrap_options.surface = &surface.mesh;
+  wrap_options.surface = &surface.mesh;
+  wrap_options.coverage_pull = !args.has("no-coverage-pull");
   const ShrinkWrapResult result = shrink_wrap(hierarchy, base.positions, distance, field, wrap_options, progress);
   const double wrap_seconds = seconds_since(start);
 
@@ -180,10 +181,11 @@ int fit(const Args& raw) {
   if (wrap_options.final_correction)
     std::printf("  correction: %zu vertices onto the isosurface (mean %.4f, max %.4f cell; %zu from the nearest zero "
                 "of the distance field, %zu along a box face, %zu from their neighbours' centroid, %zu by the "
-                "wide search), %zu left in place\n",
+                "wide search, %zu stranded ones from the extracted surface), %zu left in place\n",
                 result.correction.corrected, result.correction.mean_move_cells, result.correction.max_move_cells,
                 result.correction.from_nearest_point, result.correction.along_box_face,
-                result.correction.from_neighbours, result.correction.from_wide_search, result.correction.failed);
+                result.correction.from_neighbours, result.correction.from_wide_search,
+                result.correction.from_extracted_surface, result.correction.failed);
   if (result.untangle.tangled_before > 0)
     std::printf("  untangle: %zu tangled faces on level %d before, %zu after %d rounds\n", result.untangle.tangled_before,
                 levels, result.untangle.tangled_after, result.untangle.rounds);

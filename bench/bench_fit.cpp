@@ -270,7 +270,8 @@ int main(int argc, char** argv) {
     wrap_options.unfold_max_tangled_fraction = unfold_limit;
     wrap_options.small_component_vertices = small_components;
     wrap_options.correction_from_nearest_point = nearest_correction;
-    if (coverage_pull) wrap_options.surface = &extracted;
+    wrap_options.surface = &extracted;
+    wrap_options.coverage_pull = coverage_pull;
     wrap_options.pull_max_edge_cells = pull_max_edge;
     ShrinkWrapResult wrapped;
     double wrap_seconds = 0;
@@ -305,10 +306,12 @@ int main(int argc, char** argv) {
                   s.last_attraction.mean_move_cells, s.last_attraction.max_move_cells, s.last_attraction.out_of_reach,
                   s.last_attraction.no_direction);
     std::printf("  correction: %zu corrected (mean %.4f, max %.3f cell; %zu from the nearest point, %zu along a box "
-                "face, %zu from their neighbours, %zu by the wide search), %zu failed\n",
+                "face, %zu from their neighbours, %zu by the wide search, %zu from the extracted surface), %zu "
+                "failed\n",
                 wrapped.correction.corrected, wrapped.correction.mean_move_cells, wrapped.correction.max_move_cells,
                 wrapped.correction.from_nearest_point, wrapped.correction.along_box_face,
-                wrapped.correction.from_neighbours, wrapped.correction.from_wide_search, wrapped.correction.failed);
+                wrapped.correction.from_neighbours, wrapped.correction.from_wide_search,
+                wrapped.correction.from_extracted_surface, wrapped.correction.failed);
     std::printf("  untangle: %zu tangled faces before, %zu after %d rounds\n", wrapped.untangle.tangled_before,
                 wrapped.untangle.tangled_after, wrapped.untangle.rounds);
     std::printf("  unfold: %zu tangled faces before, %zu after %d rounds (%zu moves)%s\n",

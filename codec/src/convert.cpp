@@ -152,7 +152,8 @@ ConvertResult convert_volume(const Volume& volume, const std::string& source, co
     result.fine_faces =
         result.levels > 0 ? shared_hierarchy->step(result.levels).face_vertices.size() : base.face_count();
     ShrinkWrapOptions wrap_options = options.shrink_wrap;
-    if (options.coverage_pull) wrap_options.surface = &surface.mesh;
+    wrap_options.surface = &surface.mesh;
+    wrap_options.coverage_pull = options.coverage_pull;
     result.fit = shrink_wrap(*shared_hierarchy, base.positions, *distance, field, wrap_options, progress);
     // The fit against the isosurface, both ways; the error rows, measured
     // against the fit, cannot show what it missed. A base mesh too coarse for

@@ -1,6 +1,7 @@
 #include "isowave/core/binned_surface_distance.h"
 
 #include <algorithm>
+#include <cassert>
 #include <cmath>
 #include <limits>
 
@@ -133,7 +134,8 @@ std::int64_t BinnedSurfaceDistance::bin_along(int axis, double coordinate) const
   return std::min<std::int64_t>(dims_[axis] - 1, static_cast<std::int64_t>(std::min(c, 1e15)));
 }
 
-double BinnedSurfaceDistance::squared_distance_to_triangle(const Vec3& p, std::uint32_t triangle, double best) const {
+double BinnedSurfaceDistance::squared_distance_to_triangle(const Vec3& p, std::uint32_t triangle, double best,
+                                                           Vec3* closest) const {
   const std::uint32_t* t = triangles_.data() + 3 * std::size_t{triangle};
   const Vec3 &a = positions_[t[0]], &b = positions_[t[1]], &c = positions_[t[2]];
   // Most triangles of a bin are farther than the best so far: their bounding
@@ -141,10 +143,14 @@ double BinnedSurfaceDistance::squared_distance_to_triangle(const Vec3& p, std::u
   const Vec3 gap = component_max(Vec3{}, component_max(component_min(a, component_min(b, c)) - p,
                                                        p - component_max(a, component_max(b, c))));
   if (squared_norm(gap) >= best) return best;
-  return std::min(best, squared_norm(p - closest_point_on_triangle(p, a, b, c)));
+  const Vec3 q = closest_point_on_triangle(p, a, b, c);
+  const double squared = squared_norm(p - q);
+  if (!(squared < best)) return best;
+  if (closest) *closest = q;
+  return squared;
 }
 
-double BinnedSurfaceDistance::squared_distance(const Vec3& p) const {
+double BinnedSurfaceDistance::squared_distance(const Vec3& p, Vec3* closest) const {
   std::int64_t centre[3];
   for (int a = 0; a < 3; ++a) centre[a] = bin_along(a, p[a]);
   double best = std::numeric_limits<double>::infinity();
@@ -157,7 +163,7 @@ double BinnedSurfaceDistance::squared_distance(const Vec3& p) const {
     const std::size_t row = static_cast<std::size_t>(dims_[0] * (y + dims_[1] * z));
     for (std::uint32_t i = first_[row + static_cast<std::size_t>(x0)], end = first_[row + static_cast<std::size_t>(x1) + 1];
          i < end; ++i)
-      best = squared_distance_to_triangle(p, listed_[i], best);
+      best = squared_distance_to_triangle(p, listed_[i], best, closest);
   };
   for (std::int64_t k = 0;; ++k) {
     // Ring k: the bins k steps from the centre's in at least one axis.
@@ -204,6 +210,13 @@ double BinnedSurfaceDistance::squared_distance(const Vec3& p) const {
 double BinnedSurfaceDistance::distance(const Vec3& p) const {
   if (!is_finite(p)) return std::numeric_limits<double>::quiet_NaN();
   return std::sqrt(squared_distance(p));
+}
+
+Vec3 BinnedSurfaceDistance::closest_point(const Vec3& p) const {
+  assert(is_finite(p));
+  Vec3 closest = p;
+  squared_distance(p, &closest);
+  return closest;
 }
 
 std::vector<double> BinnedSurfaceDistance::distances(const std::vector<Vec3>& points) const {

@@ -1,6 +1,7 @@
 // BinnedSurfaceDistance against CGAL's AABB tree (SurfaceDistance), the
 // reference: the same exact distances over a corpus of meshes and of query
-// points near, on, far from and outside each mesh.
+// points near, on, far from and outside each mesh, and closest points that
+// lie on the mesh at that distance.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -50,9 +51,13 @@ void expect_same_as_cgal(const PolygonMesh& mesh, double near, const std::string
   const std::vector<Vec3> points = query_points(mesh, near, 7);
   const std::vector<double> got = binned.distances(points), expected = reference.distances(points);
   ASSERT_EQ(got.size(), points.size());
-  for (std::size_t i = 0; i < points.size(); ++i)
+  for (std::size_t i = 0; i < points.size(); ++i) {
     ASSERT_NEAR(got[i], expected[i], 1e-9 * (1 + expected[i]))
         << "point " << i << " at (" << points[i].x << ", " << points[i].y << ", " << points[i].z << ")";
+    const Vec3 closest = binned.closest_point(points[i]);
+    ASSERT_NEAR(norm(closest - points[i]), expected[i], 1e-9 * (1 + expected[i])) << "closest point of point " << i;
+    ASSERT_LE(reference.distance(closest), 1e-9 * (1 + expected[i])) << "closest point of point " << i;
+  }
 }
 
 TEST(BinnedSurfaceDistance, MatchesCgalOnTheGeneratedCorpus) {

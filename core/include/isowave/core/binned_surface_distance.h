@@ -39,11 +39,16 @@ class BinnedSurfaceDistance {
   double distance(const Vec3& p) const;
   // distance() for every point, in parallel (TBB); out[i] for points[i].
   std::vector<double> distances(const std::vector<Vec3>& points) const;
+  // The nearest point of the mesh to p (finite; the first found of equally
+  // near ones). Thread-safe; the same scan as distance().
+  Vec3 closest_point(const Vec3& p) const;
 
  private:
-  double squared_distance(const Vec3& p) const;
-  // min(best, squared distance from p to the triangle)
-  double squared_distance_to_triangle(const Vec3& p, std::uint32_t triangle, double best) const;
+  // With `closest`, the nearest point is stored there.
+  double squared_distance(const Vec3& p, Vec3* closest = nullptr) const;
+  // min(best, squared distance from p to the triangle); where the triangle
+  // is nearer than best, its closest point goes to `closest` if given.
+  double squared_distance_to_triangle(const Vec3& p, std::uint32_t triangle, double best, Vec3* closest) const;
   std::int64_t bin_along(int axis, double coordinate) const;  // clamped to the grid
 
   std::vector<Vec3> positions_;
