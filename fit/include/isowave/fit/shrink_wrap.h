@@ -291,8 +291,8 @@ struct ShrinkWrapOptions {
   std::size_t small_component_vertices = 8;
   double small_component_cells = 3.0;
   AttractionOptions attraction;
-  // The extracted isosurface the distance field was built from: the coverage
-  // pull's and the final correction's stranded points' (see
+  // The extracted isosurface the distance field was built from, for the
+  // coverage pull and for the final correction's stranded points (see
   // CorrectionStatistics::from_extracted_surface). nullptr: neither runs.
   const PolygonMesh* surface = nullptr;
   // Not in the paper: the coverage pull (see fit/src/coverage_pull.h). With
