@@ -81,11 +81,11 @@ double peak_megabytes() {
 void print_quality(const FitQuality& q) {
   std::printf(
       "  level %d: %zu vertices, %zu faces | isosurface rms %.4f max %.3f cell (%zu over 1) | to extracted rms %.4f "
-      "max %.3f cell | coverage rms %.3f p99 %.3f max %.3f cell | tangled %zu (%.4f%%) | area/patch mean p1 %.2f "
-      "median %.2f p99 %.2f (sd %.2f)%s\n",
+      "max %.3f cell (%zu over 0.5) | coverage rms %.3f p99 %.3f max %.3f cell | tangled %zu (%.4f%%) | area/patch "
+      "mean p1 %.2f median %.2f p99 %.2f (sd %.2f)%s\n",
       q.level, q.vertices, q.faces, q.isosurface_rms, q.isosurface_max, q.isosurface_far, q.surface_rms, q.surface_max,
-      q.coverage_rms, q.coverage_p99, q.coverage_max, q.tangled_faces, 100 * q.tangled_fraction, q.area_ratio_p1,
-      q.area_ratio_median, q.area_ratio_p99, q.area_ratio_deviation, q.nonfinite_vertices ? " NON-FINITE" : "");
+      q.surface_far, q.coverage_rms, q.coverage_p99, q.coverage_max, q.tangled_faces, 100 * q.tangled_fraction,
+      q.area_ratio_p1, q.area_ratio_median, q.area_ratio_p99, q.area_ratio_deviation, q.nonfinite_vertices ? " NON-FINITE" : "");
 }
 
 }  // namespace

@@ -193,7 +193,11 @@ FitQuality measure_fit_quality(const SubdivisionHierarchy& hierarchy, int level,
   q.isosurface_max = on_isosurface.max;
   q.isosurface_undefined = on_isosurface.undefined;
   q.isosurface_far = on_isosurface.far;
-  rms_and_max(extracted_distance.distances(mesh.positions), inverse_cell, q.surface_rms, q.surface_max);
+  const std::vector<double> to_extracted = extracted_distance.distances(mesh.positions);
+  rms_and_max(to_extracted, inverse_cell, q.surface_rms, q.surface_max);
+  q.surface_far = static_cast<std::size_t>(std::count_if(to_extracted.begin(), to_extracted.end(), [&](double d) {
+    return d * inverse_cell > kSurfaceFarCells;
+  }));
 
   // Coverage of the extracted surface by the fitted one.
   {

@@ -639,6 +639,7 @@ TEST(FitQuality, ReportsDistancesTanglesAndEvenness) {
   const FitQuality good = measure_fit_quality(hierarchy, 2, result.positions, p.extracted, reference, p.field, 0.0, false);
   EXPECT_EQ(good.tangled_faces, 0u);
   EXPECT_LT(good.surface_max, 0.5);
+  EXPECT_EQ(good.surface_far, 0u);
   EXPECT_EQ(good.isosurface_far, 0u);
   // The distances both ways are CGAL's (AABB trees, the reference).
   {
@@ -665,6 +666,7 @@ TEST(FitQuality, ReportsDistancesTanglesAndEvenness) {
   moved[0] = moved[0] + 3.0 * normalized(moved[0] - centre);
   const FitQuality bad = measure_fit_quality(hierarchy, 2, moved, p.extracted, reference, p.field, 0.0, false);
   EXPECT_NEAR(bad.surface_max, 3.0, 0.3);
+  EXPECT_EQ(bad.surface_far, 1u);
   EXPECT_GT(bad.isosurface_max, 2.5);
   EXPECT_EQ(bad.isosurface_far, 1u);  // the field is a distance: that vertex alone is over a cell off
   // Sliding one corner of a fine face 95% of the way to the opposite corner
