@@ -2,6 +2,8 @@
 // triangle mesh (CGAL AABB tree), on analytic fields and shared volumes.
 #include <gtest/gtest.h>
 
+#include <array>
+
 #include <cmath>
 #include <cstdio>
 
@@ -131,6 +133,37 @@ TEST(SignedDistance, DroppedComponentsLeaveNoZeroCrossing) {
   // The small sphere's centre is outside the kept surface: positive, and as far as the big sphere.
   const double centre = sdf.distance.at(38, 24, 24);
   EXPECT_NEAR(centre, norm(Vec3{38, 24, 24} - Vec3{18, 24, 24}) - 12, 0.5);
+}
+
+TEST(SignedDistance, ADroppedSpeckSharingACellWithTheKeptSurfaceLeavesNoZeroCrossing) {
+  // Kept: the half-space x + y <= 20 (a staircase of samples). Dropped: one
+  // sample inside at (11, 11, 8), whose face neighbours are all outside but
+  // which is a corner of a cell the kept surface passes through (the one at
+  // (10, 10, 8), whose corner (10, 10, 8) is inside). It seeds the queue, so
+  // a flood that stops at seeds does not find it enclosed; one that stops at
+  // the ends of grid edges the kept mesh crosses does.
+  const Volume field = test::sampled_volume({24, 24, 16}, [](double x, double y, double z) {
+    if (x == 11 && y == 11 && z == 8) return 0.5;  // the face's saddle below 0: apart
+    return x + y <= 20 ? 1.0 : -1.0;
+  });
+  IsosurfaceOptions extract_options;
+  extract_options.min_component_vertices = 10;
+  const Isosurface surface = extract_isosurface(field, extract_options);
+  ASSERT_EQ(surface.report.after.components, 1u);
+  ASSERT_GT(surface.report.before.components, 1u);
+  SignedDistanceOptions options;
+  options.surface = &surface.mesh;
+  options.band_cells = 3;
+  const SignedDistanceField sdf = compute_signed_distance(field, options);
+  EXPECT_GE(sdf.statistics.flipped_nodes, 1u);
+  // Outside the kept surface (positive), with its outside neighbours.
+  EXPECT_GT(sdf.distance.at(11, 11, 8), 0.0f);
+  for (const auto& [i, j, k] : {std::array<std::size_t, 3>{12, 11, 8}, {10, 11, 8}, {11, 12, 8}, {11, 10, 8},
+                                {11, 11, 9}, {11, 11, 7}})
+    EXPECT_GT(sdf.distance.at(i, j, k), 0.0f);
+  // Without the surface mesh the speck is a surface of its own: negative.
+  const SignedDistanceField unmasked = compute_signed_distance(field, {});
+  EXPECT_LT(unmasked.distance.at(11, 11, 8), 0.0f);
 }
 
 TEST(SignedDistance, RejectsBadInput) {

@@ -26,9 +26,10 @@
 // The surface must be the one the base mesh came from. When extraction
 // dropped small components, pass the extracted mesh as options.surface: only
 // cells that mesh passes through seed the queue, and the regions enclosed by
-// dropped components alone (same-side nodes that reach neither a seed nor the
-// box) take the sign of their surroundings, so the dropped components leave
-// no zero crossing behind.
+// dropped components alone (same-side nodes that reach neither an end of a
+// grid edge the mesh crosses nor the box) take the sign of their
+// surroundings, so the dropped components leave no zero crossing behind,
+// also those that share cells with the kept surface.
 //
 // Narrow band: with band_cells = K > 0, a node is never updated to a distance
 // beyond K cells, so propagation stops there; unreached nodes get +-far_value
