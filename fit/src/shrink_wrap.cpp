@@ -1869,7 +1869,15 @@ ShrinkWrapResult shrink_wrap(const SubdivisionHierarchy& hierarchy, const std::v
   reserve_finest_wrap_level_mesh(hierarchy, mesh);
   SmallComponents small;
   std::vector<std::uint8_t> tangent_only;
-  const TrilinearGrid scalar_grid(field);
+  // The field without the closed components extraction dropped, for every
+  // search along it (see mirror_enclosed_samples); on huge pages, as the
+  // searches sample it at scattered places (a few milliseconds to fill,
+  // most of the TLB misses saved).
+  HugePageVector<float> field_values;
+  reserve_fresh_on_huge_pages(field_values, field.values.size());
+  field_values.resize(field.values.size());
+  result.mirrored_samples = mirror_enclosed_samples(field, distance, field_values.data());
+  const TrilinearGrid scalar_grid(field, field_values.data());
   const Box box(field);
   const double cell = field.cell_size();
   std::unique_ptr<CoveragePull> pull;
@@ -1946,12 +1954,7 @@ ShrinkWrapResult shrink_wrap(const SubdivisionHierarchy& hierarchy, const std::v
     }
     if (level == levels && (options.final_correction || options.untangle_rounds > 0)) {
       auto phase = Clock::now();
-      // Both sample the scalar field at scattered places: a copy on huge
-      // pages takes a few milliseconds and saves most of the TLB misses.
-      HugePageVector<float> field_values;
-      reserve_fresh_on_huge_pages(field_values, field.values.size());
-      field_values.assign(field.values.begin(), field.values.end());
-      const TrilinearGrid field_grid(field, field_values.data());
+      const TrilinearGrid& field_grid = scalar_grid;
       const TrilinearGrid distance_grid(distance.distance);
       if (options.final_correction) {
         for (const std::vector<std::uint32_t>& list : small.vertices)

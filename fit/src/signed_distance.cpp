@@ -1,15 +1,18 @@
 #include "isowave/fit/signed_distance.h"
 
 #include <algorithm>
+#include <cassert>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <functional>
 #include <limits>
 #include <string>
 #include <vector>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 
 #include "isowave/core/error.h"
 #include "isowave/core/huge_page_vector.h"
@@ -596,6 +599,30 @@ SignedDistanceField compute_signed_distance(const Volume& field, const SignedDis
   progress.update(1.0);
   progress.end_stage();
   return result;
+}
+
+std::size_t mirror_enclosed_samples(const Volume& field, const SignedDistanceField& distance, float* out) {
+  assert(distance.distance.dims == field.dims && distance.distance.values.size() == field.values.size());
+  const float iso = static_cast<float>(distance.iso);
+  const float below = std::nextafter(iso, -std::numeric_limits<float>::infinity());
+  return tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(0, field.values.size(), 1 << 16), std::size_t{0},
+      [&](const tbb::blocked_range<std::size_t>& r, std::size_t changed) {
+        for (std::size_t n = r.begin(); n < r.end(); ++n) {
+          const float f = field.values[n];
+          out[n] = f;
+          if (!std::isfinite(f)) continue;
+          // Inside by the distance field: negative (positive with flip), as
+          // compute_signed_distance() signs it.
+          const bool inside = std::signbit(distance.distance.values[n]) != distance.flip;
+          if (inside == is_inside(f, iso)) continue;
+          const float mirrored = static_cast<float>(2.0 * distance.iso - double(f));
+          out[n] = inside ? std::max(mirrored, iso) : std::min(mirrored, below);
+          ++changed;
+        }
+        return changed;
+      },
+      std::plus<>());
 }
 
 }  // namespace isowave

@@ -164,6 +164,19 @@ TEST(SignedDistance, ADroppedSpeckSharingACellWithTheKeptSurfaceLeavesNoZeroCros
   // Without the surface mesh the speck is a surface of its own: negative.
   const SignedDistanceField unmasked = compute_signed_distance(field, {});
   EXPECT_LT(unmasked.distance.at(11, 11, 8), 0.0f);
+  // The field the shrink-wrap searches: the speck's sample mirrored across
+  // the isovalue, nothing else changed, and its isosurface the kept one.
+  Volume cleaned = field;
+  EXPECT_EQ(mirror_enclosed_samples(field, sdf, cleaned.values.data()), 1u);
+  EXPECT_EQ(cleaned.at(11, 11, 8), -0.5f);
+  for (std::size_t n = 0; n < field.values.size(); ++n) {
+    if (n == field.index(11, 11, 8)) continue;
+    ASSERT_EQ(cleaned.values[n], field.values[n]) << "sample " << n;
+  }
+  const Isosurface cleaned_surface = extract_isosurface(cleaned, {});
+  EXPECT_EQ(cleaned_surface.report.before.components, 1u);
+  EXPECT_EQ(cleaned_surface.mesh.vertex_count(), surface.mesh.vertex_count());
+  EXPECT_EQ(mirror_enclosed_samples(field, unmasked, cleaned.values.data()), 0u);  // nothing dropped
 }
 
 TEST(SignedDistance, RejectsBadInput) {
