@@ -1876,7 +1876,7 @@ ShrinkWrapResult shrink_wrap(const SubdivisionHierarchy& hierarchy, const std::v
   HugePageVector<float> field_values;
   reserve_fresh_on_huge_pages(field_values, field.values.size());
   field_values.resize(field.values.size());
-  result.mirrored_samples = mirror_enclosed_samples(field, distance, field_values.data());
+  mirror_enclosed_samples(field, distance, field_values.data());  // as many as the distance field flipped
   const TrilinearGrid scalar_grid(field, field_values.data());
   const Box box(field);
   const double cell = field.cell_size();

@@ -438,9 +438,6 @@ struct ShrinkWrapResult {
   // the unfold's count, or, when it was skipped or off, untangle()'s (before
   // the pull, which changes few); 0 when neither ran.
   std::size_t tangled_faces = 0;
-  // Field samples enclosed by dropped components, mirrored across the
-  // isovalue for the searches along the field (mirror_enclosed_samples).
-  std::size_t mirrored_samples = 0;
 };
 
 // Fits the hierarchy to the zero set of `distance` (computed from `field`,
