@@ -85,7 +85,8 @@ void print_quality(const FitQuality& q) {
       "mean p1 %.2f median %.2f p99 %.2f (sd %.2f)%s\n",
       q.level, q.vertices, q.faces, q.isosurface_rms, q.isosurface_max, q.isosurface_far, q.surface_rms, q.surface_max,
       q.surface_far, q.coverage_rms, q.coverage_p99, q.coverage_max, q.tangled_faces, 100 * q.tangled_fraction,
-      q.area_ratio_p1, q.area_ratio_median, q.area_ratio_p99, q.area_ratio_deviation, q.nonfinite_vertices ? " NON-FINITE" : "");
+      q.area_ratio_p1, q.area_ratio_median, q.area_ratio_p99, q.area_ratio_deviation,
+      q.nonfinite_vertices ? " NON-FINITE" : "");
 }
 
 }  // namespace

@@ -1048,7 +1048,8 @@ PolygonMesh faces_near(const PolygonMesh& surface, const Box& box, double cell, 
     return std::clamp<std::int64_t>(static_cast<std::int64_t>(std::floor((x - box.low[a]) / block)), 0, dims[a] - 1);
   };
   const auto block_of = [&](const Vec3& p) {
-    return static_cast<std::size_t>(block_along(0, p.x) + dims[0] * (block_along(1, p.y) + dims[1] * block_along(2, p.z)));
+    return static_cast<std::size_t>(block_along(0, p.x) +
+                                    dims[0] * (block_along(1, p.y) + dims[1] * block_along(2, p.z)));
   };
   std::vector<std::uint8_t> marked(static_cast<std::size_t>(dims[0] * dims[1] * dims[2]), 0);
   const double margin = reach + 2 * cell;
@@ -1060,7 +1061,8 @@ PolygonMesh faces_near(const PolygonMesh& surface, const Box& box, double cell, 
   const std::vector<std::vector<std::uint32_t>> chosen = for_blocks<std::vector<std::uint32_t>>(
       surface.face_count(), [&](std::size_t first, std::size_t last, std::vector<std::uint32_t>& faces) {
         for (std::size_t f = first; f < last; ++f)
-          if (marked[block_of(surface.positions[surface.face_begin(f)[0]])]) faces.push_back(static_cast<std::uint32_t>(f));
+          if (marked[block_of(surface.positions[surface.face_begin(f)[0]])])
+            faces.push_back(static_cast<std::uint32_t>(f));
       });
   PolygonMesh near;
   std::vector<std::uint32_t> corners;
