@@ -102,10 +102,10 @@ Vec3 node_gradient(const Volume& v, std::size_t i, std::size_t j, std::size_t k)
 }
 
 // Gives the regions enclosed by dropped components the sign of their
-// surroundings. Start points: nodes on a dropped component (of a cell with
-// both sides that the surface mesh does not pass through, or with a grid
-// edge across the isovalue and none the mesh crosses). From each, a flood
-// over same-side 6-neighbours; the region is enclosed if the flood ends
+// surroundings. Start points: nodes on a dropped component (a grid edge
+// across the isovalue, and none that the mesh crosses; every enclosed region
+// has one, and which nodes start does not change the result). From each, a
+// flood over same-side 6-neighbours; the region is enclosed if the flood ends
 // without reaching an end of a grid edge the surface mesh crosses, the box
 // faces, an earlier unenclosed region or the size limit. Enclosed regions
 // are flipped. Judged by the mesh's edges rather than by the seeds (the
@@ -353,7 +353,7 @@ SignedDistanceField compute_signed_distance(const Volume& field, const SignedDis
           const std::size_t n = i + nx * j + slice * k;
           bool crossing = (cell_bits & kCrossCell) != 0;
           const bool kept = (cell_bits & kKeptCell) != 0;
-          if (masked && crossing && (!kept || (!(flags[n] & kKeptEdge) && has_crossing_edge(n))))
+          if (masked && crossing && !(flags[n] & kKeptEdge) && has_crossing_edge(n))
             out.orphans.push_back(static_cast<std::uint32_t>(n));
           if (masked) crossing = kept;
           if (!crossing) continue;
