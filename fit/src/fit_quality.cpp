@@ -39,6 +39,10 @@ void rms_and_max(const std::vector<double>& values, double scale, double& rms, d
 // value not finite.
 double first_order_distance(const TrilinearGrid& grid, const Vec3& p, double iso) {
   const TrilinearSample s = grid.sample(p);
+  // A point where the field equals iso is on the isosurface whatever the
+  // gradient: the correction leaves points on plateaus of samples equal to
+  // the isovalue (miranda: 32,201 of 6.7 M fine points at iso 1.5).
+  if (s.value == iso) return 0.0;
   const double g = norm(s.gradient);
   return g > 0 && std::isfinite(s.value) ? std::abs(s.value - iso) / g : -1.0;
 }

@@ -47,6 +47,23 @@ TEST(FitQuality, IsosurfaceDistanceOfPointsAtKnownOffsets) {
   EXPECT_EQ(d.undefined, 0u);
 }
 
+// A field with a plateau of samples equal to the isovalue (x <= 4) and a
+// flat region off it (x >= 12): a point on the plateau lies on the
+// isosurface though the gradient vanishes; one in the flat region off the
+// isovalue has no first-order distance and is left out.
+TEST(FitQuality, IsosurfaceDistanceOnAPlateauAtTheIsovalueIsZero) {
+  const Volume field = test::sampled_volume({17, 5, 5}, [](double x, double, double) {
+    return x <= 4 ? 1.5 : x >= 12 ? 3.0 : 1.5 + (x - 4) / 8 * 1.5;
+  });
+  const std::vector<Vec3> points = {Vec3{2.3, 2.1, 1.7}, Vec3{14.2, 2.0, 2.0}, Vec3{8.0, 2.0, 2.0}};
+  const IsosurfaceDistance d = isosurface_distance(points, points.size(), field, 1.5, 1.0);
+  EXPECT_EQ(d.undefined, 1u);  // the point at x = 14.2
+  // Of the two others, the plateau's is at 0 and the ramp's at (8 - 4) cells.
+  EXPECT_NEAR(d.max, 4.0, 1e-12);
+  EXPECT_NEAR(d.rms, std::sqrt(16.0 / 2.0), 1e-12);
+  EXPECT_EQ(d.far, 1u);
+}
+
 // The same linear field: its isosurface is the plane x = 26, and the
 // first-order distance of any point is its exact distance to that plane. Two
 // triangles parallel to it, areas 2 and 8 (world units squared) at 1 and 4

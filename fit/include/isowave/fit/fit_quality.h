@@ -35,7 +35,7 @@ struct FitQuality {
   std::size_t nonfinite_vertices = 0;
 
   double isosurface_rms = 0, isosurface_max = 0;
-  std::size_t isosurface_undefined = 0;  // vertices with a zero or non-finite gradient (left out)
+  std::size_t isosurface_undefined = 0;  // vertices off the isovalue with a zero or non-finite gradient (left out)
   // Vertices more than a cell off: where the field is nearly flat a few of
   // these can dominate the RMS (embryo: one 655 cells off, 8 cells from the
   // extracted mesh).
@@ -60,8 +60,9 @@ struct FitQuality {
 
 // First-order distance |f(x) - iso| / |grad f(x)| of points to the isosurface
 // of the trilinearly interpolated field (as in the final correction), in
-// cells: RMS and maximum over the points where it is defined (zero or
-// non-finite gradient: `undefined`), and how many lie farther than
+// cells: RMS and maximum over the points where it is defined (0 where the
+// field equals iso; elsewhere a zero or non-finite gradient leaves it
+// undefined: `undefined`), and how many lie farther than
 // `far_cells`. Parallel, deterministic, O(points).
 struct IsosurfaceDistance {
   double rms = 0, max = 0;
