@@ -1989,11 +1989,16 @@ ShrinkWrapResult shrink_wrap(const SubdivisionHierarchy& hierarchy, const std::v
       }
       // Judged by untangle()'s count when it ran: the pull changes few
       // faces, and counting them again cost 0.2 s on miranda, where the
-      // unfold does not run.
+      // unfold does not run. Without it, counted here (else the limit would
+      // never hold back the unfold: 14.5 s on miranda).
+      if (options.untangle_rounds > 0) {
+        result.tangled_faces = result.untangle.tangled_after;
+      } else {
+        HugePageVector<std::uint8_t> tangled;
+        result.tangled_faces = find_tangled_faces(mesh, field_grid, distance.flip, data, tangled);
+      }
       const bool too_tangled =
-          options.untangle_rounds > 0 &&
-          double(result.untangle.tangled_after) > options.unfold_max_tangled_fraction * double(mesh.face_count());
-      result.tangled_faces = result.untangle.tangled_after;
+          double(result.tangled_faces) > options.unfold_max_tangled_fraction * double(mesh.face_count());
       if (options.unfold_rounds > 0 && too_tangled) {
         result.unfold.tangled_before = result.unfold.tangled_after = result.tangled_faces;
         result.unfold.skipped = true;

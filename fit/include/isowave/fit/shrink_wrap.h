@@ -384,8 +384,8 @@ struct ShrinkWrapOptions {
   // 78.68% of a cell, untangle time 1.6 -> 2.9 s (0.7 s of it coarse).
   int coarse_untangle_rounds = 2;
   // Rounds of unfold() on level L, last, after the pull (0: none); skipped
-  // when untangle() left more than unfold_max_tangled_fraction of the faces
-  // tangled. The unfold repairs folds a few faces wide at a cost of about
+  // when more than unfold_max_tangled_fraction of the faces are tangled
+  // (as untangle() left them, or counted after the pull without it). The unfold repairs folds a few faces wide at a cost of about
   // 15 us per vertex move; where a fit is tangled throughout, by features
   // thinner than its base mesh can follow, it would cost seconds and raise
   // the wavelet RMSE more. Measured 2026-11-25 (base 1/16 of the isosurface,
@@ -434,9 +434,9 @@ struct ShrinkWrapResult {
   // Unless skipped, its tangled_after counts the level-L faces tangled in
   // the result; zeros when the unfold is off.
   UnfoldStatistics unfold;
-  // Level-L faces tangled in the result as the last repair counted them:
-  // the unfold's count, or, when it was skipped or off, untangle()'s (before
-  // the pull, which changes few); 0 when neither ran.
+  // Level-L faces tangled in the result as last counted: the unfold's
+  // count, or, when it was skipped or off, untangle()'s (before the pull,
+  // which changes few), or without untangle() a count after the pull.
   std::size_t tangled_faces = 0;
 };
 
