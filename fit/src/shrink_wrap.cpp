@@ -1755,6 +1755,29 @@ void require_inside_box(const std::vector<Vec3>& positions, std::size_t count, c
   }
 }
 
+// Throws Error(InvalidArgument) naming the first vertex on a boundary edge
+// of the base (level 0's `mesh`) more than a cell from every face of the
+// volume's box. An extracted isosurface has boundaries only on those faces
+// (NaN samples count as outside, so the surface closes around them), and
+// simplification keeps its boundary vertices there; a base with a hole
+// elsewhere would be fitted with the hole left open.
+void require_boundary_on_box(const WrapLevelMesh& mesh, const std::vector<Vec3>& positions, const Volume& field) {
+  const Vec3 low = volume_box_min(field), high = volume_box_max(field);
+  const double cell = field.cell_size();
+  for (std::size_t v = 0; v < mesh.vertex_count; ++v) {
+    if (mesh.boundary_neighbours[2 * v] == WrapLevelMesh::kNone) continue;
+    const Vec3& p = positions[v];
+    double to_box = std::numeric_limits<double>::infinity();
+    for (int a = 0; a < 3; ++a) to_box = std::min({to_box, std::abs(p[a] - low[a]), std::abs(high[a] - p[a])});
+    if (to_box <= cell) continue;
+    std::ostringstream message;
+    message << "base vertex " << v << " at (" << p.x << ", " << p.y << ", " << p.z << ") lies on a boundary of the base"
+            << " mesh " << to_box / cell << " cells from the volume's box, where an isosurface extracted from this"
+            << " volume has none: is the base mesh from this volume, and closed where its isosurface is?";
+    throw Error(ErrorKind::InvalidArgument, message.str());
+  }
+}
+
 // Throws Error(InvalidArgument) when most base vertices have a normal (the
 // sum of their faces' area vectors) pointing against the field's
 // orientation (toward higher values, or lower ones with flip): a base
@@ -1894,6 +1917,7 @@ ShrinkWrapResult shrink_wrap(const SubdivisionHierarchy& hierarchy, const std::v
     const auto start = Clock::now();
     if (level > 0) subdivide_level(hierarchy, level, data);
     fill_wrap_level_mesh(hierarchy, level, data, field, distance.iso, mesh);
+    if (level == 0) require_boundary_on_box(mesh, data, field);
     constrain_to_box(mesh, field, data);
     WrapLevelStatistics stats;
     stats.level = level;

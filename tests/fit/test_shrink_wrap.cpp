@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <string>
 
 #include <tbb/global_control.h>
 
@@ -722,6 +723,18 @@ TEST(ShrinkWrap, RejectsBadInput) {
     std::reverse(reversed.face_vertices.begin() + reversed.face_offsets[f],
                  reversed.face_vertices.begin() + reversed.face_offsets[f + 1]);
   EXPECT_THROW(shrink_wrap(SubdivisionHierarchy(reversed, 1), reversed.positions, p.distance, p.field), Error);
+  // A base with a hole inside the box (one face left out), where the
+  // extracted sphere has none. (Bases whose boundary lies on the box are
+  // fitted: BoundaryVerticesStayOnTheBoxAndSharpOnesNeverMove.)
+  PolygonMesh holed;
+  holed.positions = p.base.positions;
+  for (std::size_t f = 1; f < p.base.face_count(); ++f) holed.add_face(p.base.face_begin(f), p.base.face_size(f));
+  try {
+    shrink_wrap(SubdivisionHierarchy(holed, 1), holed.positions, p.distance, p.field);
+    ADD_FAILURE() << "a base with a hole inside the box was fitted";
+  } catch (const Error& error) {
+    EXPECT_NE(std::string(error.what()).find("on a boundary of the base mesh"), std::string::npos) << error.what();
+  }
   ShrinkWrapOptions options;
   options.relaxation_weight = 0;
   EXPECT_THROW(shrink_wrap(hierarchy, p.base.positions, p.distance, p.field, options), Error);

@@ -444,7 +444,9 @@ struct ShrinkWrapResult {
 // whose grid it must share) starting from the base control points.
 // Throws Error(InvalidArgument) if base_positions has fewer than
 // vertex_count(0) entries or a non-finite one, or one more than a cell
-// outside the volume's box, if the base faces against the field (most
+// outside the volume's box, or one on a boundary of the base more than a
+// cell from the box's faces (extracted isosurfaces have boundaries only
+// there), if the base faces against the field (most
 // vertex normals toward higher values, or lower ones with distance.flip),
 // the grids differ, or an option is out of range (iterations 0..100, weight
 // in (0, 1], reaches > 0).
