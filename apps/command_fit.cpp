@@ -34,7 +34,10 @@ void print_quality(const FitQuality& q) {
               q.nonfinite_vertices ? " (NON-FINITE VERTICES)" : "");
   std::printf("    on the isosurface (|f - iso| / |grad f|): rms %.4f, max %.4f cell, %zu vertices over a cell off%s\n",
               q.isosurface_rms, q.isosurface_max, q.isosurface_far,
-              q.isosurface_undefined ? (" (" + std::to_string(q.isosurface_undefined) + " off the isovalue without a gradient, left out)").c_str() : "");
+              q.isosurface_undefined
+                  ? (" (" + std::to_string(q.isosurface_undefined) + " off the isovalue without a gradient, left out)")
+                        .c_str()
+                  : "");
   std::printf("    to the extracted mesh: rms %.4f, max %.4f cell, %zu vertices over %.1f\n", q.surface_rms,
               q.surface_max, q.surface_far, kSurfaceFarCells);
   std::printf("    coverage (extracted vertices to the fit): rms %.4f, 99th percentile %.4f, max %.4f cell\n",

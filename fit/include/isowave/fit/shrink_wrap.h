@@ -385,8 +385,9 @@ struct ShrinkWrapOptions {
   int coarse_untangle_rounds = 2;
   // Rounds of unfold() on level L, last, after the pull (0: none); skipped
   // when more than unfold_max_tangled_fraction of the faces are tangled
-  // (as untangle() left them, or counted after the pull without it). The unfold repairs folds a few faces wide at a cost of about
-  // 15 us per vertex move; where a fit is tangled throughout, by features
+  // (as untangle() left them, or counted after the pull without it). The
+  // unfold repairs folds a few faces wide at a cost of about 15 us per
+  // vertex move; where a fit is tangled throughout, by features
   // thinner than its base mesh can follow, it would cost seconds and raise
   // the wavelet RMSE more. Measured 2026-11-25 (base 1/16 of the isosurface,
   // 3 levels; tangled before -> after, time, RMSE at 20% of the
