@@ -1894,14 +1894,16 @@ ShrinkWrapResult shrink_wrap(const SubdivisionHierarchy& hierarchy, const std::v
   reserve_finest_wrap_level_mesh(hierarchy, mesh);
   SmallComponents small;
   std::vector<std::uint8_t> tangent_only;
-  // The field without the closed components extraction dropped, for every
-  // search along it (see mirror_enclosed_samples); on huge pages, as the
+  // The field without the closed components extraction dropped and with
+  // its non-finite samples filled, for every search along it (see
+  // mirror_enclosed_samples, fill_non_finite_samples); on huge pages, as the
   // searches sample it at scattered places (a few milliseconds to fill,
   // most of the TLB misses saved).
   HugePageVector<float> field_values;
   reserve_fresh_on_huge_pages(field_values, field.values.size());
   field_values.resize(field.values.size());
   mirror_enclosed_samples(field, distance, field_values.data());  // as many as the distance field flipped
+  fill_non_finite_samples(field, distance.iso, field_values.data());
   const TrilinearGrid scalar_grid(field, field_values.data());
   const Box box(field);
   const double cell = field.cell_size();

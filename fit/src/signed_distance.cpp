@@ -625,4 +625,59 @@ std::size_t mirror_enclosed_samples(const Volume& field, const SignedDistanceFie
       std::plus<>());
 }
 
+std::size_t fill_non_finite_samples(const Volume& field, double iso, float* out) {
+  struct Scan {
+    std::size_t non_finite = 0;
+    float lowest = std::numeric_limits<float>::infinity();
+  };
+  const std::vector<float>& values = field.values;
+  const Scan scan = tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(0, values.size(), 1 << 16), Scan{},
+      [&](const tbb::blocked_range<std::size_t>& r, Scan partial) {
+        for (std::size_t n = r.begin(); n < r.end(); ++n) {
+          if (std::isfinite(values[n])) partial.lowest = std::min(partial.lowest, values[n]);
+          else ++partial.non_finite;
+        }
+        return partial;
+      },
+      [](Scan a, const Scan& b) {
+        a.non_finite += b.non_finite;
+        a.lowest = std::min(a.lowest, b.lowest);
+        return a;
+      });
+  if (scan.non_finite == 0) return 0;
+  // The highest float below iso, and the value of samples with no inside
+  // neighbour.
+  float below = static_cast<float>(iso);
+  if (double(below) >= iso) below = std::nextafter(below, -std::numeric_limits<float>::infinity());
+  const float outside = std::min(scan.lowest, below);
+  const std::size_t stride[3] = {1, field.dims[0], field.dims[0] * field.dims[1]};
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, field.dims[2]), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t k = r.begin(); k < r.end(); ++k)
+      for (std::size_t j = 0; j < field.dims[1]; ++j)
+        for (std::size_t i = 0; i < field.dims[0]; ++i) {
+          const std::size_t n = field.index(i, j, k);
+          if (std::isfinite(values[n])) continue;
+          // Inside neighbours as `out` has them (written only at finite
+          // samples here, so never by this loop).
+          const std::size_t coordinate[3] = {i, j, k};
+          double sum = 0;
+          int inside = 0;
+          for (int a = 0; a < 3; ++a) {
+            if (coordinate[a] > 0 && std::isfinite(values[n - stride[a]]) && out[n - stride[a]] >= iso)
+              sum += out[n - stride[a]], ++inside;
+            if (coordinate[a] + 1 < field.dims[a] && std::isfinite(values[n + stride[a]]) && out[n + stride[a]] >= iso)
+              sum += out[n + stride[a]], ++inside;
+          }
+          if (inside == 0) {
+            out[n] = outside;
+            continue;
+          }
+          const double mirrored = 2.0 * iso - sum / inside;
+          out[n] = static_cast<float>(std::clamp(mirrored, double(std::numeric_limits<float>::lowest()), double(below)));
+        }
+  });
+  return scan.non_finite;
+}
+
 }  // namespace isowave

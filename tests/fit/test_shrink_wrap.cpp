@@ -76,6 +76,29 @@ void expect_targets(const Pipeline& p, const std::string& name) {
   EXPECT_LE(q.tangled_fraction, 0.001);
 }
 
+// A sphere cut by a slab of NaN samples (one of them Inf): extraction counts
+// them as outside, so the surface is two caps closed by flat lids between
+// the last finite samples and the slab. The shrink-wrap's searches and the
+// report see the field with those samples filled (fill_non_finite_samples);
+// before, the lid points had no isosurface to be corrected onto, none of
+// them could be measured, and every lid face counted as folded (28% of the
+// fine faces).
+TEST(ShrinkWrap, ASphereCutByNonFiniteSamplesMeetsTheTargets) {
+  Volume field = test::sampled_volume({40, 40, 40}, [](double x, double y, double z) {
+    return 16.0 - std::sqrt((x - 19.5) * (x - 19.5) + (y - 19.5) * (y - 19.5) + (z - 19.5) * (z - 19.5));
+  });
+  for (std::size_t k = 17; k <= 20; ++k)
+    for (std::size_t j = 0; j < 40; ++j)
+      for (std::size_t i = 0; i < 40; ++i) field.values[field.index(i, j, k)] = std::nanf("");
+  field.values[field.index(20, 20, 18)] = std::numeric_limits<float>::infinity();
+  const Pipeline p = prepare(std::move(field), 0.0, 100);
+  expect_targets(p, "sphere cut by NaN samples");
+  const SubdivisionHierarchy hierarchy(p.base, 3);
+  const ShrinkWrapResult result = shrink_wrap(hierarchy, p.base.positions, p.distance, p.field, options_for(p));
+  EXPECT_EQ(result.correction.failed, 0u);
+  EXPECT_EQ(isosurface_distance(result.positions, result.positions.size(), p.field, p.iso, 1.0).undefined, 0u);
+}
+
 TEST(ShrinkWrap, Genus3MeetsTheTargets) {
   // Base of 150 vertices (about 1/40 of the 6,000 extracted ones).
   expect_targets(prepare(make_builtin_field("genus3", 96), 0.0, 150), "genus3");

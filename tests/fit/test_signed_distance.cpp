@@ -6,12 +6,15 @@
 
 #include <cmath>
 #include <cstdio>
+#include <limits>
+#include <vector>
 
 #include "isowave/core/error.h"
 #include "isowave/extract/builtin_fields.h"
 #include "isowave/extract/isosurface.h"
 #include "isowave/extract/volume_io.h"
 #include "isowave/fit/signed_distance.h"
+#include "isowave/fit/trilinear.h"
 #include "isowave/core/surface_distance.h"
 #include "support/test_meshes.h"
 
@@ -177,6 +180,40 @@ TEST(SignedDistance, ADroppedSpeckSharingACellWithTheKeptSurfaceLeavesNoZeroCros
   EXPECT_EQ(cleaned_surface.report.before.components, 1u);
   EXPECT_EQ(cleaned_surface.mesh.vertex_count(), surface.mesh.vertex_count());
   EXPECT_EQ(mirror_enclosed_samples(field, unmasked, cleaned.values.data()), 0u);  // nothing dropped
+}
+
+// A ramp f = x - 1.5 (iso 0) with three non-finite samples: one with a
+// single inside neighbour, one with five, one with none.
+TEST(SignedDistance, FilledNonFiniteSamplesKeepExtractionsClassAndMidpoints) {
+  Volume field = test::sampled_volume({4, 3, 3}, [](double x, double, double) { return x - 1.5; });
+  const std::vector<float> ramp = field.values;
+  std::vector<float> untouched = ramp;
+  EXPECT_EQ(fill_non_finite_samples(field, 0.0, untouched.data()), 0u);  // all finite: nothing written
+  EXPECT_EQ(untouched, ramp);
+  field.values[field.index(1, 1, 1)] = std::nanf("");  // inside neighbour: (2, 1, 1) = 0.5
+  field.values[field.index(3, 1, 1)] = std::numeric_limits<float>::infinity();  // five: 0.5 and four of 1.5
+  field.values[field.index(0, 0, 0)] = -std::nanf("");  // none: the lowest finite value, -1.5
+  std::vector<float> out = field.values;
+  EXPECT_EQ(fill_non_finite_samples(field, 0.0, out.data()), 3u);
+  for (std::size_t n = 0; n < out.size(); ++n) {
+    ASSERT_TRUE(std::isfinite(out[n])) << n;
+    // Inside exactly where extraction counts a sample inside.
+    EXPECT_EQ(out[n] >= 0.0f, std::isfinite(field.values[n]) && field.values[n] >= 0.0f) << n;
+    if (std::isfinite(field.values[n])) {
+      EXPECT_EQ(out[n], field.values[n]) << n;
+    }
+  }
+  EXPECT_FLOAT_EQ(out[field.index(1, 1, 1)], -0.5f);
+  EXPECT_FLOAT_EQ(out[field.index(3, 1, 1)], -(0.5f + 4 * 1.5f) / 5);
+  EXPECT_FLOAT_EQ(out[field.index(0, 0, 0)], -1.5f);
+  // The isosurface crosses the edge to the single inside neighbour at its
+  // midpoint, where extraction puts that edge's vertex.
+  const TrilinearGrid grid(field, out.data());
+  EXPECT_NEAR(grid.value(Vec3{1.5, 1.0, 1.0}), 0.0, 1e-7);
+  // An isovalue at a sample's value: the filled sample stays below it.
+  std::vector<float> at_iso = field.values;
+  fill_non_finite_samples(field, 0.5, at_iso.data());
+  EXPECT_LT(at_iso[field.index(1, 1, 1)], 0.5f);
 }
 
 TEST(SignedDistance, RejectsBadInput) {

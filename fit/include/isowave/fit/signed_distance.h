@@ -117,4 +117,21 @@ SignedDistanceField compute_signed_distance(const Volume& field, const SignedDis
 // Returns how many samples changed. Parallel (TBB), O(samples).
 std::size_t mirror_enclosed_samples(const Volume& field, const SignedDistanceField& distance, float* out);
 
+// Gives the field's non-finite samples (outside, as extraction counts them)
+// finite values below iso in out[0 .. field.sample_count()), so that the
+// trilinear field, its isosurface and its gradient are defined next to them
+// too: a sample with inside 6-neighbours gets 2 iso - (their mean), at
+// least one float step below iso, which puts the isosurface near the
+// midpoints of the grid edges between them, where extraction puts its
+// vertices; the others get the field's lowest finite value (or that step
+// below iso, if higher). Every sample keeps extraction's inside/outside
+// class. Without this, points and faces in cells with a NaN corner have no
+// value or gradient: a sphere cut by a slab of NaN samples (test) left the
+// correction nothing to follow on its two flat lids, and the fit's report
+// counted every lid face as folded (28%). `out` holds the finite samples
+// (the field's, or mirror_enclosed_samples's); only the entries of
+// non-finite ones are written. Returns how many. Parallel (TBB),
+// O(samples).
+std::size_t fill_non_finite_samples(const Volume& field, double iso, float* out);
+
 }  // namespace isowave
