@@ -650,6 +650,7 @@ std::size_t fill_non_finite_samples(const Volume& field, double iso, float* out)
   // neighbour.
   float below = static_cast<float>(iso);
   if (double(below) >= iso) below = std::nextafter(below, -std::numeric_limits<float>::infinity());
+  below = std::max(below, std::numeric_limits<float>::lowest());  // finite even for an iso beyond float's range
   const float outside = std::min(scan.lowest, below);
   const std::size_t stride[3] = {1, field.dims[0], field.dims[0] * field.dims[1]};
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, field.dims[2]), [&](const tbb::blocked_range<std::size_t>& r) {
@@ -658,8 +659,8 @@ std::size_t fill_non_finite_samples(const Volume& field, double iso, float* out)
         for (std::size_t i = 0; i < field.dims[0]; ++i) {
           const std::size_t n = field.index(i, j, k);
           if (std::isfinite(values[n])) continue;
-          // Inside neighbours as `out` has them (written only at finite
-          // samples here, so never by this loop).
+          // Inside neighbours as `out` has them: read only at finite
+          // samples, which this loop never writes.
           const std::size_t coordinate[3] = {i, j, k};
           double sum = 0;
           int inside = 0;
