@@ -10,8 +10,8 @@
 #include <tbb/parallel_sort.h>
 
 #include "isowave/core/error.h"
-#include "isowave/fit/signed_distance.h"
 #include "isowave/fit/trilinear.h"
+#include "fitted_field.h"
 
 namespace isowave {
 namespace {
@@ -34,25 +34,6 @@ void rms_and_max(const std::vector<double>& values, double scale, double& rms, d
   rms = values.empty() ? 0.0 : std::sqrt(sum / double(values.size())) * scale;
   max *= scale;
 }
-
-// The trilinear field as the shrink-wrap sees it: with non-finite samples
-// filled (fill_non_finite_samples), in a copy made only when there are any.
-class FittedField {
- public:
-  FittedField(const Volume& field, double iso)
-      : filled_(filled_values(field, iso)), grid_(field, filled_.empty() ? field.values.data() : filled_.data()) {}
-  const TrilinearGrid& grid() const { return grid_; }
-
- private:
-  static std::vector<float> filled_values(const Volume& field, double iso) {
-    if (std::all_of(field.values.begin(), field.values.end(), [](float f) { return std::isfinite(f); })) return {};
-    std::vector<float> values = field.values;
-    fill_non_finite_samples(field, iso, values.data());
-    return values;
-  }
-  std::vector<float> filled_;
-  TrilinearGrid grid_;
-};
 
 // First-order distance |f(p) - iso| / |grad f(p)| of p to the isosurface of
 // the trilinear field, world units; -1 where the gradient is zero or the
@@ -81,7 +62,7 @@ double percentile(std::vector<double>& values, double fraction) {
 IsosurfaceDistance isosurface_distance(const std::vector<Vec3>& points, std::size_t count, const Volume& field,
                                        double iso, double far_cells) {
   if (points.size() < count) throw Error(ErrorKind::InvalidArgument, "isosurface distance: too few points");
-  const FittedField fitted(field, iso);
+  const detail::FittedField fitted(field, iso);
   const TrilinearGrid& grid = fitted.grid();
   std::vector<double> first_order(count);
   for_each_index(count, [&](std::size_t v) { first_order[v] = first_order_distance(grid, points[v], iso); });
@@ -102,7 +83,7 @@ IsosurfaceDistance isosurface_distance(const std::vector<Vec3>& points, std::siz
 }
 
 SurfaceDeviation extracted_surface_deviation(const PolygonMesh& extracted, const Volume& field, double iso) {
-  const FittedField fitted(field, iso);
+  const detail::FittedField fitted(field, iso);
   const TrilinearGrid& grid = fitted.grid();
   // Fixed blocks of faces, their partial sums added in order: the result
   // does not depend on the thread count.
@@ -233,7 +214,7 @@ FitQuality measure_fit_quality(const SubdivisionHierarchy& hierarchy, int level,
   }
 
   // Tangles and areas per face.
-  const FittedField fitted(field, iso);
+  const detail::FittedField fitted(field, iso);
   const TrilinearGrid& grid = fitted.grid();
   std::vector<std::uint8_t> tangled(q.faces);
   std::vector<double> area(q.faces);

@@ -23,6 +23,7 @@
 #include "isowave/fit/trilinear.h"
 #include "isowave/transform/wavelet_transform.h"
 #include "coverage_pull.h"
+#include "fitted_field.h"
 #include "root_search.h"
 
 namespace isowave {
@@ -1571,20 +1572,23 @@ CorrectionStatistics correct_to_isosurface(const WrapLevelMesh& mesh, const Volu
   assert(!surface_distance || surface_distance->dims == field.dims);
   std::optional<TrilinearGrid> distance;
   if (surface_distance) distance.emplace(*surface_distance);
-  return correct_with(mesh, TrilinearGrid(field), Box(field), field.cell_size(), iso, max_move_cells, positions,
-                      nullptr, wide_search ? (flip ? 1.0 : -1.0) : 0.0, surface, distance ? &*distance : nullptr);
+  const detail::FittedField fitted(field, iso);
+  return correct_with(mesh, fitted.grid(), Box(field), field.cell_size(), iso, max_move_cells, positions, nullptr,
+                      wide_search ? (flip ? 1.0 : -1.0) : 0.0, surface, distance ? &*distance : nullptr);
 }
 
 UntangleStatistics untangle(const WrapLevelMesh& mesh, const Volume& field, double iso, bool flip, int rounds,
                             double max_move_cells, std::vector<Vec3>& positions) {
   std::vector<Vec3> moved;
-  return untangle_with(mesh, TrilinearGrid(field), Box(field), field.cell_size(), iso, flip, rounds, max_move_cells,
+  const detail::FittedField fitted(field, iso);
+  return untangle_with(mesh, fitted.grid(), Box(field), field.cell_size(), iso, flip, rounds, max_move_cells,
                        positions, moved);
 }
 
 UnfoldStatistics unfold(const WrapLevelMesh& mesh, const Volume& field, double iso, bool flip, int rounds,
                         double max_move_cells, std::vector<Vec3>& positions) {
-  return unfold_with(mesh, TrilinearGrid(field), Box(field), field.cell_size(), iso, flip, rounds, max_move_cells,
+  const detail::FittedField fitted(field, iso);
+  return unfold_with(mesh, fitted.grid(), Box(field), field.cell_size(), iso, flip, rounds, max_move_cells,
                      positions);
 }
 

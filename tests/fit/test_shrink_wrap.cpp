@@ -97,6 +97,14 @@ TEST(ShrinkWrap, ASphereCutByNonFiniteSamplesMeetsTheTargets) {
   const ShrinkWrapResult result = shrink_wrap(hierarchy, p.base.positions, p.distance, p.field, options_for(p));
   EXPECT_EQ(result.correction.failed, 0u);
   EXPECT_EQ(isosurface_distance(result.positions, result.positions.size(), p.field, p.iso, 1.0).undefined, 0u);
+  // The stand-alone correction sees the same field: the fit moved a fifth of
+  // a cell across the lids (along z) goes back onto the isosurface.
+  const WrapLevelMesh fine = make_wrap_level_mesh(hierarchy, 3, result.positions, p.field, p.iso);
+  std::vector<Vec3> moved = result.positions;
+  for (Vec3& v : moved) v.z += 0.2;
+  const CorrectionStatistics corrected = correct_to_isosurface(fine, p.field, p.iso, 2.0, moved);
+  EXPECT_EQ(corrected.failed, 0u);
+  EXPECT_LE(isosurface_distance(moved, moved.size(), p.field, p.iso, 1.0).rms, 0.01);
 }
 
 TEST(ShrinkWrap, Genus3MeetsTheTargets) {

@@ -202,6 +202,9 @@ struct CorrectionStatistics {
 // wide search (from_wide_search); with `surface` and `surface_distance`
 // (the extracted surface and its signed-distance field, on the field's
 // grid), last from the extracted surface (from_extracted_surface); in place.
+// Here and in untangle() and unfold() the field's non-finite samples are
+// filled as the shrink-wrap fills them (fill_non_finite_samples; in a copy
+// of the field, made only when it has any).
 CorrectionStatistics correct_to_isosurface(const WrapLevelMesh& mesh, const Volume& field, double iso,
                                            double max_move_cells, std::vector<Vec3>& positions,
                                            bool wide_search = false, bool flip = false,
