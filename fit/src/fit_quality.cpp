@@ -59,17 +59,18 @@ double percentile(std::vector<double>& values, double fraction) {
   return values[rank];
 }
 
-IsosurfaceDistance isosurface_distance(const std::vector<Vec3>& points, std::size_t count, const Volume& field,
-                                       double iso, double far_cells) {
-  if (points.size() < count) throw Error(ErrorKind::InvalidArgument, "isosurface distance: too few points");
-  const detail::FittedField fitted(field, iso);
-  const TrilinearGrid& grid = fitted.grid();
+namespace {
+
+// isosurface_distance() on a field already set up (the report's tangle
+// count reads the same one).
+IsosurfaceDistance isosurface_distance_on(const TrilinearGrid& grid, double cell, const std::vector<Vec3>& points,
+                                          std::size_t count, double iso, double far_cells) {
   std::vector<double> first_order(count);
   for_each_index(count, [&](std::size_t v) { first_order[v] = first_order_distance(grid, points[v], iso); });
   IsosurfaceDistance result;
   std::vector<double> defined;
   defined.reserve(count);
-  const double far = far_cells * field.cell_size();
+  const double far = far_cells * cell;
   for (double d : first_order) {
     if (!(d >= 0 && std::isfinite(d))) {
       ++result.undefined;
@@ -78,8 +79,17 @@ IsosurfaceDistance isosurface_distance(const std::vector<Vec3>& points, std::siz
     defined.push_back(d);
     result.far += d > far ? 1 : 0;
   }
-  rms_and_max(defined, 1.0 / field.cell_size(), result.rms, result.max);
+  rms_and_max(defined, 1.0 / cell, result.rms, result.max);
   return result;
+}
+
+}  // namespace
+
+IsosurfaceDistance isosurface_distance(const std::vector<Vec3>& points, std::size_t count, const Volume& field,
+                                       double iso, double far_cells) {
+  if (points.size() < count) throw Error(ErrorKind::InvalidArgument, "isosurface distance: too few points");
+  const detail::FittedField fitted(field, iso);
+  return isosurface_distance_on(fitted.grid(), field.cell_size(), points, count, iso, far_cells);
 }
 
 SurfaceDeviation extracted_surface_deviation(const PolygonMesh& extracted, const Volume& field, double iso) {
@@ -195,7 +205,10 @@ FitQuality measure_fit_quality(const SubdivisionHierarchy& hierarchy, int level,
   if (q.nonfinite_vertices) return q;  // nothing else is meaningful
 
   // Vertices against the field and the extracted surface.
-  const IsosurfaceDistance on_isosurface = isosurface_distance(mesh.positions, q.vertices, field, iso, 1.0);
+  const detail::FittedField fitted(field, iso);
+  const TrilinearGrid& grid = fitted.grid();
+  const IsosurfaceDistance on_isosurface =
+      isosurface_distance_on(grid, field.cell_size(), mesh.positions, q.vertices, iso, 1.0);
   q.isosurface_rms = on_isosurface.rms;
   q.isosurface_max = on_isosurface.max;
   q.isosurface_undefined = on_isosurface.undefined;
@@ -214,8 +227,6 @@ FitQuality measure_fit_quality(const SubdivisionHierarchy& hierarchy, int level,
   }
 
   // Tangles and areas per face.
-  const detail::FittedField fitted(field, iso);
-  const TrilinearGrid& grid = fitted.grid();
   std::vector<std::uint8_t> tangled(q.faces);
   std::vector<double> area(q.faces);
   const double expected_sign = flip ? 1.0 : -1.0;  // normals toward lower values unless flipped
