@@ -80,7 +80,10 @@ inline constexpr double kUncoveredWarning = 0.01;
 // adds a warning without a pre-filter: on noisy scans and fine-grained fields
 // (stent, HCCI, MRI, embryo, miranda: 3-5%) the folds sit on necks, tunnels
 // and specks under a cell across, which smooth_sigma = 1 removes (stent
-// 5.1% -> 0.29%, HCCI 4.4% -> 0.12%).
+// 5.1% -> 0.29%, HCCI 4.4% -> 0.12%). Where the fit did not follow the
+// surface (the far-points or uncovered warning, or fewer than half as many
+// fine points as extracted vertices), the warning, with or without a
+// pre-filter, names a larger base mesh or more levels instead.
 inline constexpr double kFoldedWarning = 0.01;
 inline constexpr int kBaseAttempts = 3;
 
