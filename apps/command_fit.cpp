@@ -199,12 +199,7 @@ int fit(const Args& raw) {
   else if (result.unfold.tangled_before > 0)
     std::printf("  unfold: %zu tangled faces before, %zu after %d rounds\n", result.unfold.tangled_before,
                 result.unfold.tangled_after, result.unfold.rounds);
-  // A fine mesh with far fewer vertices than the isosurface cannot follow
-  // it: a sphere of radius 8 cells simplified to a tetrahedron, 3 levels
-  // (194 fine vertices for 1,210 extracted), stays up to 5 cells inside
-  // with a third of its faces folded, where a base of 1/64 of the extracted
-  // vertices (18) comes within 0.015 cell of the extracted mesh, no fold.
-  const bool coarse = 2 * fine.vertex_count() < surface.mesh.vertex_count();
+  const bool coarse = fine_mesh_too_coarse(fine.vertex_count(), surface.mesh.vertex_count());
   const std::size_t suggested = std::max<std::size_t>(4, surface.mesh.vertex_count() >> (2 * levels));
   if (coarse)
     std::printf("  note: %zu fine vertices for an isosurface of %zu: %d levels of this base are too coarse to follow it "

@@ -232,12 +232,11 @@ int main(int argc, char** argv) {
       const openvdb::math::Transform::Ptr transform = openvdb::math::Transform::createLinearTransform(volume.cell_size());
       start = std::chrono::steady_clock::now();
       const openvdb::FloatGrid::Ptr grid = openvdb::tools::meshToLevelSet<openvdb::FloatGrid>(*transform, points, triangles, 3.0f);
-      const double vdb_seconds = seconds_since(start);
-      peer_seconds = vdb_seconds;
-      std::printf("OpenVDB meshToLevelSet (half width 3): %.3f s, %zu active voxels\n", vdb_seconds,
+      peer_seconds = seconds_since(start);
+      std::printf("OpenVDB meshToLevelSet (half width 3): %.3f s, %zu active voxels\n", peer_seconds,
                   std::size_t(grid->activeVoxelCount()));
       std::printf("ratio signed distance / OpenVDB: band %g %.3fx (target <= 1.0x), whole grid %.3fx\n", band,
-                  distance_seconds / vdb_seconds, whole_seconds / vdb_seconds);
+                  distance_seconds / peer_seconds, whole_seconds / peer_seconds);
     }
 
     if (sdf_only) return 0;

@@ -207,12 +207,11 @@ ConvertResult convert_volume(const Volume& volume, const std::string& source, co
     result.warnings.push_back(warning.str());
   }
   // Where the fit did not follow the surface (points left off it, parts left
-  // out, or, as `isowave fit` judges it, fewer than half as many fine points
-  // as extracted vertices), the folds come from a base mesh too coarse for
-  // the surface, which the pre-filter does not remove (the torus at 160^3
-  // from 9 base vertices, 3 levels: 57% folded, 44% with --smooth 1).
+  // out, or a fine mesh too coarse for it), the folds come from the base
+  // mesh, which the pre-filter does not change (the torus at 160^3 from 9
+  // base vertices, 3 levels: 57% folded, 44% with --smooth 1).
   const bool too_coarse = far_off || result.uncovered_share > kUncoveredWarning ||
-                          2 * result.fine_vertices < result.extracted_vertices;
+                          fine_mesh_too_coarse(result.fine_vertices, result.extracted_vertices);
   if (result.tangled_share() > kFoldedWarning && (too_coarse || options.smooth_sigma == 0)) {
     std::ostringstream warning;
     warning << std::setprecision(2) << 100.0 * result.tangled_share() << "% of the fine faces fold against the field gradient";
