@@ -185,35 +185,39 @@ std::size_t minimum_element_bytes(const PlyElement& element, bool ascii) {
   return std::max<std::size_t>(bytes, 1);
 }
 
-PolygonMesh read_ply(const std::string& path, const std::string& data) {
-  // Header: lines up to "end_header".
+struct PlyHeader {
+  PlyEncoding encoding = PlyEncoding::Ascii;
+  std::vector<PlyElement> elements;
+  std::size_t body_start = 0;  // byte offset of the first element's data
+};
+
+// Header: lines up to "end_header".
+PlyHeader read_ply_header(const std::string& path, const std::string& data) {
   const std::size_t header_end = data.find("end_header");
   if (data.compare(0, 3, "ply") != 0) fail(path, "not a PLY file (missing 'ply' magic)");
   if (header_end == std::string::npos) fail(path, "PLY header has no end_header line");
-  std::size_t body_start = data.find('\n', header_end);
-  body_start = body_start == std::string::npos ? data.size() : body_start + 1;
-
+  PlyHeader result;
+  result.body_start = data.find('\n', header_end);
+  result.body_start = result.body_start == std::string::npos ? data.size() : result.body_start + 1;
   TextCursor header(data.data(), data.data() + header_end);
   header.next_line();
-  PlyEncoding encoding = PlyEncoding::Ascii;
   bool have_format = false;
-  std::vector<PlyElement> elements;
   while (!header.at_end()) {
     const std::string_view keyword = header.token_in_line();
     if (keyword == "format") {
       const std::string_view name = header.token_in_line();
-      if (name == "ascii") encoding = PlyEncoding::Ascii;
-      else if (name == "binary_little_endian") encoding = PlyEncoding::BinaryLittle;
-      else if (name == "binary_big_endian") encoding = PlyEncoding::BinaryBig;
+      if (name == "ascii") result.encoding = PlyEncoding::Ascii;
+      else if (name == "binary_little_endian") result.encoding = PlyEncoding::BinaryLittle;
+      else if (name == "binary_big_endian") result.encoding = PlyEncoding::BinaryBig;
       else fail(path, "unknown PLY format '" + std::string(name) + "'");
       have_format = true;
     } else if (keyword == "element") {
       PlyElement element;
       element.name = std::string(header.token_in_line());
       if (!parse_integer(header.token_in_line(), element.count)) fail(path, "malformed element count for '" + element.name + "'");
-      elements.push_back(std::move(element));
+      result.elements.push_back(std::move(element));
     } else if (keyword == "property") {
-      if (elements.empty()) fail(path, "PLY property before any element");
+      if (result.elements.empty()) fail(path, "PLY property before any element");
       PlyProperty property;
       std::string_view type_name = header.token_in_line();
       if (type_name == "list") {
@@ -223,99 +227,117 @@ PolygonMesh read_ply(const std::string& path, const std::string& data) {
       }
       if (!ply_type_from_name(type_name, property.type)) fail(path, "unknown PLY property type '" + std::string(type_name) + "'");
       property.name = std::string(header.token_in_line());
-      elements.back().properties.push_back(property);
+      result.elements.back().properties.push_back(property);
     } else if (!keyword.empty() && keyword != "comment" && keyword != "obj_info") {
       fail(path, "unknown PLY header line '" + std::string(keyword) + "'");
     }
     header.next_line();
   }
   if (!have_format) fail(path, "PLY header has no format line");
+  return result;
+}
 
-  PlyBody body(path, data.data() + body_start, data.data() + data.size(), encoding);
+// Positions (and the optional `sharp` flags) of the vertex element.
+void read_ply_vertices(const std::string& path, const PlyElement& element, PlyBody& body, PolygonMesh& mesh) {
+  int x = -1, y = -1, z = -1, sharp = -1;
+  for (int i = 0; i < static_cast<int>(element.properties.size()); ++i) {
+    const PlyProperty& property = element.properties[i];
+    if (property.is_list) continue;
+    if (property.name == "x") x = i;
+    else if (property.name == "y") y = i;
+    else if (property.name == "z") z = i;
+    else if (property.name == "sharp") sharp = i;
+  }
+  if (x < 0 || y < 0 || z < 0) fail(path, "vertex element lacks x, y or z");
+  mesh.positions.resize(element.count);
+  if (sharp >= 0) mesh.sharp.assign(element.count, 0);
+  for (std::uint64_t v = 0; v < element.count; ++v) {
+    double xyz[3] = {0, 0, 0};
+    for (int i = 0; i < static_cast<int>(element.properties.size()); ++i) {
+      const PlyProperty& property = element.properties[i];
+      if (property.is_list) {
+        const double n = body.read(property.count_type, "a vertex list");
+        if (n < 0 || n > 1e6) fail(path, "malformed list length in vertex " + std::to_string(v));
+        for (int k = 0; k < static_cast<int>(n); ++k) body.read(property.type, "a vertex list");
+        continue;
+      }
+      const double value = body.read(property.type, "vertex data");
+      if (i == x) xyz[0] = value;
+      else if (i == y) xyz[1] = value;
+      else if (i == z) xyz[2] = value;
+      else if (i == sharp) mesh.sharp[v] = value != 0;
+    }
+    mesh.positions[v] = {xyz[0], xyz[1], xyz[2]};
+  }
+}
+
+// Faces from the vertex_indices (or vertex_index) list of the face element.
+void read_ply_faces(const std::string& path, const PlyElement& element, PlyBody& body, PolygonMesh& mesh) {
+  int list = -1;
+  for (int i = 0; i < static_cast<int>(element.properties.size()); ++i)
+    if (element.properties[i].is_list &&
+        (element.properties[i].name == "vertex_indices" || element.properties[i].name == "vertex_index"))
+      list = i;
+  if (list < 0) fail(path, "face element lacks a vertex_indices list");
+  mesh.face_offsets.reserve(element.count + 1);
+  mesh.face_vertices.reserve(element.count * 3);
+  std::vector<std::uint32_t> corners;
+  for (std::uint64_t f = 0; f < element.count; ++f) {
+    for (int i = 0; i < static_cast<int>(element.properties.size()); ++i) {
+      const PlyProperty& property = element.properties[i];
+      if (!property.is_list) {
+        body.read(property.type, "face data");
+        continue;
+      }
+      const double n = body.read(property.count_type, "a face's vertex count");
+      if (n < 0 || n != static_cast<double>(static_cast<std::int64_t>(n)) || n > body.remaining() + 1.0)
+        fail(path, "malformed vertex count in face " + std::to_string(f));
+      corners.clear();
+      for (std::int64_t k = 0; k < static_cast<std::int64_t>(n); ++k) {
+        const double index = body.read(property.type, "face indices");
+        if (i != list) continue;
+        if (index < 0 || index != static_cast<double>(static_cast<std::int64_t>(index)) || index >= 4294967295.0)
+          fail(path, "invalid vertex index in face " + std::to_string(f));
+        corners.push_back(static_cast<std::uint32_t>(index));
+      }
+      if (i == list) mesh.add_face(corners.data(), corners.size());
+    }
+  }
+}
+
+void skip_ply_element(const std::string& path, const PlyElement& element, PlyBody& body) {
+  for (std::uint64_t e = 0; e < element.count; ++e)
+    for (const PlyProperty& property : element.properties) {
+      if (!property.is_list) {
+        body.read(property.type, element.name.c_str());
+        continue;
+      }
+      const double n = body.read(property.count_type, element.name.c_str());
+      if (n < 0 || n > body.remaining() + 1.0) fail(path, "malformed list length in element '" + element.name + "'");
+      for (std::int64_t k = 0; k < static_cast<std::int64_t>(n); ++k) body.read(property.type, element.name.c_str());
+    }
+}
+
+PolygonMesh read_ply(const std::string& path, const std::string& data) {
+  const PlyHeader header = read_ply_header(path, data);
+  PlyBody body(path, data.data() + header.body_start, data.data() + data.size(), header.encoding);
   PolygonMesh mesh;
   bool have_vertices = false;
   bool have_faces = false;
-  for (const PlyElement& element : elements) {
+  for (const PlyElement& element : header.elements) {
     // Every element needs at least a few bytes per entry: reject counts the
     // file cannot hold before allocating anything for them.
     if (element.count > body.remaining() / minimum_element_bytes(element, body.is_ascii()))
       fail(path, "element '" + element.name + "' claims " + std::to_string(element.count) +
                      " entries, more than the file can hold (truncated?)");
     if (element.name == "vertex") {
-      int x = -1, y = -1, z = -1, sharp = -1;
-      for (int i = 0; i < static_cast<int>(element.properties.size()); ++i) {
-        const PlyProperty& property = element.properties[i];
-        if (property.is_list) continue;
-        if (property.name == "x") x = i;
-        else if (property.name == "y") y = i;
-        else if (property.name == "z") z = i;
-        else if (property.name == "sharp") sharp = i;
-      }
-      if (x < 0 || y < 0 || z < 0) fail(path, "vertex element lacks x, y or z");
-      mesh.positions.resize(element.count);
-      if (sharp >= 0) mesh.sharp.assign(element.count, 0);
-      for (std::uint64_t v = 0; v < element.count; ++v) {
-        double xyz[3] = {0, 0, 0};
-        for (int i = 0; i < static_cast<int>(element.properties.size()); ++i) {
-          const PlyProperty& property = element.properties[i];
-          if (property.is_list) {
-            const double n = body.read(property.count_type, "a vertex list");
-            if (n < 0 || n > 1e6) fail(path, "malformed list length in vertex " + std::to_string(v));
-            for (int k = 0; k < static_cast<int>(n); ++k) body.read(property.type, "a vertex list");
-            continue;
-          }
-          const double value = body.read(property.type, "vertex data");
-          if (i == x) xyz[0] = value;
-          else if (i == y) xyz[1] = value;
-          else if (i == z) xyz[2] = value;
-          else if (i == sharp) mesh.sharp[v] = value != 0;
-        }
-        mesh.positions[v] = {xyz[0], xyz[1], xyz[2]};
-      }
+      read_ply_vertices(path, element, body, mesh);
       have_vertices = true;
     } else if (element.name == "face") {
-      int list = -1;
-      for (int i = 0; i < static_cast<int>(element.properties.size()); ++i)
-        if (element.properties[i].is_list &&
-            (element.properties[i].name == "vertex_indices" || element.properties[i].name == "vertex_index"))
-          list = i;
-      if (list < 0) fail(path, "face element lacks a vertex_indices list");
-      mesh.face_offsets.reserve(element.count + 1);
-      mesh.face_vertices.reserve(element.count * 3);
-      std::vector<std::uint32_t> corners;
-      for (std::uint64_t f = 0; f < element.count; ++f) {
-        for (int i = 0; i < static_cast<int>(element.properties.size()); ++i) {
-          const PlyProperty& property = element.properties[i];
-          if (!property.is_list) {
-            body.read(property.type, "face data");
-            continue;
-          }
-          const double n = body.read(property.count_type, "a face's vertex count");
-          if (n < 0 || n != static_cast<double>(static_cast<std::int64_t>(n)) || n > body.remaining() + 1.0)
-            fail(path, "malformed vertex count in face " + std::to_string(f));
-          corners.clear();
-          for (std::int64_t k = 0; k < static_cast<std::int64_t>(n); ++k) {
-            const double index = body.read(property.type, "face indices");
-            if (i != list) continue;
-            if (index < 0 || index != static_cast<double>(static_cast<std::int64_t>(index)) || index >= 4294967295.0)
-              fail(path, "invalid vertex index in face " + std::to_string(f));
-            corners.push_back(static_cast<std::uint32_t>(index));
-          }
-          if (i == list) mesh.add_face(corners.data(), corners.size());
-        }
-      }
+      read_ply_faces(path, element, body, mesh);
       have_faces = true;
     } else {
-      for (std::uint64_t e = 0; e < element.count; ++e)
-        for (const PlyProperty& property : element.properties) {
-          if (!property.is_list) {
-            body.read(property.type, element.name.c_str());
-            continue;
-          }
-          const double n = body.read(property.count_type, element.name.c_str());
-          if (n < 0 || n > body.remaining() + 1.0) fail(path, "malformed list length in element '" + element.name + "'");
-          for (std::int64_t k = 0; k < static_cast<std::int64_t>(n); ++k) body.read(property.type, element.name.c_str());
-        }
+      skip_ply_element(path, element, body);
     }
   }
   if (!have_vertices) fail(path, "PLY file has no vertex element");

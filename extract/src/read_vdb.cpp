@@ -394,14 +394,9 @@ Volume densify(const GridT& grid, const std::string& path, const std::string& na
   return volume;
 }
 
-}  // namespace
-
-Volume read_vdb(const std::string& path, const VolumeReadOptions& options) {
-  initialize_openvdb();
-  InputFile file(path);
-  Walker w(file);
-
-  // Header: magic, file version, library version, grid offsets flag, UUID.
+// Header: magic, file version, library version, grid offsets flag, UUID.
+// Returns the header's end.
+std::uint64_t read_file_header(Walker& w) {
   const std::int64_t magic = w.i64("header");
   if (magic != openvdb::OPENVDB_MAGIC) w.fail("not an OpenVDB file (bad magic number)");
   const std::uint32_t version = w.u32("header");
@@ -415,12 +410,14 @@ Volume read_vdb(const std::string& path, const VolumeReadOptions& options) {
   if (!has_offsets) w.fail("unsupported: a VDB stream without grid offsets");
   w.skip(36, "header UUID");
   const std::uint64_t header_end = w.pos();
+  return header_end;
+}
 
-  walk_metadata(w);
+// The grid descriptors, with their offsets checked against the file.
+std::vector<GridEntry> read_grid_descriptors(Walker& w, const InputFile& file) {
   const std::int64_t grid_count = static_cast<std::int32_t>(w.u32("grid count"));
   if (grid_count < 0 || static_cast<std::uint64_t>(grid_count) > w.remaining() / 36)
     w.fail("corrupt grid count " + std::to_string(grid_count));
-
   std::vector<GridEntry> grids;
   for (std::int64_t i = 0; i < grid_count; ++i) {
     GridEntry g;
@@ -448,7 +445,11 @@ Volume read_vdb(const std::string& path, const VolumeReadOptions& options) {
     grids.push_back(g);
     w.seek(g.end_pos);
   }
+  return grids;
+}
 
+// options.grid, else the first float or double grid.
+const GridEntry& choose_grid(Walker& w, const std::vector<GridEntry>& grids, const VolumeReadOptions& options) {
   const std::string float_type = openvdb::FloatGrid::gridType();
   const std::string double_type = openvdb::DoubleGrid::gridType();
   const GridEntry* chosen = nullptr;
@@ -464,8 +465,19 @@ Volume read_vdb(const std::string& path, const VolumeReadOptions& options) {
   }
   if (chosen->type != float_type && chosen->type != double_type)
     w.fail("grid '" + chosen->name + "' has type " + chosen->type + " (only float and double grids are supported)");
+  return *chosen;
+}
 
-  // Re-pack: header, empty file metadata, the chosen grid (after its instance parent).
+// A stream of the header, empty file metadata and the chosen grid (after its
+// instance parent), for OpenVDB to read.
+struct PackedGrids {
+  std::vector<char> bytes;
+  std::size_t grid_count = 0;
+};
+
+PackedGrids repack_grid(Walker& w, const std::vector<GridEntry>& grids, const GridEntry& chosen_grid,
+                        std::uint64_t header_end, const std::string& path) {
+  const GridEntry* chosen = &chosen_grid;
   std::vector<char> packed = w.bytes(0, header_end);
   put_u32(packed, 0);
   std::vector<const GridEntry*> parts;
@@ -479,42 +491,63 @@ Volume read_vdb(const std::string& path, const VolumeReadOptions& options) {
   parts.push_back(chosen);
   put_u32(packed, static_cast<std::uint32_t>(parts.size()));
   for (const auto* g : parts) pack_grid(w, *g, path, packed);
+  return {std::move(packed), parts.size()};
+}
 
+openvdb::GridBase::Ptr read_packed_grid(Walker& w, PackedGrids& packed, const std::string& name) {
   openvdb::GridBase::Ptr grid;
   try {
-    MemoryBuffer buffer(packed);
+    MemoryBuffer buffer(packed.bytes);
     std::istream in(&buffer);
     in.exceptions(std::ios_base::failbit | std::ios_base::badbit);
     openvdb::io::Stream stream(in, /*delayLoad=*/false);
     const auto read = stream.getGrids();
-    if (!read || read->size() != parts.size() || !read->back()) w.fail("corrupt grid '" + chosen->name + "'");
+    if (!read || read->size() != packed.grid_count || !read->back()) w.fail("corrupt grid '" + name + "'");
     grid = read->back();
   } catch (const Error&) {
     throw;
   } catch (const std::ios_base::failure&) {
-    w.fail("truncated or corrupt data in grid '" + chosen->name + "'");
+    w.fail("truncated or corrupt data in grid '" + name + "'");
   } catch (const openvdb::Exception& e) {
-    w.fail("corrupt grid '" + chosen->name + "': " + e.what());
+    w.fail("corrupt grid '" + name + "': " + e.what());
   } catch (const std::bad_alloc&) {
-    w.fail("corrupt grid '" + chosen->name + "' (implausible sizes)");
+    w.fail("corrupt grid '" + name + "' (implausible sizes)");
   } catch (const std::exception& e) {
-    w.fail("corrupt grid '" + chosen->name + "': " + e.what());
+    w.fail("corrupt grid '" + name + "': " + e.what());
   }
+  return grid;
+}
 
+Volume densify_grid(Walker& w, const openvdb::GridBase::Ptr& grid, const std::string& path, const std::string& name) {
   Volume volume;
   try {
     if (auto f = openvdb::gridPtrCast<openvdb::FloatGrid>(grid)) {
-      volume = densify(*f, path, chosen->name, ScalarType::Float32);
+      volume = densify(*f, path, name, ScalarType::Float32);
     } else if (auto d = openvdb::gridPtrCast<openvdb::DoubleGrid>(grid)) {
-      volume = densify(*d, path, chosen->name, ScalarType::Float64);
+      volume = densify(*d, path, name, ScalarType::Float64);
     } else {
-      w.fail("grid '" + chosen->name + "' is not a float or double grid");
+      w.fail("grid '" + name + "' is not a float or double grid");
     }
   } catch (const Error&) {
     throw;
   } catch (const std::exception& e) {  // e.g. a singular transform
-    w.fail("corrupt grid '" + chosen->name + "': " + e.what());
+    w.fail("corrupt grid '" + name + "': " + e.what());
   }
+  return volume;
+}
+
+}  // namespace
+
+Volume read_vdb(const std::string& path, const VolumeReadOptions& options) {
+  initialize_openvdb();
+  InputFile file(path);
+  Walker w(file);
+  const std::uint64_t header_end = read_file_header(w);
+  walk_metadata(w);
+  const std::vector<GridEntry> grids = read_grid_descriptors(w, file);
+  const GridEntry& chosen = choose_grid(w, grids, options);
+  PackedGrids packed = repack_grid(w, grids, chosen, header_end, path);
+  Volume volume = densify_grid(w, read_packed_grid(w, packed, chosen.name), path, chosen.name);
   make_spacing_positive(volume);
   check_geometry(volume, path);
   return volume;

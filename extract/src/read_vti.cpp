@@ -442,18 +442,20 @@ std::vector<double> numbers(const std::string& path, const std::string& what, co
   return values;
 }
 
-}  // namespace
+const XmlElement* child_named(const XmlDocument& doc, const XmlElement& parent, const char* name) {
+  for (std::size_t c : parent.children) {
+    if (doc.elements[c].name == name) return &doc.elements[c];
+  }
+  return nullptr;
+}
 
-Volume read_vti(const std::string& path, const VolumeReadOptions& options) {
-  const std::vector<char> buffer = InputFile(path).read_all();
-  const XmlDocument doc = XmlParser(path, buffer).parse();
-  const auto& el = doc.elements;
-  const XmlElement& root = el[0];
-  if (root.name != "VTKFile") format_error(path, "not a VTK XML file (root element <" + root.name + ">)");
-  const std::string* file_type = root.attribute("type");
-  if (!file_type || *file_type != "ImageData")
-    format_error(path, "unsupported VTK XML type '" + (file_type ? *file_type : std::string("?")) + "' (only ImageData)");
+std::string name_of(const XmlElement* a) {
+  const auto* n = a->attribute("Name");
+  return n ? *n : std::string();
+}
 
+// The root's byte order, header size and compressor.
+Encoding read_encoding(const std::string& path, const XmlElement& root) {
   Encoding enc;
   if (const auto* order = root.attribute("byte_order")) {
     if (*order == "BigEndian") enc.big_endian = true;
@@ -468,36 +470,35 @@ Volume read_vti(const std::string& path, const VolumeReadOptions& options) {
     else if (!compressor->empty())
       format_error(path, "unsupported compressor '" + *compressor + "' (only vtkZLibDataCompressor)");
   }
+  return enc;
+}
 
-  const auto child = [&](const XmlElement& parent, const char* name) -> const XmlElement* {
-    for (std::size_t c : parent.children) {
-      if (el[c].name == name) return &el[c];
-    }
-    return nullptr;
-  };
-  const XmlElement* image = child(root, "ImageData");
-  if (!image) format_error(path, "missing <ImageData> element");
+// The one <Piece> of <ImageData>.
+const XmlElement& single_piece(const std::string& path, const XmlDocument& doc, const XmlElement& image) {
   std::vector<const XmlElement*> pieces;
-  for (std::size_t c : image->children) {
-    if (el[c].name == "Piece") pieces.push_back(&el[c]);
+  for (std::size_t c : image.children) {
+    if (doc.elements[c].name == "Piece") pieces.push_back(&doc.elements[c]);
   }
   if (pieces.empty()) format_error(path, "missing <Piece> element");
   if (pieces.size() > 1) format_error(path, "unsupported: " + std::to_string(pieces.size()) + " pieces (one is supported)");
-  const XmlElement& piece = *pieces[0];
+  return *pieces[0];
+}
 
+// Dims, spacing and origin from the extent, Origin, Spacing and an
+// axis-aligned Direction (a flipped axis becomes a negative spacing).
+void read_grid_geometry(const std::string& path, const XmlElement& image, const XmlElement& piece, Volume& volume) {
   const std::string* extent_text = piece.attribute("Extent");
-  if (!extent_text) extent_text = image->attribute("WholeExtent");
+  if (!extent_text) extent_text = image.attribute("WholeExtent");
   if (!extent_text) format_error(path, "missing WholeExtent / Extent");
   const auto extent = numbers(path, "Extent", *extent_text, 6, true);
-  Volume volume;
   for (int a = 0; a < 3; ++a) {
     if (extent[2 * a + 1] < extent[2 * a]) format_error(path, "bad Extent '" + *extent_text + "'");
     volume.dims[a] = static_cast<std::size_t>(extent[2 * a + 1] - extent[2 * a] + 1);
   }
   std::vector<double> origin{0, 0, 0}, spacing{1, 1, 1}, direction{1, 0, 0, 0, 1, 0, 0, 0, 1};
-  if (const auto* t = image->attribute("Origin")) origin = numbers(path, "Origin", *t, 3, false);
-  if (const auto* t = image->attribute("Spacing")) spacing = numbers(path, "Spacing", *t, 3, false);
-  if (const auto* t = image->attribute("Direction")) direction = numbers(path, "Direction", *t, 9, false);
+  if (const auto* t = image.attribute("Origin")) origin = numbers(path, "Origin", *t, 3, false);
+  if (const auto* t = image.attribute("Spacing")) spacing = numbers(path, "Spacing", *t, 3, false);
+  if (const auto* t = image.attribute("Direction")) direction = numbers(path, "Direction", *t, 9, false);
   double axis_sign[3];
   for (int r = 0; r < 3; ++r) {
     for (int c = 0; c < 3; ++c) {
@@ -513,20 +514,20 @@ Volume read_vti(const std::string& path, const VolumeReadOptions& options) {
   for (double s : {sx, sy, sz}) {
     if (s == 0) format_error(path, "bad Spacing (zero)");
   }
+}
 
-  // Pick the array.
-  const XmlElement* point_data = child(piece, "PointData");
+// The point-data array to read: options.field, else the Scalars attribute's,
+// else the first.
+const XmlElement& pick_array(const std::string& path, const XmlDocument& doc, const XmlElement& piece,
+                             const VolumeReadOptions& options) {
+  const auto& el = doc.elements;
+  const XmlElement* point_data = child_named(doc, piece, "PointData");
   std::vector<const XmlElement*> arrays;
   if (point_data) {
     for (std::size_t c : point_data->children) {
       if (el[c].name == "DataArray") arrays.push_back(&el[c]);
     }
   }
-  const auto name_of = [](const XmlElement* a) {
-    const auto* n = a->attribute("Name");
-    return n ? *n : std::string();
-  };
-  const XmlElement* array = nullptr;
   std::string wanted = options.field;
   if (wanted.empty() && point_data) {
     if (const auto* s = point_data->attribute("Scalars")) wanted = *s;
@@ -536,35 +537,34 @@ Volume read_vti(const std::string& path, const VolumeReadOptions& options) {
   }
   if (wanted.empty()) {
     if (arrays.empty()) format_error(path, "missing field: no point data arrays");
-    array = arrays[0];
-  } else {
-    for (const auto* a : arrays) {
-      if (name_of(a) == wanted) {
-        array = a;
-        break;
-      }
-    }
-    if (!array) {
-      std::string where;
-      if (const XmlElement* cell = child(piece, "CellData")) {
-        for (std::size_t c : cell->children) {
-          if (el[c].name == "DataArray" && name_of(&el[c]) == wanted) where = " (it is cell data)";
-        }
-      }
-      std::string list;
-      for (const auto* a : arrays) list += (list.empty() ? "" : ", ") + name_of(a);
-      format_error(path, "missing field '" + wanted + "'" + where + " (point arrays: " + (list.empty() ? "none" : list) + ")");
+    return *arrays[0];
+  }
+  for (const auto* a : arrays) {
+    if (name_of(a) == wanted) return *a;
+  }
+  std::string where;
+  if (const XmlElement* cell = child_named(doc, piece, "CellData")) {
+    for (std::size_t c : cell->children) {
+      if (el[c].name == "DataArray" && name_of(&el[c]) == wanted) where = " (it is cell data)";
     }
   }
-  const std::string what = "array '" + name_of(array) + "'";
+  std::string list;
+  for (const auto* a : arrays) list += (list.empty() ? "" : ", ") + name_of(a);
+  format_error(path, "missing field '" + wanted + "'" + where + " (point arrays: " + (list.empty() ? "none" : list) + ")");
+}
 
-  const std::string* type_name = array->attribute("type");
+// The array's samples, ascii, inline binary (base64) or appended (raw or
+// base64), into volume.values; volume.dims must be set.
+void read_array_samples(const std::string& path, const std::vector<char>& buffer, const XmlDocument& doc,
+                        const Encoding& enc, const XmlElement& array, Volume& volume) {
+  const std::string what = "array '" + name_of(&array) + "'";
+  const std::string* type_name = array.attribute("type");
   if (!type_name) format_error(path, "bad " + what + ": missing type");
   bool known = false;
   const auto type = vti_type(*type_name, known);
   if (!type) format_error(path, std::string(known ? "unsupported" : "unknown") + " data type '" + *type_name + "' in " + what);
   volume.source_type = *type;
-  if (const auto* nc = array->attribute("NumberOfComponents")) {
+  if (const auto* nc = array.attribute("NumberOfComponents")) {
     std::int64_t n = 0;
     if (!parse_int64(*nc, n) || n < 1) format_error(path, "bad NumberOfComponents in " + what);
     if (n != 1) format_error(path, what + " has " + std::to_string(n) + " components (a scalar field needs 1)");
@@ -572,31 +572,28 @@ Volume read_vti(const std::string& path, const VolumeReadOptions& options) {
   const std::size_t sample_size = scalar_type_size(*type);
   const std::size_t count = checked_sample_count(volume.dims, sample_size, path);
   const std::uint64_t expected = static_cast<std::uint64_t>(count) * sample_size;
-  const auto allocate = [&volume, count]() {
-    volume.values.resize(count);
-    return volume.values.data();
-  };
 
-  const std::string* format_attr = array->attribute("format");
+  const std::string* format_attr = array.attribute("format");
   const std::string format = format_attr ? *format_attr : "ascii";
-  const char* text_begin = buffer.data() + array->text_begin;
-  const char* text_end = buffer.data() + array->text_end;
+  const char* text_begin = buffer.data() + array.text_begin;
+  const char* text_end = buffer.data() + array.text_end;
   if (format == "ascii") {
     if (count > static_cast<std::size_t>(text_end - text_begin) / 2 + 1)
       format_error(path, "truncated data in " + what + ": the text cannot hold " + std::to_string(count) + " values");
-    parse_text_samples(text_begin, text_end, count, *type, false, true, allocate(), path, what);
+    volume.values.resize(count);
+    parse_text_samples(text_begin, text_end, count, *type, false, true, volume.values.data(), path, what);
   } else if (format == "binary") {
     Base64Source source(text_begin, text_end, path);
     read_binary_array(source, enc, expected, *type, volume.values, count, path, what);
   } else if (format == "appended") {
     if (!doc.appended) format_error(path, "missing <AppendedData> for " + what);
-    const std::string* offset_text = array->attribute("offset");
+    const std::string* offset_text = array.attribute("offset");
     std::int64_t offset = 0;
     if (!offset_text || !parse_int64(*offset_text, offset) || offset < 0)
       format_error(path, "bad or missing offset in " + what);
     const std::uint64_t start = doc.appended_data + static_cast<std::uint64_t>(offset);
     if (start > buffer.size()) format_error(path, "truncated appended data (" + what + " starts past the end of the file)");
-    const std::string* encoding = el[*doc.appended].attribute("encoding");
+    const std::string* encoding = doc.elements[*doc.appended].attribute("encoding");
     const std::string appended_encoding = encoding ? *encoding : "raw";
     if (appended_encoding == "raw") {
       RawSource source(buffer.data() + start, buffer.data() + buffer.size());
@@ -610,7 +607,26 @@ Volume read_vti(const std::string& path, const VolumeReadOptions& options) {
   } else {
     format_error(path, "unsupported format '" + format + "' in " + what);
   }
+}
 
+}  // namespace
+
+Volume read_vti(const std::string& path, const VolumeReadOptions& options) {
+  const std::vector<char> buffer = InputFile(path).read_all();
+  const XmlDocument doc = XmlParser(path, buffer).parse();
+  const XmlElement& root = doc.elements[0];
+  if (root.name != "VTKFile") format_error(path, "not a VTK XML file (root element <" + root.name + ">)");
+  const std::string* file_type = root.attribute("type");
+  if (!file_type || *file_type != "ImageData")
+    format_error(path, "unsupported VTK XML type '" + (file_type ? *file_type : std::string("?")) + "' (only ImageData)");
+  const Encoding enc = read_encoding(path, root);
+  const XmlElement* image = child_named(doc, root, "ImageData");
+  if (!image) format_error(path, "missing <ImageData> element");
+  const XmlElement& piece = single_piece(path, doc, *image);
+
+  Volume volume;
+  read_grid_geometry(path, *image, piece, volume);
+  read_array_samples(path, buffer, doc, enc, pick_array(path, doc, piece, options), volume);
   make_spacing_positive(volume);
   check_geometry(volume, path);
   return volume;

@@ -144,6 +144,15 @@ class VtkParser {
     }
   }
 
+  using Tokens = std::vector<std::string_view>;
+  // Steps of read(), in file order.
+  void read_header();
+  Tokens read_geometry();  // returns the POINT_DATA / CELL_DATA line
+  void read_attributes(Tokens tokens);
+  [[noreturn]] void fail_missing_field() const;
+  // Skips a FIELD block whose header line is `t` (FIELD name numArrays); true
+  // when an array of it was the wanted field and was read.
+  bool skip_field_block(const Tokens& t, std::size_t elements, bool point_data, bool attribute);
   void read_samples(const VtkType& type, const std::string& what);
   // Called for each point-data candidate; true when it was read.
   bool consider(const std::string& name, const char* kind, std::size_t components, std::size_t tuples,
@@ -198,7 +207,7 @@ bool VtkParser::consider(const std::string& name, const char* kind, std::size_t 
   return true;
 }
 
-Volume VtkParser::read() {
+void VtkParser::read_header() {
   auto header = raw_line();
   if (!header || header->rfind("# vtk DataFile Version", 0) != 0)
     fail("not a legacy VTK file (missing '# vtk DataFile Version' header)");
@@ -208,14 +217,16 @@ Volume VtkParser::read() {
   if (iequals(format[0], "BINARY")) binary_ = true;
   else if (!iequals(format[0], "ASCII")) fail("bad header: expected ASCII or BINARY, got '" + std::string(format[0]) + "'");
 
-  auto tokens = next_line();
+  const auto tokens = next_line();
   if (tokens.size() < 2 || !iequals(tokens[0], "DATASET")) fail("bad header: expected 'DATASET STRUCTURED_POINTS'");
   if (!iequals(tokens[1], "STRUCTURED_POINTS"))
     fail("unsupported dataset type '" + std::string(tokens[1]) + "' (only STRUCTURED_POINTS is supported)");
+}
 
+VtkParser::Tokens VtkParser::read_geometry() {
   std::optional<std::array<std::size_t, 3>> dims;
   Vec3 spacing{1, 1, 1}, origin{0, 0, 0};
-  const auto read_vec = [this](const std::vector<std::string_view>& t, const char* what) {
+  const auto read_vec = [this](const Tokens& t, const char* what) {
     if (t.size() < 4) fail(std::string("bad header: ") + what + " needs 3 numbers");
     double v[3];
     for (int i = 0; i < 3; ++i) {
@@ -225,29 +236,7 @@ Volume VtkParser::read() {
     return Vec3{v[0], v[1], v[2]};
   };
 
-  // Skips a FIELD block whose header line is `t` (FIELD name numArrays).
-  const auto skip_field_block = [this](const std::vector<std::string_view>& t, std::size_t elements, bool point_data,
-                                       bool attribute) {
-    if (t.size() < 3) fail("bad header: FIELD needs a name and an array count");
-    const std::size_t arrays = count_token(t[2], "FIELD array count");
-    for (std::size_t a = 0; a < arrays; ++a) {
-      skip_metadata();
-      const auto line = next_line();
-      if (line.empty()) fail("truncated FIELD data (array " + std::to_string(a) + " of " + std::to_string(arrays) + ")");
-      if (iequals(line[0], "NULL_ARRAY")) continue;
-      if (line.size() < 4) fail("bad header: FIELD array line needs name, components, tuples and type");
-      const std::string name = decode_name(line[0]);
-      const std::size_t components = count_token(line[1], "component count");
-      const std::size_t tuples = count_token(line[2], "tuple count");
-      const VtkType type = type_of(line[3]);
-      if (attribute && tuples == elements &&
-          consider(name, "FIELD", components, tuples, type, point_data, false))
-        return true;
-      skip_values(multiply(components, tuples), type, "FIELD array '" + name + "'");
-    }
-    return false;
-  };
-
+  Tokens tokens;
   while (true) {
     tokens = next_line();
     if (tokens.empty()) fail("truncated header (no POINT_DATA section)");
@@ -281,7 +270,31 @@ Volume VtkParser::read() {
   volume_.spacing = spacing;
   volume_.origin = origin;
   points_ = checked_sample_count(volume_.dims, 1, path_);
+  return tokens;
+}
 
+bool VtkParser::skip_field_block(const Tokens& t, std::size_t elements, bool point_data, bool attribute) {
+  if (t.size() < 3) fail("bad header: FIELD needs a name and an array count");
+  const std::size_t arrays = count_token(t[2], "FIELD array count");
+  for (std::size_t a = 0; a < arrays; ++a) {
+    skip_metadata();
+    const auto line = next_line();
+    if (line.empty()) fail("truncated FIELD data (array " + std::to_string(a) + " of " + std::to_string(arrays) + ")");
+    if (iequals(line[0], "NULL_ARRAY")) continue;
+    if (line.size() < 4) fail("bad header: FIELD array line needs name, components, tuples and type");
+    const std::string name = decode_name(line[0]);
+    const std::size_t components = count_token(line[1], "component count");
+    const std::size_t tuples = count_token(line[2], "tuple count");
+    const VtkType type = type_of(line[3]);
+    if (attribute && tuples == elements &&
+        consider(name, "FIELD", components, tuples, type, point_data, false))
+      return true;
+    skip_values(multiply(components, tuples), type, "FIELD array '" + name + "'");
+  }
+  return false;
+}
+
+void VtkParser::read_attributes(Tokens tokens) {
   bool point_data = false;
   std::size_t elements = 0;
   while (!tokens.empty()) {
@@ -344,13 +357,20 @@ Volume VtkParser::read() {
     tokens = next_line();
   }
 
-  if (!found_) {
-    std::string list;
-    for (const auto& s : seen_) list += (list.empty() ? "" : ", ") + s;
-    if (list.empty()) list = "none";
-    if (options_.field.empty()) fail("missing field: no SCALARS point data (arrays found: " + list + ")");
-    fail("missing field '" + options_.field + "' (arrays found: " + list + ")");
-  }
+}
+
+void VtkParser::fail_missing_field() const {
+  std::string list;
+  for (const auto& s : seen_) list += (list.empty() ? "" : ", ") + s;
+  if (list.empty()) list = "none";
+  if (options_.field.empty()) fail("missing field: no SCALARS point data (arrays found: " + list + ")");
+  fail("missing field '" + options_.field + "' (arrays found: " + list + ")");
+}
+
+Volume VtkParser::read() {
+  read_header();
+  read_attributes(read_geometry());
+  if (!found_) fail_missing_field();
   make_spacing_positive(volume_);
   check_geometry(volume_, path_);
   return std::move(volume_);

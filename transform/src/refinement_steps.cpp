@@ -169,45 +169,53 @@ struct LevelTopology {
   std::uint32_t corner_count() const { return face_offsets[face_count]; }
 };
 
-// The base level, completed from the face-vertex lists as
-// Vtr::Level::completeTopologyFromFaceVertices() completes it for a
-// consistently oriented manifold: edges numbered in order of first appearance
-// over the faces' corners, oriented as in the face that creates them, their
-// faces in face order; then each vertex's faces and edges ordered around it
-// (Level::orderVertexFacesAndEdges): from its first face, or on the boundary
-// from the boundary edge leaving it, walking to the edge entering it in each
-// face and across to the next face.
-LevelTopology level_from_base(const PolygonMesh& base) {
-  constexpr std::uint32_t kValenceLimit = 0xFFFF;  // OpenSubdiv's VALENCE_LIMIT (16-bit local indices)
-  constexpr std::uint32_t kNone = ~std::uint32_t{0};
-  LevelTopology t;
-  t.vertex_count = static_cast<std::uint32_t>(base.vertex_count());
-  t.face_count = static_cast<std::uint32_t>(base.face_count());
-  const std::uint32_t V = t.vertex_count, F = t.face_count;
-  t.face_offsets = base.face_offsets;
-  t.face_vertices = base.face_vertices;
-  const std::uint32_t C = t.corner_count();
+// Per vertex during completion: its faces, and slots for its edges (faces + 1
+// per vertex, enough for a manifold vertex) filled in order of appearance.
+struct EdgeSlots {
+  std::vector<std::uint32_t> face_count_of, edge_count_of;
+  std::vector<std::uint32_t> offsets, edges;  // vertex v's edges: edges[offsets[v] ..][0 .. edge_count_of[v])
+};
+
+constexpr std::uint32_t kValenceLimit = 0xFFFF;  // OpenSubdiv's VALENCE_LIMIT (16-bit local indices)
+constexpr std::uint32_t kNoEdge = ~std::uint32_t{0};
+
+Error not_manifold() { return Error(ErrorKind::Topology, "the base mesh is not a consistently oriented manifold"); }
+
+std::uint32_t corner_of(const LevelTopology& t, std::uint32_t face, std::uint32_t v) {
+  const std::uint32_t offset = t.face_offsets[face];
+  return static_cast<std::uint32_t>(std::find(&t.face_vertices[offset], &t.face_vertices[t.face_offsets[face + 1]], v) -
+                                    &t.face_vertices[offset]);
+}
+
+// Faces per vertex in face order; a manifold vertex has as many edges as
+// faces, or one more on the boundary.
+EdgeSlots count_vertex_faces(LevelTopology& t) {
+  const std::uint32_t V = t.vertex_count, F = t.face_count, C = t.corner_count();
   for (std::uint32_t f = 0; f < F; ++f)
     if (t.face_size(f) > kValenceLimit) throw Error(ErrorKind::Topology, "a base face has more than 65535 corners");
-
-  // Faces per vertex in face order; a manifold vertex has as many edges as
-  // faces, or one more on the boundary.
-  std::vector<std::uint32_t> face_count_of(V + 1, 0);
-  for (std::uint32_t c = 0; c < C; ++c) ++face_count_of[t.face_vertices[c]];
+  EdgeSlots slots;
+  slots.face_count_of.assign(V + 1, 0);
+  for (std::uint32_t c = 0; c < C; ++c) ++slots.face_count_of[t.face_vertices[c]];
   t.vertex_face_offsets.resize(std::size_t{V} + 1);
   t.vertex_face_offsets[0] = 0;
   for (std::uint32_t v = 0; v < V; ++v) {
-    if (face_count_of[v] > kValenceLimit) throw Error(ErrorKind::Topology, "a base vertex has more than 65535 faces");
-    t.vertex_face_offsets[v + 1] = t.vertex_face_offsets[v] + face_count_of[v];
+    if (slots.face_count_of[v] > kValenceLimit) throw Error(ErrorKind::Topology, "a base vertex has more than 65535 faces");
+    t.vertex_face_offsets[v + 1] = t.vertex_face_offsets[v] + slots.face_count_of[v];
   }
   t.vertex_faces.resize(C);
-  std::vector<std::uint32_t> edge_slots(std::size_t{V} + 1);  // room for faces + 1 edges per vertex
-  edge_slots[0] = 0;
-  for (std::uint32_t v = 0; v < V; ++v) edge_slots[v + 1] = edge_slots[v] + face_count_of[v] + 1;
-  std::vector<std::uint32_t> slot_edges(edge_slots[V]);
-  std::vector<std::uint32_t> edge_count_of(V, 0), faces_filled(V, 0);
+  slots.offsets.resize(std::size_t{V} + 1);
+  slots.offsets[0] = 0;
+  for (std::uint32_t v = 0; v < V; ++v) slots.offsets[v + 1] = slots.offsets[v] + slots.face_count_of[v] + 1;
+  slots.edges.resize(slots.offsets[V]);
+  slots.edge_count_of.assign(V, 0);
+  return slots;
+}
 
-  const auto not_manifold = [] { return Error(ErrorKind::Topology, "the base mesh is not a consistently oriented manifold"); };
+// Edges numbered in order of first appearance over the faces' corners,
+// oriented as in the face that creates them, their faces in face order.
+void complete_edges(LevelTopology& t, EdgeSlots& slots) {
+  const std::uint32_t V = t.vertex_count, F = t.face_count, C = t.corner_count();
+  std::vector<std::uint32_t> faces_filled(V, 0);
   t.face_edges.resize(C);
   t.edge_vertices.reserve(C + 2);
   std::vector<std::uint32_t> first_face, second_face;
@@ -217,27 +225,27 @@ LevelTopology level_from_base(const PolygonMesh& base) {
     const std::uint32_t offset = t.face_offsets[f], n = t.face_size(f);
     for (std::uint32_t i = 0; i < n; ++i) {
       const std::uint32_t v0 = t.face_vertices[offset + i], v1 = t.face_vertices[offset + (i + 1 == n ? 0 : i + 1)];
-      std::uint32_t edge = kNone;
-      for (std::uint32_t k = 0; k < edge_count_of[v0]; ++k) {
-        const std::uint32_t candidate = slot_edges[edge_slots[v0] + k];
+      std::uint32_t edge = kNoEdge;
+      for (std::uint32_t k = 0; k < slots.edge_count_of[v0]; ++k) {
+        const std::uint32_t candidate = slots.edges[slots.offsets[v0] + k];
         if (t.edge_vertices[2 * candidate] == v1 || t.edge_vertices[2 * candidate + 1] == v1) {
           edge = candidate;
           break;
         }
       }
-      if (edge == kNone) {
+      if (edge == kNoEdge) {
         edge = static_cast<std::uint32_t>(first_face.size());
         t.edge_vertices.push_back(v0);
         t.edge_vertices.push_back(v1);
         first_face.push_back(f);
-        second_face.push_back(kNone);
+        second_face.push_back(kNoEdge);
         for (const std::uint32_t end : {v0, v1}) {
-          if (edge_count_of[end] == face_count_of[end] + 1) throw not_manifold();
-          slot_edges[edge_slots[end] + edge_count_of[end]++] = edge;
+          if (slots.edge_count_of[end] == slots.face_count_of[end] + 1) throw not_manifold();
+          slots.edges[slots.offsets[end] + slots.edge_count_of[end]++] = edge;
         }
       } else {
         // Its second face must run along it the other way.
-        if (second_face[edge] != kNone || t.edge_vertices[2 * edge] == v0) throw not_manifold();
+        if (second_face[edge] != kNoEdge || t.edge_vertices[2 * edge] == v0) throw not_manifold();
         second_face[edge] = f;
       }
       t.face_edges[offset + i] = edge;
@@ -249,45 +257,45 @@ LevelTopology level_from_base(const PolygonMesh& base) {
   t.edge_faces.resize(2 * std::size_t{E});
   t.edge_boundary.resize(E);
   for (std::uint32_t e = 0; e < E; ++e) {
-    t.edge_boundary[e] = second_face[e] == kNone ? 1 : 0;
+    t.edge_boundary[e] = second_face[e] == kNoEdge ? 1 : 0;
     t.edge_faces[2 * e] = first_face[e];
-    t.edge_faces[2 * e + 1] = second_face[e] == kNone ? first_face[e] : second_face[e];
+    t.edge_faces[2 * e + 1] = second_face[e] == kNoEdge ? first_face[e] : second_face[e];
   }
   t.vertex_edge_offsets.resize(std::size_t{V} + 1);
   t.vertex_edge_offsets[0] = 0;
-  for (std::uint32_t v = 0; v < V; ++v) t.vertex_edge_offsets[v + 1] = t.vertex_edge_offsets[v] + edge_count_of[v];
+  for (std::uint32_t v = 0; v < V; ++v) t.vertex_edge_offsets[v + 1] = t.vertex_edge_offsets[v] + slots.edge_count_of[v];
   t.vertex_edges.resize(t.vertex_edge_offsets[V]);
-
-  const auto corner_of = [&](std::uint32_t face, std::uint32_t v) {
-    const std::uint32_t offset = t.face_offsets[face];
-    return static_cast<std::uint32_t>(std::find(&t.face_vertices[offset], &t.face_vertices[t.face_offsets[face + 1]], v) -
-                                      &t.face_vertices[offset]);
-  };
   for (std::uint32_t v = 0; v < V; ++v)
-    if (edge_count_of[v] > kValenceLimit) throw Error(ErrorKind::Topology, "a base vertex has more than 65535 edges");
+    if (slots.edge_count_of[v] > kValenceLimit) throw Error(ErrorKind::Topology, "a base vertex has more than 65535 edges");
+}
 
-  // Each vertex's faces and edges in order around it.
+// Each vertex's faces and edges in order around it
+// (Level::orderVertexFacesAndEdges): from its first face, or on the boundary
+// from the boundary edge leaving it, walking to the edge entering it in each
+// face and across to the next face.
+void order_vertex_neighbourhoods(LevelTopology& t, const EdgeSlots& slots) {
+  const std::uint32_t V = t.vertex_count;
   parallel_range(V, kGrain, [&](std::uint32_t begin, std::uint32_t end) {
     std::vector<std::uint32_t> ordered_faces, ordered_edges;
     for (std::uint32_t v = begin; v < end; ++v) {
-      const std::uint32_t face_total = face_count_of[v], edge_total = edge_count_of[v];
-      const std::uint32_t* edges = &slot_edges[edge_slots[v]];
+      const std::uint32_t face_total = slots.face_count_of[v], edge_total = slots.edge_count_of[v];
+      const std::uint32_t* edges = &slots.edges[slots.offsets[v]];
       std::uint32_t* faces = &t.vertex_faces[t.vertex_face_offsets[v]];
       if (face_total == 0 || edge_total < 2 || (edge_total != face_total && edge_total != face_total + 1)) throw not_manifold();
-      std::uint32_t face = kNone, corner = 0, edge = kNone;
+      std::uint32_t face = kNoEdge, corner = 0, edge = kNoEdge;
       if (edge_total == face_total) {
         face = faces[0];
-        corner = corner_of(face, v);
+        corner = corner_of(t, face, v);
         edge = t.face_edges[t.face_offsets[face] + corner];
       } else {
         for (std::uint32_t k = 0; k < edge_total; ++k) {
           if (!t.edge_boundary[edges[k]]) continue;
           edge = edges[k];
           face = t.edge_faces[2 * edge];
-          corner = corner_of(face, v);
+          corner = corner_of(t, face, v);
           if (edge == t.face_edges[t.face_offsets[face] + corner]) break;
         }
-        if (edge == kNone) throw not_manifold();
+        if (edge == kNoEdge) throw not_manifold();
       }
       ordered_faces.assign(1, face);
       ordered_edges.assign(1, edge);
@@ -312,15 +320,18 @@ LevelTopology level_from_base(const PolygonMesh& base) {
       std::copy(ordered_edges.begin(), ordered_edges.end(), t.vertex_edges.begin() + t.vertex_edge_offsets[v]);
     }
   });
+}
 
-  // Local indices: a vertex's corner in each face, its end of each edge, an
-  // edge's index in each face.
+// Local indices: a vertex's corner in each face, its end of each edge, an
+// edge's index in each face.
+void fill_local_indices(LevelTopology& t) {
+  const std::uint32_t V = t.vertex_count, F = t.face_count, C = t.corner_count(), E = t.edge_count;
   t.vertex_face_local.resize(C);
   t.vertex_edge_local.resize(t.vertex_edges.size());
   parallel_range(V, kGrain, [&](std::uint32_t begin, std::uint32_t end) {
     for (std::uint32_t v = begin; v < end; ++v) {
       for (std::uint32_t k = t.vertex_face_offsets[v]; k < t.vertex_face_offsets[v + 1]; ++k)
-        t.vertex_face_local[k] = static_cast<std::uint16_t>(corner_of(t.vertex_faces[k], v));
+        t.vertex_face_local[k] = static_cast<std::uint16_t>(corner_of(t, t.vertex_faces[k], v));
       for (std::uint32_t k = t.vertex_edge_offsets[v]; k < t.vertex_edge_offsets[v + 1]; ++k)
         t.vertex_edge_local[k] = t.edge_vertices[2 * t.vertex_edges[k] + 1] == v ? 1 : 0;
     }
@@ -333,31 +344,33 @@ LevelTopology level_from_base(const PolygonMesh& base) {
       t.edge_face_local[2 * e + side] = static_cast<std::uint16_t>(k - t.face_offsets[f]);
       if (t.edge_boundary[e]) t.edge_face_local[2 * e + 1] = t.edge_face_local[2 * e];
     }
+}
+
+// The base level, completed from the face-vertex lists as
+// Vtr::Level::completeTopologyFromFaceVertices() completes it for a
+// consistently oriented manifold.
+LevelTopology level_from_base(const PolygonMesh& base) {
+  LevelTopology t;
+  t.vertex_count = static_cast<std::uint32_t>(base.vertex_count());
+  t.face_count = static_cast<std::uint32_t>(base.face_count());
+  t.face_offsets = base.face_offsets;
+  t.face_vertices = base.face_vertices;
+  EdgeSlots slots = count_vertex_faces(t);
+  complete_edges(t, slots);
+  order_vertex_neighbourhoods(t, slots);
+  fill_local_indices(t);
   return t;
 }
 
-// The next level by uniform Catmull-Clark splitting, numbered as
-// Vtr::QuadRefinement (uniform, vertices first) numbers it. With C corners in
-// the parent:
-//   faces:    face f's corner j -> child face face_offsets[f] + j;
-//   edges:    face f's corner j -> the child edge from the f vertex to the e
-//             vertex of face edge j, at face_offsets[f] + j; then edge e's
-//             half at its end i -> C + 2 e + i;
-//   vertices: v vertices, f vertices, e vertices (the hierarchy's layout).
-// A child face of a quad is rotated so that its parent corner sits at the
-// corner's own index; a child face of any other polygon starts at its corner.
-// Without `with_local_indices` the child lacks the *_local arrays: it can
-// become a refinement step but not be refined further.
-LevelTopology refine(const LevelTopology& p, bool with_local_indices) {
-  const std::uint32_t V = p.vertex_count, F = p.face_count, E = p.edge_count;
-  const std::uint32_t C = p.corner_count();
-  const std::uint32_t first_face_vertex = V, first_edge_vertex = V + F;
-  LevelTopology c;
-  c.vertex_count = V + F + E;
-  c.face_count = C;
-  c.edge_count = C + 2 * E;
 
-  // Child faces, and the child edges interior to parent faces.
+// Whether a refined level gets the *_local arrays it needs to be refined once more.
+enum class LocalIndices { Omit, Compute };
+
+// Child faces, and the child edges interior to parent faces.
+void refine_faces_and_interior_edges(const LevelTopology& p, LocalIndices local, LevelTopology& c) {
+  const bool with_local_indices = local == LocalIndices::Compute;
+  const std::uint32_t V = p.vertex_count, F = p.face_count, C = p.corner_count();
+  const std::uint32_t first_face_vertex = V, first_edge_vertex = V + F;
   allocate(c.face_offsets, std::size_t{C} + 1);
   allocate(c.face_vertices, 4 * std::size_t{C});
   allocate(c.face_edges, 4 * std::size_t{C});
@@ -404,8 +417,13 @@ LevelTopology refine(const LevelTopology& p, bool with_local_indices) {
       }
     }
   });
+}
 
-  // The two halves of each parent edge.
+// The two halves of each parent edge.
+void refine_edge_halves(const LevelTopology& p, LocalIndices local, LevelTopology& c) {
+  const bool with_local_indices = local == LocalIndices::Compute;
+  const std::uint32_t E = p.edge_count, C = p.corner_count();
+  const std::uint32_t first_edge_vertex = p.vertex_count + p.face_count;
   parallel_range(E, kGrain, [&](std::uint32_t begin, std::uint32_t end) {
     for (std::uint32_t e = begin; e < end; ++e) {
       const std::uint32_t face_count = p.edge_boundary[e] ? 1 : 2;
@@ -432,10 +450,15 @@ LevelTopology refine(const LevelTopology& p, bool with_local_indices) {
       }
     }
   });
+}
 
-  // Vertex neighbourhood offsets: a v vertex keeps its parent's valence, an
-  // f vertex has n edges and faces, an e vertex 2 + k edges and 2 k faces
-  // for an edge of k faces.
+// Vertex neighbourhood offsets: a v vertex keeps its parent's valence, an
+// f vertex has n edges and faces, an e vertex 2 + k edges and 2 k faces
+// for an edge of k faces.
+void allocate_child_vertex_rows(const LevelTopology& p, LocalIndices local, LevelTopology& c) {
+  const bool with_local_indices = local == LocalIndices::Compute;
+  const std::uint32_t V = p.vertex_count, F = p.face_count, E = p.edge_count, C = p.corner_count();
+  const std::uint32_t first_face_vertex = V, first_edge_vertex = V + F;
   std::vector<std::uint32_t> boundary_before(std::size_t{E} + 1);
   boundary_before[0] = 0;
   for (std::uint32_t e = 0; e < E; ++e) boundary_before[e + 1] = boundary_before[e] + p.edge_boundary[e];
@@ -464,8 +487,12 @@ LevelTopology refine(const LevelTopology& p, bool with_local_indices) {
   if (with_local_indices) allocate(c.vertex_edge_local, c.vertex_edges.size());
   allocate(c.vertex_faces, c.vertex_face_offsets[c.vertex_count]);
   if (with_local_indices) allocate(c.vertex_face_local, c.vertex_faces.size());
+}
 
-  // v vertices: the child of each incident edge and face, in the parent's order.
+// v vertices: the child of each incident edge and face, in the parent's order.
+void fill_vertex_vertex_rows(const LevelTopology& p, LocalIndices local, LevelTopology& c) {
+  const bool with_local_indices = local == LocalIndices::Compute;
+  const std::uint32_t V = p.vertex_count, C = p.corner_count();
   parallel_range(V, kGrain, [&](std::uint32_t begin, std::uint32_t end) {
     for (std::uint32_t v = begin; v < end; ++v) {
       for (std::uint32_t k = p.vertex_edge_offsets[v]; k < p.vertex_edge_offsets[v + 1]; ++k) {
@@ -479,8 +506,13 @@ LevelTopology refine(const LevelTopology& p, bool with_local_indices) {
       }
     }
   });
-  // f vertices: the interior child edges, each face's leading one first, and
-  // the child faces in corner order.
+}
+
+// f vertices: the interior child edges, each face's leading one first, and
+// the child faces in corner order.
+void fill_face_vertex_rows(const LevelTopology& p, LocalIndices local, LevelTopology& c) {
+  const bool with_local_indices = local == LocalIndices::Compute;
+  const std::uint32_t F = p.face_count, first_face_vertex = p.vertex_count;
   parallel_range(F, kGrain, [&](std::uint32_t begin, std::uint32_t end) {
     for (std::uint32_t f = begin; f < end; ++f) {
       const std::uint32_t offset = p.face_offsets[f], n = p.face_size(f);
@@ -496,9 +528,15 @@ LevelTopology refine(const LevelTopology& p, bool with_local_indices) {
       }
     }
   });
-  // e vertices: edges ordered (half, interior edge of face 0, other half,
-  // interior edge of face 1); faces per parent face, the one after the edge
-  // first.
+}
+
+// e vertices: edges ordered (half, interior edge of face 0, other half,
+// interior edge of face 1); faces per parent face, the one after the edge
+// first.
+void fill_edge_vertex_rows(const LevelTopology& p, LocalIndices local, LevelTopology& c) {
+  const bool with_local_indices = local == LocalIndices::Compute;
+  const std::uint32_t E = p.edge_count, C = p.corner_count();
+  const std::uint32_t first_edge_vertex = p.vertex_count + p.face_count;
   parallel_range(E, kGrain, [&](std::uint32_t begin, std::uint32_t end) {
     for (std::uint32_t e = begin; e < end; ++e) {
       const std::uint32_t face_count = p.edge_boundary[e] ? 1 : 2;
@@ -532,6 +570,31 @@ LevelTopology refine(const LevelTopology& p, bool with_local_indices) {
       }
     }
   });
+}
+
+// The next level by uniform Catmull-Clark splitting, numbered as
+// Vtr::QuadRefinement (uniform, vertices first) numbers it. With C corners in
+// the parent:
+//   faces:    face f's corner j -> child face face_offsets[f] + j;
+//   edges:    face f's corner j -> the child edge from the f vertex to the e
+//             vertex of face edge j, at face_offsets[f] + j; then edge e's
+//             half at its end i -> C + 2 e + i;
+//   vertices: v vertices, f vertices, e vertices (the hierarchy's layout).
+// A child face of a quad is rotated so that its parent corner sits at the
+// corner's own index; a child face of any other polygon starts at its corner.
+// With LocalIndices::Omit the child lacks the *_local arrays: it can
+// become a refinement step but not be refined further.
+LevelTopology refine(const LevelTopology& p, LocalIndices local) {
+  LevelTopology c;
+  c.vertex_count = p.vertex_count + p.face_count + p.edge_count;
+  c.face_count = p.corner_count();
+  c.edge_count = p.corner_count() + 2 * p.edge_count;
+  refine_faces_and_interior_edges(p, local, c);
+  refine_edge_halves(p, local, c);
+  allocate_child_vertex_rows(p, local, c);
+  fill_vertex_vertex_rows(p, local, c);
+  fill_face_vertex_rows(p, local, c);
+  fill_edge_vertex_rows(p, local, c);
   return c;
 }
 
@@ -602,7 +665,7 @@ std::vector<RefinementStep> build_refinement_steps(const PolygonMesh& base, int 
   for (int l = 0; l < levels; ++l) {
     LevelTopology child;
     // The local indices serve only the next refinement.
-    if (l + 1 < levels) child = refine(level, l + 2 < levels);
+    if (l + 1 < levels) child = refine(level, l + 2 < levels ? LocalIndices::Compute : LocalIndices::Omit);
     steps.push_back(make_step(std::move(level), base.sharp));
     level = std::move(child);
   }
