@@ -36,15 +36,16 @@ struct PolygonMesh {
 
 // Throws Error(Format) naming `source` if a face has fewer than 3 vertices,
 // an index is out of range, a position is not finite, or the sharp array has
-// the wrong size.
+// the wrong size. O(vertices + corners).
 void validate_indices(const PolygonMesh& mesh, const std::string& source);
 
 // Drops vertices no face references, renumbering the rest in order.
-// Returns how many were removed.
+// Returns how many were removed. O(vertices + corners).
 std::size_t remove_unreferenced_vertices(PolygonMesh& mesh);
 
 // Splits every face into triangles (quads along their shorter diagonal,
 // larger polygons as a fan), keeping orientation, vertices and sharp flags.
+// O(corners).
 PolygonMesh triangulate(const PolygonMesh& mesh);
 
 }  // namespace isowave
