@@ -15,7 +15,7 @@
 namespace isowave {
 
 struct PolygonMesh {
-  std::vector<Vec3> positions;  // world coordinates (the volume's units), finite
+  std::vector<Vec3> positions;  // world coordinates (the volume's units); finite (validate_indices)
   std::vector<std::uint32_t> face_offsets{0};  // face_count() + 1 entries, first is 0, non-decreasing
   std::vector<std::uint32_t> face_vertices;    // vertex indices < vertex_count(), in orientation order
   // Empty (no vertex is sharp) or one entry per vertex: 1 = sharp.
