@@ -119,7 +119,7 @@ namespace {
 
 // Counts and area of every component of a mesh and each face's component:
 // one half-edge build serves the statistics before and after the clean-up
-// and the clean-up itself, instead of one count each (miranda: 1.7 -> 1.0 s).
+// and the clean-up itself, instead of one count each.
 struct ComponentTable {
   std::vector<TopologySummary> topology;
   std::vector<double> area;

@@ -3,11 +3,10 @@
 //
 // Why: the edge-collapse loop, the shrink-wrap and the distance field touch
 // arrays of hundreds of megabytes at random places. With 4 KiB pages nearly
-// every such access also misses the TLB and walks the page table; on this
-// machine (THP in "madvise" mode) asking for huge pages made the miranda
-// collapse loop 1.4x faster (bench_simplify). Buffers under 4 MiB use the
-// ordinary heap. Where the kernel has no huge pages to give, madvise is a
-// hint and the buffer works as before.
+// every such access also misses the TLB and walks the page table; with THP in
+// "madvise" mode, asking for huge pages removes most of those walks. Buffers
+// under 4 MiB use the ordinary heap. Where the kernel has no huge pages to
+// give, madvise is a hint and the buffer works as before.
 #include <cstddef>
 #include <cstdlib>
 #include <new>
@@ -65,15 +64,16 @@ void fault_in_pages(const void* data, std::size_t bytes);
 // library code never calls it. Makes glibc's malloc take large blocks from
 // its heap instead of fresh mmap()s and keep freed memory instead of giving
 // it back, so that a stage reuses the pages an earlier stage faulted in: the
-// kernel zeroes every fresh page on first touch, which on this machine ran
-// at about 1 GB/s and cost convert 1.3 s and the first shrink-wrap 1.5 s on
-// miranda. The peak resident size stays about the same (the freed blocks
-// are what the next stage allocates); the process keeps it until release_freed_memory() or exit.
+// kernel zeroes every fresh page on first touch, which costs about a second
+// per GB on slow virtual machines. The peak resident size stays about the
+// same (the freed blocks are what the next stage allocates); the process
+// keeps it until release_freed_memory() or exit.
 void keep_freed_memory_for_reuse();
 // Gives the memory kept for reuse back to the kernel (malloc_trim): between
 // the inputs of a batch, so that one input's leftovers do not stay resident,
-// fragmented, under the next (the engine CT after miranda: 2.3 GB resident
-// instead of 0.3 GB), and before a benchmark measures a dataset's peak.
+// fragmented, under the next (a small input after a large one would otherwise
+// keep the large one's peak), and before a benchmark measures a dataset's
+// peak.
 void release_freed_memory();
 
 // Makes room for `count` elements in `values`, keeping its contents, in a

@@ -15,9 +15,9 @@
 namespace isowave {
 
 struct PolygonMesh {
-  std::vector<Vec3> positions;
-  std::vector<std::uint32_t> face_offsets{0};  // face_count() + 1 entries, first is 0
-  std::vector<std::uint32_t> face_vertices;
+  std::vector<Vec3> positions;  // world coordinates (the volume's units); finite (validate_indices)
+  std::vector<std::uint32_t> face_offsets{0};  // face_count() + 1 entries, first is 0, non-decreasing
+  std::vector<std::uint32_t> face_vertices;    // vertex indices < vertex_count(), in orientation order
   // Empty (no vertex is sharp) or one entry per vertex: 1 = sharp.
   std::vector<std::uint8_t> sharp;
 
@@ -36,15 +36,16 @@ struct PolygonMesh {
 
 // Throws Error(Format) naming `source` if a face has fewer than 3 vertices,
 // an index is out of range, a position is not finite, or the sharp array has
-// the wrong size.
+// the wrong size. O(vertices + corners).
 void validate_indices(const PolygonMesh& mesh, const std::string& source);
 
 // Drops vertices no face references, renumbering the rest in order.
-// Returns how many were removed.
+// Returns how many were removed. O(vertices + corners).
 std::size_t remove_unreferenced_vertices(PolygonMesh& mesh);
 
 // Splits every face into triangles (quads along their shorter diagonal,
 // larger polygons as a fan), keeping orientation, vertices and sharp flags.
+// O(corners).
 PolygonMesh triangulate(const PolygonMesh& mesh);
 
 }  // namespace isowave

@@ -46,8 +46,12 @@ struct MeshWriteOptions {
 // limits (huge or tiny).
 bool float_loses_geometry(const PolygonMesh& mesh);
 
-// Writes atomically (temporary file, then rename). PLY gets the uchar vertex
-// property `sharp` when any vertex is sharp; OBJ and OFF cannot carry it.
+// Writes atomically (AtomicFileWriter). An existing file is replaced: the
+// caller decides whether that is allowed. PLY gets the uchar vertex property `sharp`
+// when any vertex is sharp; OBJ and OFF cannot carry it. Throws
+// Error(InvalidArgument) for an unknown extension, Error(Format) for a mesh
+// that fails validate_indices(), Error(Io) if the file cannot be written.
+// O(vertices + corners).
 void write_mesh(const std::string& path, const PolygonMesh& mesh, const MeshWriteOptions& options = {});
 
 }  // namespace isowave

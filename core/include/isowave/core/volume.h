@@ -19,11 +19,11 @@ const char* to_string(ScalarType type);
 std::size_t scalar_type_size(ScalarType type);
 
 struct Volume {
-  std::array<std::size_t, 3> dims{0, 0, 0};  // samples along x, y, z
-  Vec3 spacing{1, 1, 1};                      // world units between samples
-  Vec3 origin{0, 0, 0};                       // world position of sample (0, 0, 0)
-  ScalarType source_type = ScalarType::Float32;
-  std::vector<float> values;                  // dims[0] * dims[1] * dims[2] samples
+  std::array<std::size_t, 3> dims{0, 0, 0};  // samples along x, y, z; the readers give >= 1 each
+  Vec3 spacing{1, 1, 1};                      // world units between samples; finite, > 0 (readers flip negative axes)
+  Vec3 origin{0, 0, 0};                       // world position of sample (0, 0, 0); finite
+  ScalarType source_type = ScalarType::Float32;  // the file's sample type, for reports only
+  std::vector<float> values;                  // dims[0] * dims[1] * dims[2] samples; NaN/Inf allowed
   std::size_t nonfinite_count = 0;            // NaN/Inf samples found on load
 
   std::size_t sample_count() const { return dims[0] * dims[1] * dims[2]; }
@@ -32,7 +32,9 @@ struct Volume {
   Vec3 world(double i, double j, double k) const {
     return {origin.x + spacing.x * i, origin.y + spacing.y * j, origin.z + spacing.z * k};
   }
-  // Edge length of one cell; the geometric mean of the spacings on anisotropic grids.
+  // Edge length of one cell in world units; the geometric mean of the
+  // spacings on anisotropic grids. Every "% of a cell" and "cells" figure the
+  // tools print is relative to this.
   double cell_size() const;
 };
 

@@ -20,8 +20,8 @@
 //   face (such a diagonal would lie on the face, where the neighbouring cell
 //   could use it too): a fan when a suitable apex exists, otherwise any
 //   triangulation of allowed diagonals, otherwise (a tunnel-like loop where
-//   none exists, about 0.2% of the vertices on noisy data) a fan around one
-//   extra vertex at the loop's centroid. Each segment is then in exactly one
+//   none exists; rare, seen on noisy data) a fan around one extra vertex
+//   at the loop's centroid. Each segment is then in exactly one
 //   triangle of each of its (at most two) cells and no other edge is shared
 //   between cells, so the result is a 2-manifold whose only boundary edges
 //   lie on the faces of the volume box. The cell interior is not examined

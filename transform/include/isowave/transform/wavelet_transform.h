@@ -3,7 +3,8 @@
 // 2000, Sec. 3.3-3.4), in place over the coarse-to-fine layout of
 // SubdivisionHierarchy: one array whose first vertex_count(0) entries are base
 // control points and whose entries [vertex_count(l-1), vertex_count(l)) are
-// the level-l wavelet coefficients (f details, then e details).
+// the level-l wavelet coefficients (f details, then e details). Control
+// points and coefficients are 3-vectors in the mesh's world units.
 //
 // Both directions run level by level, each lifting step split across threads
 // (TBB); every output is a fixed-order gather, so results are bit-identical
