@@ -13,7 +13,7 @@
 #include "cli.h"
 #include "commands.h"
 #include "console_progress.h"
-#include "isowave/codec/convert.h"
+#include "isowave/pipeline/convert.h"
 #include "isowave/codec/isw_format.h"
 #include "isowave/core/error.h"
 #include "isowave/core/huge_page_vector.h"

@@ -11,7 +11,7 @@
 #include "cli.h"
 #include "commands.h"
 #include "console_progress.h"
-#include "isowave/codec/convert.h"
+#include "isowave/pipeline/convert.h"
 #include "isowave/core/error.h"
 #include "isowave/core/mesh_io.h"
 #include "isowave/extract/isosurface.h"

@@ -7,7 +7,7 @@
 #include "commands.h"
 #include "isowave/core/error.h"
 #include "isowave/core/mesh_io.h"
-#include "isowave/codec/convert.h"
+#include "isowave/pipeline/convert.h"
 #include "isowave/transform/hierarchy.h"
 #include "isowave/transform/limit_surface.h"
 #include "isowave/transform/wavelet_transform.h"

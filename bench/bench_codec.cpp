@@ -37,7 +37,7 @@
 #include <vector>
 
 #include "isowave/core/huge_page_vector.h"
-#include "isowave/codec/convert.h"
+#include "isowave/pipeline/convert.h"
 #include "isowave/codec/importance.h"
 #include "isowave/codec/isw_format.h"
 #include "isowave/codec/statistics.h"

@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "isowave/codec/convert.h"
+#include "isowave/pipeline/convert.h"
 #include "isowave/codec/statistics.h"
 #include "isowave/core/binned_surface_distance.h"
 #include "isowave/core/surface_distance.h"

@@ -1,4 +1,4 @@
-#include "isowave/codec/convert.h"
+#include "isowave/pipeline/convert.h"
 
 #include <algorithm>
 #include <chrono>
