@@ -11,14 +11,11 @@
 #include "cli.h"
 #include "commands.h"
 #include "console_progress.h"
-#include "isowave/pipeline/convert.h"
+#include "isowave/pipeline/prepare.h"
 #include "isowave/core/error.h"
 #include "isowave/core/mesh_io.h"
-#include "isowave/extract/isosurface.h"
-#include "isowave/extract/volume_io.h"
 #include "isowave/fit/fit_quality.h"
 #include "isowave/fit/shrink_wrap.h"
-#include "isowave/fit/signed_distance.h"
 #include "isowave/core/binned_surface_distance.h"
 #include "isowave/transform/hierarchy.h"
 #include "volume_options.h"
@@ -94,10 +91,10 @@ int fit(const Args& raw) {
   if (levels < 0) throw Error(ErrorKind::InvalidArgument, "missing required option --levels");
   if (!args.has("iso") && !cli::is_builtin_volume(input))
     throw Error(ErrorKind::InvalidArgument, "missing required option --iso (only builtin: inputs default to 0)");
-  IsosurfaceOptions extract_options = cli::extraction_options(args);
-  extract_options.iso = args.get_double("iso", 0.0);
-  const double smooth = extract_options.smooth_sigma;
-  extract_options.smooth_sigma = 0;  // applied below to the field the fit also uses
+  PrepareOptions prepare_options;
+  prepare_options.extract = cli::extraction_options(args);
+  prepare_options.extract.iso = args.get_double("iso", 0.0);
+  const IsosurfaceOptions& extract_options = prepare_options.extract;
   ShrinkWrapOptions wrap_options;
   wrap_options.iterations = args.get_int("iterations", wrap_options.iterations, 0, 100);
   wrap_options.final_level_iterations = args.get_int("final-iterations", wrap_options.final_level_iterations, 0, 100);
@@ -108,16 +105,16 @@ int fit(const Args& raw) {
   cli::set_unfold_limit(args, wrap_options);
   const bool report = !args.has("no-report") && !args.has("quiet");
   wrap_options.keep_levels = report;
-  const double band = args.get_double("band", 3.0);
+  prepare_options.distance_band_cells = args.get_double("band", prepare_options.distance_band_cells);
+  const double band = prepare_options.distance_band_cells;
   if (!(band >= 0 && band <= 1e6)) throw Error(ErrorKind::InvalidArgument, "--band must be in 0..1e6 cells");
   const VolumeReadOptions read_options = cli::volume_read_options(args);
 
   // The base mesh first: cheap to read, and its errors are the likeliest.
   PolygonMesh base = read_mesh(base_path);
   const std::size_t unreferenced = remove_unreferenced_vertices(base);
-  // Peak about 280 bytes per fine vertex on miranda (1.85 GB at 6.7 M, with
-  // the volume, distance field and extracted mesh).
-  cli::check_memory(static_cast<double>(fine_vertex_count(base, levels)), 300, "--levels " + std::to_string(levels));
+  check_memory(static_cast<double>(fine_vertex_count(base, levels)), kFitBytesPerFineVertex,
+               "--levels " + std::to_string(levels));
   const SubdivisionHierarchy hierarchy(base, levels);
 
   // A live line per stage on a terminal (miranda: the shrink-wrap and the
@@ -126,30 +123,19 @@ int fit(const Args& raw) {
   const bool live = cli::default_progress_mode(args.has("quiet")) == cli::ProgressMode::LiveBar;
   cli::ConsoleProgress progress(input, live ? cli::ProgressMode::LiveBar : cli::ProgressMode::Quiet);
   auto start = Clock::now();
-  progress.begin_stage("load");
-  Volume field = read_volume(input, read_options);
-  progress.end_stage();
-  if (field.dims[0] < 2 || field.dims[1] < 2 || field.dims[2] < 2)
-    throw Error(ErrorKind::InvalidArgument, input + ": fitting needs at least 2 samples along each axis");
-  // The fit sees the same (pre-filtered) field the surface is extracted from.
-  if (smooth > 0) field = gaussian_smoothed(field, smooth);
-  const Isosurface surface = extract_isosurface(field, extract_options, progress);
-  if (surface.mesh.face_count() == 0)
-    throw Error(ErrorKind::InvalidArgument,
-                input + ": the isosurface at " + args.get("iso", "0") + " is empty" + value_range_note(field));
+  PreparedSurface prepared =
+      extract_surface(load_volume(input, read_options, progress), prepare_options, input, progress);
+  const Volume& field = prepared.field;
+  const PolygonMesh& extracted = prepared.isosurface.mesh;
   const double extract_seconds = seconds_since(start);
 
   start = Clock::now();
-  SignedDistanceOptions distance_options;
-  distance_options.iso = extract_options.iso;
-  distance_options.flip = extract_options.flip;
-  distance_options.band_cells = band;
-  distance_options.surface = &surface.mesh;
-  const SignedDistanceField distance = compute_signed_distance(field, distance_options, progress);
+  prepared.distance = surface_distance_field(prepared, prepare_options, progress);
+  const SignedDistanceField& distance = prepared.distance;
   const double distance_seconds = seconds_since(start);
 
   start = Clock::now();
-  wrap_options.surface = &surface.mesh;
+  wrap_options.surface = &extracted;
   wrap_options.coverage_pull = !args.has("no-coverage-pull");
   const ShrinkWrapResult result = shrink_wrap(hierarchy, base.positions, distance, field, wrap_options, progress);
   const double wrap_seconds = seconds_since(start);
@@ -165,8 +151,8 @@ int fit(const Args& raw) {
   std::printf("%s: %zu vertices, %zu faces, %zu sharp%s\n", base_path.c_str(), base.vertex_count(), base.face_count(),
               base.sharp_count(),
               unreferenced ? (" (" + std::to_string(unreferenced) + " unreferenced vertices dropped)").c_str() : "");
-  std::printf("%s: isosurface %zu vertices, %zu triangles (%.2f s)\n", input.c_str(), surface.mesh.vertex_count(),
-              surface.mesh.face_count(), extract_seconds);
+  std::printf("%s: isosurface %zu vertices, %zu triangles (%.2f s)\n", input.c_str(), extracted.vertex_count(),
+              extracted.face_count(), extract_seconds);
   if (band > 0)
     std::printf("signed distance: %zu nodes, %zu seeds, band %g cells (%.2f s)\n", distance.statistics.nodes,
                 distance.statistics.seed_nodes, band, distance_seconds);
@@ -199,28 +185,28 @@ int fit(const Args& raw) {
   else if (result.unfold.tangled_before > 0)
     std::printf("  unfold: %zu tangled faces before, %zu after %d rounds\n", result.unfold.tangled_before,
                 result.unfold.tangled_after, result.unfold.rounds);
-  const bool coarse = fine_mesh_too_coarse(fine.vertex_count(), surface.mesh.vertex_count());
-  const std::size_t suggested = std::max<std::size_t>(4, surface.mesh.vertex_count() >> (2 * levels));
+  const bool coarse = fine_mesh_too_coarse(fine.vertex_count(), extracted.vertex_count());
+  const std::size_t suggested = std::max<std::size_t>(4, extracted.vertex_count() >> (2 * levels));
   if (coarse)
     std::printf("  note: %zu fine vertices for an isosurface of %zu: %d levels of this base are too coarse to follow it "
                 "(a base of about %zu vertices, or more levels, would)\n",
-                fine.vertex_count(), surface.mesh.vertex_count(), levels, suggested);
-  else if (smooth == 0 && result.tangled_faces > fine.face_count() / 1000)
+                fine.vertex_count(), extracted.vertex_count(), levels, suggested);
+  else if (extract_options.smooth_sigma == 0 && result.tangled_faces > fine.face_count() / 1000)
     std::printf("  note: %.2f%% of the fine faces stay tangled; folds sit mostly on necks and tunnels thinner than a "
                 "cell, which a one-voxel pre-filter (--smooth 1) removes\n",
                 100.0 * double(result.tangled_faces) / double(fine.face_count()));
   if (report) {
     std::fflush(stdout);  // the report so far before the live line of the measurement
     progress.begin_stage("quality");
-    const BinnedSurfaceDistance reference(surface.mesh);
+    const BinnedSurfaceDistance reference(extracted);
     std::vector<FitQuality> qualities;
-    const SurfaceDeviation deviation = extracted_surface_deviation(surface.mesh, field, extract_options.iso);
+    const SurfaceDeviation deviation = extracted_surface_deviation(extracted, field, extract_options.iso);
     double work = 0, total = 0;  // each level's measurement takes about as long as its vertices
     for (int level = 0; level <= levels; ++level) total += double(hierarchy.vertex_count(level));
     for (int level = 0; level <= levels; ++level) {
       qualities.push_back(measure_fit_quality(
           hierarchy, level, level < levels ? result.level_positions[static_cast<std::size_t>(level)] : result.positions,
-          surface.mesh, reference, field, extract_options.iso, extract_options.flip));
+          extracted, reference, field, extract_options.iso, extract_options.flip));
       work += double(hierarchy.vertex_count(level));
       progress.update(work / total);
     }

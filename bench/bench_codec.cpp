@@ -96,19 +96,20 @@ struct Dataset {
 };
 
 void run(const Dataset& dataset) {
-  std::printf("\n== %s (%s, iso %g", dataset.name.c_str(), dataset.path.c_str(), dataset.options.iso);
-  if (dataset.options.min_component_vertices) std::printf(", --min-component-vertices %zu", dataset.options.min_component_vertices);
+  std::printf("\n== %s (%s, iso %g", dataset.name.c_str(), dataset.path.c_str(), dataset.options.prepare.extract.iso);
+  const std::size_t min_component = dataset.options.prepare.extract.min_component_vertices;
+  if (min_component) std::printf(", --min-component-vertices %zu", min_component);
   std::printf(")\n");
   release_freed_memory();  // the previous dataset's leftovers
   reset_peak_rss();
   auto start = Clock::now();
-  const Volume volume = read_volume(dataset.path);
+  Volume volume = read_volume(dataset.path);
   const double load = seconds_since(start);
   ConvertOptions options = dataset.options;
   options.keep_extracted_mesh = true;
   options.summary_percents = {100, 20, 10, 5};
   start = Clock::now();
-  const ConvertResult r = convert_volume(volume, dataset.path, options);
+  const ConvertResult r = convert_volume(std::move(volume), dataset.path, options);
   const double convert_seconds = seconds_since(start);
   const double peak = peak_rss_mb();
   const double cell = r.cell_size;
@@ -310,10 +311,10 @@ int main(int argc, char** argv) {
       Dataset d{argv[1], argv[1], {}, {0, 0, 0, 0}};
       for (int i = 2; i + 1 < argc; i += 2) {
         const std::string flag = argv[i];
-        if (flag == "--iso") d.options.iso = std::atof(argv[i + 1]);
-        else if (flag == "--min-component-vertices") d.options.min_component_vertices = std::strtoul(argv[i + 1], nullptr, 10);
+        if (flag == "--iso") d.options.prepare.extract.iso = std::atof(argv[i + 1]);
+        else if (flag == "--min-component-vertices") d.options.prepare.extract.min_component_vertices = std::strtoul(argv[i + 1], nullptr, 10);
         else if (flag == "--levels") d.options.levels = std::atoi(argv[i + 1]);
-        else if (flag == "--base-ratio") d.options.base_ratio = std::atof(argv[i + 1]);
+        else if (flag == "--base-ratio") d.options.base.ratio = std::atof(argv[i + 1]);
         else throw std::runtime_error("unknown option " + flag);
       }
       datasets.push_back(d);
@@ -324,14 +325,14 @@ int main(int argc, char** argv) {
         return 0;
       }
       Dataset miranda{"miranda", shared + "/volumes/miranda_256x256x256.nrrd", {}, {7.6, 20.5, 41.7, 71.3}};
-      miranda.options.iso = 1.5;
-      miranda.options.min_component_vertices = 50;
+      miranda.options.prepare.extract.iso = 1.5;
+      miranda.options.prepare.extract.min_component_vertices = 50;
       miranda.options.levels = 3;
-      miranda.options.base_ratio = 0.017;
+      miranda.options.base.ratio = 0.017;
       Dataset engine{"engine", shared + "/volumes/engine_256x256x128.nrrd", {}, {7.6, 20.5, 41.7, 71.3}};
-      engine.options.iso = 100;
+      engine.options.prepare.extract.iso = 100;
       engine.options.levels = 3;
-      engine.options.base_ratio = 0.017;
+      engine.options.base.ratio = 0.017;
       datasets = {miranda, engine};
     }
     std::printf("the paper's Table 1 (turbulent mixing, 1.19 M fine control points): RMSE 7.6%% of a cell at 20%%, "
