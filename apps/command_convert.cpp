@@ -97,7 +97,6 @@ std::string iso_text(double iso) {
   return text;
 }
 
-
 cli::CommandSpec convert_spec() {
   std::vector<cli::OptionSpec> options = {
       {"iso", true, "isovalue(s), comma separated (default 0 for builtin: inputs)", "V[,V2,...]"},

@@ -95,6 +95,7 @@ int fit(const Args& raw) {
   prepare_options.extract = cli::extraction_options(args);
   prepare_options.extract.iso = args.get_double("iso", 0.0);
   const IsosurfaceOptions& extract_options = prepare_options.extract;
+  const double smooth = extract_options.smooth_sigma;
   ShrinkWrapOptions wrap_options;
   wrap_options.iterations = args.get_int("iterations", wrap_options.iterations, 0, 100);
   wrap_options.final_level_iterations = args.get_int("final-iterations", wrap_options.final_level_iterations, 0, 100);
@@ -126,7 +127,7 @@ int fit(const Args& raw) {
   PreparedSurface prepared =
       extract_surface(load_volume(input, read_options, progress), prepare_options, input, progress);
   const Volume& field = prepared.field;
-  const PolygonMesh& extracted = prepared.isosurface.mesh;
+  const Isosurface& surface = prepared.isosurface;
   const double extract_seconds = seconds_since(start);
 
   start = Clock::now();
@@ -135,7 +136,7 @@ int fit(const Args& raw) {
   const double distance_seconds = seconds_since(start);
 
   start = Clock::now();
-  wrap_options.surface = &extracted;
+  wrap_options.surface = &surface.mesh;
   wrap_options.coverage_pull = !args.has("no-coverage-pull");
   const ShrinkWrapResult result = shrink_wrap(hierarchy, base.positions, distance, field, wrap_options, progress);
   const double wrap_seconds = seconds_since(start);
@@ -151,8 +152,8 @@ int fit(const Args& raw) {
   std::printf("%s: %zu vertices, %zu faces, %zu sharp%s\n", base_path.c_str(), base.vertex_count(), base.face_count(),
               base.sharp_count(),
               unreferenced ? (" (" + std::to_string(unreferenced) + " unreferenced vertices dropped)").c_str() : "");
-  std::printf("%s: isosurface %zu vertices, %zu triangles (%.2f s)\n", input.c_str(), extracted.vertex_count(),
-              extracted.face_count(), extract_seconds);
+  std::printf("%s: isosurface %zu vertices, %zu triangles (%.2f s)\n", input.c_str(), surface.mesh.vertex_count(),
+              surface.mesh.face_count(), extract_seconds);
   if (band > 0)
     std::printf("signed distance: %zu nodes, %zu seeds, band %g cells (%.2f s)\n", distance.statistics.nodes,
                 distance.statistics.seed_nodes, band, distance_seconds);
@@ -185,28 +186,28 @@ int fit(const Args& raw) {
   else if (result.unfold.tangled_before > 0)
     std::printf("  unfold: %zu tangled faces before, %zu after %d rounds\n", result.unfold.tangled_before,
                 result.unfold.tangled_after, result.unfold.rounds);
-  const bool coarse = fine_mesh_too_coarse(fine.vertex_count(), extracted.vertex_count());
-  const std::size_t suggested = std::max<std::size_t>(4, extracted.vertex_count() >> (2 * levels));
+  const bool coarse = fine_mesh_too_coarse(fine.vertex_count(), surface.mesh.vertex_count());
+  const std::size_t suggested = std::max<std::size_t>(4, surface.mesh.vertex_count() >> (2 * levels));
   if (coarse)
     std::printf("  note: %zu fine vertices for an isosurface of %zu: %d levels of this base are too coarse to follow it "
                 "(a base of about %zu vertices, or more levels, would)\n",
-                fine.vertex_count(), extracted.vertex_count(), levels, suggested);
-  else if (extract_options.smooth_sigma == 0 && result.tangled_faces > fine.face_count() / 1000)
+                fine.vertex_count(), surface.mesh.vertex_count(), levels, suggested);
+  else if (smooth == 0 && result.tangled_faces > fine.face_count() / 1000)
     std::printf("  note: %.2f%% of the fine faces stay tangled; folds sit mostly on necks and tunnels thinner than a "
                 "cell, which a one-voxel pre-filter (--smooth 1) removes\n",
                 100.0 * double(result.tangled_faces) / double(fine.face_count()));
   if (report) {
     std::fflush(stdout);  // the report so far before the live line of the measurement
     progress.begin_stage("quality");
-    const BinnedSurfaceDistance reference(extracted);
+    const BinnedSurfaceDistance reference(surface.mesh);
     std::vector<FitQuality> qualities;
-    const SurfaceDeviation deviation = extracted_surface_deviation(extracted, field, extract_options.iso);
+    const SurfaceDeviation deviation = extracted_surface_deviation(surface.mesh, field, extract_options.iso);
     double work = 0, total = 0;  // each level's measurement takes about as long as its vertices
     for (int level = 0; level <= levels; ++level) total += double(hierarchy.vertex_count(level));
     for (int level = 0; level <= levels; ++level) {
       qualities.push_back(measure_fit_quality(
           hierarchy, level, level < levels ? result.level_positions[static_cast<std::size_t>(level)] : result.positions,
-          extracted, reference, field, extract_options.iso, extract_options.flip));
+          surface.mesh, reference, field, extract_options.iso, extract_options.flip));
       work += double(hierarchy.vertex_count(level));
       progress.update(work / total);
     }

@@ -370,7 +370,7 @@ ConvertResult convert_volume(Volume volume, const std::string& source, const Con
   ConvertResult result;
   result.cell_size = volume.cell_size();
 
-  auto start = Clock::now();
+  const auto start = Clock::now();
   PreparedSurface prepared = extract_surface(std::move(volume), options.prepare, source, progress);
   result.extraction = prepared.isosurface.report;
   result.extracted_vertices = prepared.isosurface.mesh.vertex_count();
