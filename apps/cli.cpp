@@ -4,7 +4,6 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <unistd.h>
 
 #include "isowave/core/error.h"
 
@@ -140,17 +139,6 @@ void check_outputs(const Arguments& args, const std::vector<std::string>& output
     for (const fs::path& other : seen)
       if (other == canonical) usage_error(output + ": given for two outputs");
     seen.push_back(canonical);
-  }
-}
-
-void check_memory(double fine_vertices, double bytes_per_vertex, const std::string& what) {
-  const double needed = fine_vertices * bytes_per_vertex;
-  const double physical = static_cast<double>(sysconf(_SC_PHYS_PAGES)) * static_cast<double>(sysconf(_SC_PAGESIZE));
-  if (physical > 0 && needed > physical) {
-    char message[256];
-    std::snprintf(message, sizeof message, "%s would make %.0f fine vertices, about %.1f GB, more than this machine's %.1f GB",
-                  what.c_str(), fine_vertices, needed / 1e9, physical / 1e9);
-    usage_error(message);
   }
 }
 

@@ -60,11 +60,6 @@ inline OptionSpec force_option() { return {"force", false, "overwrite existing o
 // and no two outputs the same file. Throws Error with one line naming it.
 void check_outputs(const Arguments& args, const std::vector<std::string>& outputs);
 
-// Refuses, with Error(InvalidArgument) naming `what`, a job whose estimate
-// (fine_vertices x bytes_per_vertex) exceeds this machine's physical memory:
-// a clear message at once rather than minutes of swapping or the OOM killer.
-void check_memory(double fine_vertices, double bytes_per_vertex, const std::string& what);
-
 // `text` as a JSON string literal, quotes included (control characters as \u escapes).
 std::string json_string(const std::string& text);
 

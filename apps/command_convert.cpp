@@ -13,7 +13,8 @@
 #include "cli.h"
 #include "commands.h"
 #include "console_progress.h"
-#include "isowave/codec/convert.h"
+#include "isowave/pipeline/convert.h"
+#include "isowave/pipeline/prepare.h"
 #include "isowave/codec/isw_format.h"
 #include "isowave/core/error.h"
 #include "isowave/core/huge_page_vector.h"
@@ -36,6 +37,7 @@ struct JobOutcome {
   bool ok = false;
   std::string error;
   double load_seconds = 0;
+  std::size_t volume_bytes = 0;  // the samples as the input stores them
   ConvertResult result;
 };
 
@@ -95,9 +97,7 @@ std::string iso_text(double iso) {
   return text;
 }
 
-}  // namespace
-
-int convert(const Args& raw) {
+cli::CommandSpec convert_spec() {
   std::vector<cli::OptionSpec> options = {
       {"iso", true, "isovalue(s), comma separated (default 0 for builtin: inputs)", "V[,V2,...]"},
       {"levels", true, "subdivision levels 1..6, or 'auto' (default): the fine mesh as large as the isosurface", "L|auto"},
@@ -109,6 +109,7 @@ int convert(const Args& raw) {
        "R"},
       {"no-flips", false, "base mesh by the paper's collapse rules only (no valence-lowering flips)", ""},
       {"no-coverage-pull", false, "fit without pulling the fine levels toward isosurface parts they leave out", ""},
+      {"allow-folded", false, "write the file even when most of the fit's faces fold (unusable)", ""},
       {"verify", false, "decode each encoded file once more before writing it and check it gives exactly the coded coefficients", ""},
       {"step", true, "quantization step in cells (default 0.01: adds about 0.5% of a cell RMSE)", "CELLS"},
       {"output", true, "output file (one input and one isovalue)", "OUT.isw"},
@@ -121,7 +122,7 @@ int convert(const Args& raw) {
   cli::add_unfold_option(options);
   cli::add_extraction_options(options);
   cli::add_volume_options(options);
-  const cli::CommandSpec spec{
+  return cli::CommandSpec{
       "convert",
       "INPUT... --iso V[,V2,...] [--levels L|auto] [--base-vertices N | --base-ratio R] [extract options]\n"
       "                (-o OUT.isw | --out-dir DIR) [--jobs N] [--force] [--quiet] [--json]",
@@ -132,39 +133,34 @@ int convert(const Args& raw) {
       options,
       1,
       -1};
-  const cli::Arguments args(spec, raw);
-  if (cli::print_help_if_requested(spec, args)) return 0;
-  if (args.has("output") == args.has("out-dir"))
-    throw Error(ErrorKind::InvalidArgument, "give exactly one of -o OUT.isw and --out-dir DIR");
+}
+
+ConvertOptions convert_options_from(const cli::Arguments& args) {
   if (args.has("base-vertices") && args.has("base-ratio"))
     throw Error(ErrorKind::InvalidArgument, "give at most one of --base-vertices and --base-ratio");
-
-  const VolumeReadOptions read_options = cli::volume_read_options(args);
-  ConvertOptions convert_options;
+  ConvertOptions options;
+  options.prepare.extract = cli::extraction_options(args);
   const std::string levels_text = args.get("levels", "auto");
-  convert_options.levels = levels_text == "auto" ? 0 : args.get_int("levels", 0, 1, 6);
-  convert_options.base_vertices = static_cast<std::size_t>(args.get_int("base-vertices", 0, 4, 1 << 30));
-  convert_options.base_ratio = args.get_double("base-ratio", ConvertOptions().base_ratio);
-  convert_options.grow_base_until_covered = !args.has("base-vertices") && !args.has("base-ratio");
-  convert_options.valence_flips = !args.has("no-flips");
-  convert_options.coverage_pull = !args.has("no-coverage-pull");
-  cli::set_unfold_limit(args, convert_options.shrink_wrap);
-  convert_options.verify_file = args.has("verify");
-  if (!(convert_options.base_ratio > 0 && convert_options.base_ratio <= 1))
+  options.levels = levels_text == "auto" ? 0 : args.get_int("levels", 0, 1, 6);
+  options.base.vertices = static_cast<std::size_t>(args.get_int("base-vertices", 0, 4, 1 << 30));
+  options.base.ratio = args.get_double("base-ratio", options.base.ratio);
+  if (!(options.base.ratio > 0 && options.base.ratio <= 1))
     throw Error(ErrorKind::InvalidArgument, "--base-ratio must be in (0, 1]");
-  const IsosurfaceOptions extraction = cli::extraction_options(args);
-  convert_options.min_component_vertices = extraction.min_component_vertices;
-  convert_options.smooth_sigma = extraction.smooth_sigma;
-  convert_options.flip = extraction.flip;
-  convert_options.step_cells = args.get_double("step", 0.01);
-  if (!(convert_options.step_cells > 0)) throw Error(ErrorKind::InvalidArgument, "--step must be positive");
-  const int jobs_count = args.get_int("jobs", 1, 1, 64);
-  const bool force = args.has("force");
-  const bool json = args.has("json");
-  // --json keeps stdout for the JSON object; warnings still go to stderr.
-  const bool quiet = args.has("quiet") || json;
-  const bool warn = !args.has("quiet");
+  options.base.growth =
+      args.has("base-vertices") || args.has("base-ratio") ? BaseGrowth::Fixed : BaseGrowth::UntilCovered;
+  options.base.simplify.valence_flips = !args.has("no-flips");
+  options.shrink_wrap.coverage_pull = !args.has("no-coverage-pull");
+  cli::set_unfold_limit(args, options.shrink_wrap);
+  options.step_cells = args.get_double("step", options.step_cells);
+  if (!(options.step_cells > 0)) throw Error(ErrorKind::InvalidArgument, "--step must be positive");
+  options.folded_fit = args.has("allow-folded") ? FoldedFit::Keep : FoldedFit::Refuse;
+  options.file_check = args.has("verify") ? FileCheck::DecodeAgain : FileCheck::None;
+  return options;
+}
 
+// One job per input file and isovalue, with its output path; checks that
+// the outputs can be written and that no two jobs write one file.
+std::vector<Job> plan_jobs(const cli::Arguments& args) {
   std::vector<Job> jobs;
   for (const auto& [input, problem] : expand_inputs(args.positional())) {
     if (!problem.empty()) {
@@ -208,10 +204,36 @@ int convert(const Args& raw) {
     if (!fs::is_directory(args.get("out-dir")))
       throw Error(ErrorKind::Io, args.get("out-dir") + ": cannot create the output directory");
   }
+  return jobs;
+}
 
-  const cli::ProgressMode mode =
-      quiet ? cli::ProgressMode::Quiet
-            : (jobs_count > 1 ? cli::ProgressMode::Lines : cli::default_progress_mode(false));
+// How the batch reports as it runs.
+struct RunSettings {
+  VolumeReadOptions read;
+  ConvertOptions convert;
+  cli::ProgressMode mode = cli::ProgressMode::Quiet;
+  bool force = false, warn = true, label_iso = false;
+};
+
+// Loads, converts and writes one job; throws what goes wrong.
+void run_job(const Job& job, const RunSettings& settings, JobOutcome& outcome, cli::ConsoleProgress& progress) {
+  if (!job.problem.empty()) throw Error(ErrorKind::InvalidArgument, job.input + ": " + job.problem);
+  if (!settings.force && fs::exists(job.output))
+    throw Error(ErrorKind::Io, job.output + ": already exists (use --force to overwrite)");
+  const auto start = std::chrono::steady_clock::now();
+  Volume volume = load_volume(job.input, settings.read, progress);
+  outcome.load_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  outcome.volume_bytes = volume.sample_count() * scalar_type_size(volume.source_type);
+  ConvertOptions options = settings.convert;
+  options.prepare.extract.iso = job.iso;
+  outcome.result = convert_volume(std::move(volume), job.input, options, progress);
+  write_isw(job.output, outcome.result.bytes, settings.force);
+  outcome.ok = true;
+}
+
+// Runs the jobs on `threads` threads; each reports one line as it ends ("k
+// of N" in its label), a failure with its error, once.
+std::vector<JobOutcome> run_jobs(const std::vector<Job>& jobs, const RunSettings& settings, int threads) {
   std::vector<JobOutcome> outcomes(jobs.size());
   std::atomic<std::size_t> next{0};
   std::mutex print_mutex;
@@ -219,127 +241,179 @@ int convert(const Args& raw) {
     for (std::size_t j = next++; j < jobs.size(); j = next++) {
       const Job& job = jobs[j];
       JobOutcome& outcome = outcomes[j];
-      const std::string label = stem_of(job.input) + (args.has("iso") ? " @" + iso_text(job.iso) : "");
+      const std::string label = "[" + std::to_string(j + 1) + "/" + std::to_string(jobs.size()) + "] " +
+                                stem_of(job.input) + (settings.label_iso ? " @" + iso_text(job.iso) : "");
+      cli::ConsoleProgress progress(label, settings.mode);
       try {
-        if (!job.problem.empty()) throw Error(ErrorKind::InvalidArgument, job.input + ": " + job.problem);
-        if (!force && fs::exists(job.output))
-          throw Error(ErrorKind::Io, job.output + ": already exists (use --force to overwrite)");
-        cli::ConsoleProgress progress(label, mode);
-        const auto start = std::chrono::steady_clock::now();
-        progress.begin_stage("load");
-        const Volume volume = read_volume(job.input, read_options);
-        progress.end_stage();
-        outcome.load_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-        ConvertOptions job_options = convert_options;
-        job_options.iso = job.iso;
-        outcome.result = convert_volume(volume, job.input, job_options, progress);
-        write_isw(job.output, outcome.result.bytes, force);
-        outcome.ok = true;
-        if (warn) {
-          std::lock_guard<std::mutex> lock(print_mutex);
+        run_job(job, settings, outcome, progress);
+        char done[64];
+        std::snprintf(done, sizeof done, " (%zu bytes, %.1f s)", outcome.result.bytes.size(),
+                      outcome.load_seconds + outcome.result.seconds.total());
+        std::lock_guard<std::mutex> lock(print_mutex);
+        progress.finish("wrote " + job.output + done);
+        if (settings.warn)
           for (const std::string& warning : outcome.result.warnings)
             std::fprintf(stderr, "isowave convert: warning: %s: %s\n", job.input.c_str(), warning.c_str());
-        }
       } catch (const std::exception& error) {
         outcome.error = error.what();
         // Most errors from reading name the input already.
-        const bool named = outcome.error.rfind(job.input + ":", 0) == 0;
+        if (outcome.error.rfind(job.input + ":", 0) != 0) outcome.error = job.input + ": " + outcome.error;
         std::lock_guard<std::mutex> lock(print_mutex);
-        std::fprintf(stderr, "isowave convert: %s%s%s (skipped)\n", named ? "" : job.input.c_str(), named ? "" : ": ",
-                     error.what());
+        if (settings.mode == cli::ProgressMode::Quiet)
+          std::fprintf(stderr, "isowave convert: %s (skipped)\n", outcome.error.c_str());
+        else
+          progress.finish("FAILED: " + outcome.error + " (skipped)");
       }
       release_freed_memory();  // what this input left must not stay under the next one
     }
   };
-  std::vector<std::thread> threads;
-  for (int t = 1; t < std::min<int>(jobs_count, static_cast<int>(jobs.size())); ++t) threads.emplace_back(worker);
+  std::vector<std::thread> pool;
+  for (int t = 1; t < std::min<int>(threads, static_cast<int>(jobs.size())); ++t) pool.emplace_back(worker);
   worker();
-  for (std::thread& t : threads) t.join();
+  for (std::thread& t : pool) t.join();
+  return outcomes;
+}
 
-  std::size_t failed = 0;
-  for (const JobOutcome& o : outcomes) failed += o.ok ? 0 : 1;
+double rmse_percent(const ConvertResult& r, double value) { return 100.0 * value / r.cell_size; }
 
-  const auto rmse_percent = [](const ConvertResult& r, double value) { return 100.0 * value / r.cell_size; };
-  if (json) {
-    std::printf("{\"converted\": %zu, \"failed\": %zu, \"results\": [", jobs.size() - failed, failed);
-    for (std::size_t j = 0; j < jobs.size(); ++j) {
-      const JobOutcome& o = outcomes[j];
-      if (jobs[j].problem.empty())
-        std::printf("%s{\"input\": %s, \"iso\": %.10g, \"output\": %s, \"ok\": %s", j ? ", " : "",
-                    cli::json_string(jobs[j].input).c_str(), jobs[j].iso, cli::json_string(jobs[j].output).c_str(),
-                    o.ok ? "true" : "false");
-      else
-        std::printf("%s{\"input\": %s, \"iso\": null, \"output\": null, \"ok\": false", j ? ", " : "",
-                    cli::json_string(jobs[j].input).c_str());
-      if (!o.ok) {
-        std::printf(", \"error\": %s}", cli::json_string(o.error).c_str());
-        continue;
-      }
-      const ConvertResult& r = o.result;
-      std::printf(", \"bytes\": %zu, \"cell_size\": %.9g, \"extracted_vertices\": %zu, \"base_vertices\": %zu, "
-                  "\"fine_vertices\": %zu, \"levels\": %d, \"seconds\": {\"load\": %.3f, \"extract\": %.3f, "
-                  "\"simplify\": %.3f, \"distance\": %.3f, \"fit\": %.3f, \"analysis\": %.3f, \"encode\": %.3f, "
-                  "\"evaluate\": %.3f}, \"fit_isosurface_rms_cells\": %.6g, \"fit_isosurface_max_cells\": %.6g, "
-                  "\"fit_points_beyond_one_cell\": %zu, \"isosurface_uncovered_share\": %.6g, "
-                  "\"fit_tangled_share\": %.6g, \"base_attempts\": %d, ",
-                  r.bytes.size(), r.cell_size, r.extracted_vertices, r.base_vertices, r.fine_vertices, r.levels,
-                  o.load_seconds, r.seconds.extract, r.seconds.simplify, r.seconds.distance, r.seconds.fit,
-                  r.seconds.analysis, r.seconds.encode, r.seconds.evaluate, r.fit_isosurface.rms, r.fit_isosurface.max,
-                  r.fit_isosurface.far, r.uncovered_share, r.tangled_share(), r.base_attempts);
-      for (std::size_t k = 0; k < r.warnings.size(); ++k)
-        std::printf("%s%s", k ? ", " : "\"warnings\": [", cli::json_string(r.warnings[k]).c_str());
-      std::printf("%s\"rows\": [", r.warnings.empty() ? "" : "], ");
-      for (std::size_t k = 0; k < r.summary.size(); ++k) {
-        const RateDistortionRow& row = r.summary[k];
-        std::printf("%s{\"percent\": %.4f, \"coefficients\": %zu, \"rmse_percent_cell\": %.6g, \"max_percent_cell\": "
-                    "%.6g, \"bytes\": %llu, \"base\": %s}",
-                    k ? ", " : "", row.percent, row.kept, rmse_percent(r, row.rms), rmse_percent(r, row.max),
-                    static_cast<unsigned long long>(row.bytes), row.is_base ? "true" : "false");
-      }
-      std::printf("]}");
-    }
-    std::printf("]}\n");
-  } else if (!quiet) {
-    std::printf("\n%-28s %10s %9s %9s %10s %3s %8s  %s\n", "output", "bytes", "isosurf.", "base", "fine", "L",
-                "seconds", "RMSE [% cell] at percent of coefficients (base last)");
-    for (std::size_t j = 0; j < jobs.size(); ++j) {
-      const JobOutcome& o = outcomes[j];
-      if (!o.ok) {
-        std::printf("%-28s FAILED: %s\n", (jobs[j].problem.empty() ? jobs[j].output : jobs[j].input).c_str(),
-                    o.error.c_str());
-        continue;
-      }
-      const ConvertResult& r = o.result;
-      std::string errors;
-      char cell[64];
-      const RateDistortionRow* previous = nullptr;
-      for (const RateDistortionRow& row : r.summary) {
-        // Percentages below the base mesh's share all give the base mesh: one entry.
-        if (previous && previous->kept == row.kept) continue;
-        previous = &row;
-        std::snprintf(cell, sizeof cell, "%s%.4g%%: %.3g", errors.empty() ? "" : "  ", row.percent, rmse_percent(r, row.rms));
-        errors += cell;
-      }
-      std::printf("%-28s %10zu %9zu %9zu %10zu %3d %8.1f  %s\n", jobs[j].output.c_str(), r.bytes.size(),
-                  r.extracted_vertices, r.base_vertices, r.fine_vertices, r.levels, o.load_seconds + r.seconds.total(),
-                  errors.c_str());
-      std::printf("%-28s stages: load %.2f, extract %.2f, simplify %.2f, distance %.2f, fit %.2f, analysis %.2f, "
-                  "encode %.2f, evaluate %.2f s; %.2f bits per fine vertex\n",
-                  "", o.load_seconds, r.seconds.extract, r.seconds.simplify, r.seconds.distance, r.seconds.fit,
-                  r.seconds.analysis, r.seconds.encode, r.seconds.evaluate,
-                  8.0 * static_cast<double>(r.bytes.size()) / static_cast<double>(r.fine_vertices));
-      std::printf("%-28s fit: the fine control points lie %.3g cell RMS (max %.3g) off the isosurface, %zu of them "
-                  "more than a cell; %.3g%% of the isosurface lies more than %g cells from all of them; %.3g%% of the "
-                  "fine faces are folded against the field gradient\n",
-                  "", r.fit_isosurface.rms, r.fit_isosurface.max, r.fit_isosurface.far, 100.0 * r.uncovered_share,
-                  kUncoveredCells, 100.0 * r.tangled_share());
-      if (r.base_attempts > 1)
-        std::printf("%-28s the base mesh grew from %zu to %zu vertices (%d tries) to cover the isosurface\n", "",
-                    r.first_base_vertices, r.base_vertices, r.base_attempts);
-    }
-    if (failed) std::printf("\n%zu of %zu conversions failed\n", failed, jobs.size());
+// The batch's totals: inputs, failures, bytes in (the volumes' samples as
+// their inputs store them) and out, their ratio and the wall-clock time.
+struct Totals {
+  std::size_t inputs = 0, failed = 0, bytes_in = 0, bytes_out = 0;
+  double seconds = 0;
+  double ratio() const { return bytes_out ? double(bytes_in) / double(bytes_out) : 0.0; }
+};
+
+Totals totals_of(const std::vector<JobOutcome>& outcomes, double seconds) {
+  Totals t;
+  t.inputs = outcomes.size();
+  t.seconds = seconds;
+  for (const JobOutcome& o : outcomes) {
+    t.failed += o.ok ? 0 : 1;
+    if (o.ok) t.bytes_in += o.volume_bytes, t.bytes_out += o.result.bytes.size();
   }
-  return failed ? 1 : 0;
+  return t;
+}
+
+void print_json_result(const JobOutcome& o) {
+  const ConvertResult& r = o.result;
+  std::printf(", \"bytes\": %zu, \"volume_bytes\": %zu, \"cell_size\": %.9g, \"extracted_vertices\": %zu, "
+              "\"base_vertices\": %zu, \"fine_vertices\": %zu, \"levels\": %d, \"seconds\": {\"load\": %.3f, "
+              "\"extract\": %.3f, \"simplify\": %.3f, \"distance\": %.3f, \"fit\": %.3f, \"analysis\": %.3f, "
+              "\"encode\": %.3f, \"evaluate\": %.3f}, \"fit_isosurface_rms_cells\": %.6g, "
+              "\"fit_isosurface_max_cells\": %.6g, \"fit_points_beyond_one_cell\": %zu, "
+              "\"isosurface_uncovered_share\": %.6g, \"fit_tangled_share\": %.6g, \"base_attempts\": %d, ",
+              r.bytes.size(), o.volume_bytes, r.cell_size, r.extracted_vertices, r.base_vertices, r.fine_vertices,
+              r.levels, o.load_seconds, r.seconds.extract, r.seconds.simplify, r.seconds.distance, r.seconds.fit,
+              r.seconds.analysis, r.seconds.encode, r.seconds.evaluate, r.fit_isosurface.rms, r.fit_isosurface.max,
+              r.fit_isosurface.far, r.uncovered_share, r.tangled_share(), r.base_attempts);
+  for (std::size_t k = 0; k < r.warnings.size(); ++k)
+    std::printf("%s%s", k ? ", " : "\"warnings\": [", cli::json_string(r.warnings[k]).c_str());
+  std::printf("%s\"rows\": [", r.warnings.empty() ? "" : "], ");
+  for (std::size_t k = 0; k < r.summary.size(); ++k) {
+    const RateDistortionRow& row = r.summary[k];
+    std::printf("%s{\"percent\": %.4f, \"coefficients\": %zu, \"rmse_percent_cell\": %.6g, \"max_percent_cell\": "
+                "%.6g, \"bytes\": %llu, \"base\": %s}",
+                k ? ", " : "", row.percent, row.kept, rmse_percent(r, row.rms), rmse_percent(r, row.max),
+                static_cast<unsigned long long>(row.bytes), row.is_base ? "true" : "false");
+  }
+  std::printf("]}");
+}
+
+void print_json(const std::vector<Job>& jobs, const std::vector<JobOutcome>& outcomes, const Totals& totals) {
+  std::printf("{\"converted\": %zu, \"failed\": %zu, \"volume_bytes\": %zu, \"bytes\": %zu, \"seconds\": %.3f, "
+              "\"results\": [",
+              totals.inputs - totals.failed, totals.failed, totals.bytes_in, totals.bytes_out, totals.seconds);
+  for (std::size_t j = 0; j < jobs.size(); ++j) {
+    const JobOutcome& o = outcomes[j];
+    if (jobs[j].problem.empty())
+      std::printf("%s{\"input\": %s, \"iso\": %.10g, \"output\": %s, \"ok\": %s", j ? ", " : "",
+                  cli::json_string(jobs[j].input).c_str(), jobs[j].iso, cli::json_string(jobs[j].output).c_str(),
+                  o.ok ? "true" : "false");
+    else
+      std::printf("%s{\"input\": %s, \"iso\": null, \"output\": null, \"ok\": false", j ? ", " : "",
+                  cli::json_string(jobs[j].input).c_str());
+    if (o.ok) print_json_result(o);
+    else std::printf(", \"error\": %s}", cli::json_string(o.error).c_str());
+  }
+  std::printf("]}\n");
+}
+
+void print_table_row(const std::string& output, const JobOutcome& o) {
+  const ConvertResult& r = o.result;
+  std::string errors;
+  char cell[64];
+  const RateDistortionRow* previous = nullptr;
+  for (const RateDistortionRow& row : r.summary) {
+    // Percentages below the base mesh's share all give the base mesh: one entry.
+    if (previous && previous->kept == row.kept) continue;
+    previous = &row;
+    std::snprintf(cell, sizeof cell, "%s%.4g%%: %.3g", errors.empty() ? "" : "  ", row.percent, rmse_percent(r, row.rms));
+    errors += cell;
+  }
+  std::printf("%-28s %10zu %9zu %9zu %10zu %3d %8.1f  %s\n", output.c_str(), r.bytes.size(), r.extracted_vertices,
+              r.base_vertices, r.fine_vertices, r.levels, o.load_seconds + r.seconds.total(), errors.c_str());
+  std::printf("%-28s stages: load %.2f, extract %.2f, simplify %.2f, distance %.2f, fit %.2f, analysis %.2f, "
+              "encode %.2f, evaluate %.2f s; %.2f bits per fine vertex\n",
+              "", o.load_seconds, r.seconds.extract, r.seconds.simplify, r.seconds.distance, r.seconds.fit,
+              r.seconds.analysis, r.seconds.encode, r.seconds.evaluate,
+              8.0 * static_cast<double>(r.bytes.size()) / static_cast<double>(r.fine_vertices));
+  std::printf("%-28s fit: the fine control points lie %.3g cell RMS (max %.3g) off the isosurface, %zu of them "
+              "more than a cell; %.2f%% of the isosurface lies more than %g cells from all of them; %.2f%% of the "
+              "fine faces are folded against the field gradient\n",
+              "", r.fit_isosurface.rms, r.fit_isosurface.max, r.fit_isosurface.far, 100.0 * r.uncovered_share,
+              kUncoveredCells, 100.0 * r.tangled_share());
+  if (r.base_attempts > 1)
+    std::printf("%-28s the base mesh grew from %zu to %zu vertices (%d tries) to cover the isosurface\n", "",
+                r.first_base_vertices, r.base_vertices, r.base_attempts);
+}
+
+// The summary table; a failed input's error was printed as it happened.
+void print_table(const std::vector<Job>& jobs, const std::vector<JobOutcome>& outcomes, const Totals& totals) {
+  std::printf("\n%-28s %10s %9s %9s %10s %3s %8s  %s\n", "output", "bytes", "isosurf.", "base", "fine", "L",
+              "seconds", "RMSE [% cell] at percent of coefficients (base last)");
+  for (std::size_t j = 0; j < jobs.size(); ++j) {
+    if (outcomes[j].ok) print_table_row(jobs[j].output, outcomes[j]);
+    else std::printf("%-28s FAILED (the error is above)\n", (jobs[j].problem.empty() ? jobs[j].output : jobs[j].input).c_str());
+  }
+  std::printf("\n%zu input%s, %zu failed", totals.inputs, totals.inputs == 1 ? "" : "s", totals.failed);
+  if (totals.bytes_out > 0)
+    std::printf("; volumes %.3g MB in, %.3g MB out (%.1f : 1)", 1e-6 * double(totals.bytes_in),
+                1e-6 * double(totals.bytes_out), totals.ratio());
+  std::printf("; %.1f s\n", totals.seconds);
+}
+
+}  // namespace
+
+int convert(const Args& raw) {
+  const cli::CommandSpec spec = convert_spec();
+  const cli::Arguments args(spec, raw);
+  if (cli::print_help_if_requested(spec, args)) return 0;
+  if (args.has("output") == args.has("out-dir"))
+    throw Error(ErrorKind::InvalidArgument, "give exactly one of -o OUT.isw and --out-dir DIR");
+  RunSettings settings;
+  settings.read = cli::volume_read_options(args);
+  settings.convert = convert_options_from(args);
+  const int threads = args.get_int("jobs", 1, 1, 64);
+  settings.force = args.has("force");
+  const bool json = args.has("json");
+  // --json keeps stdout for the JSON object; warnings still go to stderr.
+  const bool quiet = args.has("quiet") || json;
+  settings.warn = !args.has("quiet");
+  settings.label_iso = args.has("iso");
+  const std::vector<Job> jobs = plan_jobs(args);
+
+  // Runs side by side write their lines whole.
+  settings.mode = quiet ? cli::ProgressMode::Quiet
+                        : (threads > 1 && jobs.size() > 1 ? cli::ProgressMode::BufferedLine
+                                                          : cli::default_progress_mode(false));
+  const auto start = std::chrono::steady_clock::now();
+  const std::vector<JobOutcome> outcomes = run_jobs(jobs, settings, threads);
+  const Totals totals =
+      totals_of(outcomes, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+  if (json) print_json(jobs, outcomes, totals);
+  else if (!quiet) print_table(jobs, outcomes, totals);
+  return totals.failed ? 1 : 0;
 }
 
 }  // namespace isowave::commands

@@ -11,14 +11,11 @@
 #include "cli.h"
 #include "commands.h"
 #include "console_progress.h"
-#include "isowave/codec/convert.h"
+#include "isowave/pipeline/prepare.h"
 #include "isowave/core/error.h"
 #include "isowave/core/mesh_io.h"
-#include "isowave/extract/isosurface.h"
-#include "isowave/extract/volume_io.h"
 #include "isowave/fit/fit_quality.h"
 #include "isowave/fit/shrink_wrap.h"
-#include "isowave/fit/signed_distance.h"
 #include "isowave/core/binned_surface_distance.h"
 #include "isowave/transform/hierarchy.h"
 #include "volume_options.h"
@@ -94,10 +91,11 @@ int fit(const Args& raw) {
   if (levels < 0) throw Error(ErrorKind::InvalidArgument, "missing required option --levels");
   if (!args.has("iso") && !cli::is_builtin_volume(input))
     throw Error(ErrorKind::InvalidArgument, "missing required option --iso (only builtin: inputs default to 0)");
-  IsosurfaceOptions extract_options = cli::extraction_options(args);
-  extract_options.iso = args.get_double("iso", 0.0);
+  PrepareOptions prepare_options;
+  prepare_options.extract = cli::extraction_options(args);
+  prepare_options.extract.iso = args.get_double("iso", 0.0);
+  const IsosurfaceOptions& extract_options = prepare_options.extract;
   const double smooth = extract_options.smooth_sigma;
-  extract_options.smooth_sigma = 0;  // applied below to the field the fit also uses
   ShrinkWrapOptions wrap_options;
   wrap_options.iterations = args.get_int("iterations", wrap_options.iterations, 0, 100);
   wrap_options.final_level_iterations = args.get_int("final-iterations", wrap_options.final_level_iterations, 0, 100);
@@ -108,16 +106,16 @@ int fit(const Args& raw) {
   cli::set_unfold_limit(args, wrap_options);
   const bool report = !args.has("no-report") && !args.has("quiet");
   wrap_options.keep_levels = report;
-  const double band = args.get_double("band", 3.0);
+  prepare_options.distance_band_cells = args.get_double("band", prepare_options.distance_band_cells);
+  const double band = prepare_options.distance_band_cells;
   if (!(band >= 0 && band <= 1e6)) throw Error(ErrorKind::InvalidArgument, "--band must be in 0..1e6 cells");
   const VolumeReadOptions read_options = cli::volume_read_options(args);
 
   // The base mesh first: cheap to read, and its errors are the likeliest.
   PolygonMesh base = read_mesh(base_path);
   const std::size_t unreferenced = remove_unreferenced_vertices(base);
-  // Peak about 280 bytes per fine vertex on miranda (1.85 GB at 6.7 M, with
-  // the volume, distance field and extracted mesh).
-  cli::check_memory(static_cast<double>(fine_vertex_count(base, levels)), 300, "--levels " + std::to_string(levels));
+  check_memory(static_cast<double>(fine_vertex_count(base, levels)), kFitBytesPerFineVertex,
+               "--levels " + std::to_string(levels));
   const SubdivisionHierarchy hierarchy(base, levels);
 
   // A live line per stage on a terminal (miranda: the shrink-wrap and the
@@ -126,26 +124,15 @@ int fit(const Args& raw) {
   const bool live = cli::default_progress_mode(args.has("quiet")) == cli::ProgressMode::LiveBar;
   cli::ConsoleProgress progress(input, live ? cli::ProgressMode::LiveBar : cli::ProgressMode::Quiet);
   auto start = Clock::now();
-  progress.begin_stage("load");
-  Volume field = read_volume(input, read_options);
-  progress.end_stage();
-  if (field.dims[0] < 2 || field.dims[1] < 2 || field.dims[2] < 2)
-    throw Error(ErrorKind::InvalidArgument, input + ": fitting needs at least 2 samples along each axis");
-  // The fit sees the same (pre-filtered) field the surface is extracted from.
-  if (smooth > 0) field = gaussian_smoothed(field, smooth);
-  const Isosurface surface = extract_isosurface(field, extract_options, progress);
-  if (surface.mesh.face_count() == 0)
-    throw Error(ErrorKind::InvalidArgument,
-                input + ": the isosurface at " + args.get("iso", "0") + " is empty" + value_range_note(field));
+  PreparedSurface prepared =
+      extract_surface(load_volume(input, read_options, progress), prepare_options, input, progress);
+  const Volume& field = prepared.field;
+  const Isosurface& surface = prepared.isosurface;
   const double extract_seconds = seconds_since(start);
 
   start = Clock::now();
-  SignedDistanceOptions distance_options;
-  distance_options.iso = extract_options.iso;
-  distance_options.flip = extract_options.flip;
-  distance_options.band_cells = band;
-  distance_options.surface = &surface.mesh;
-  const SignedDistanceField distance = compute_signed_distance(field, distance_options, progress);
+  prepared.distance = surface_distance_field(prepared, prepare_options, progress);
+  const SignedDistanceField& distance = prepared.distance;
   const double distance_seconds = seconds_since(start);
 
   start = Clock::now();

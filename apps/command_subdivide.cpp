@@ -7,7 +7,7 @@
 #include "commands.h"
 #include "isowave/core/error.h"
 #include "isowave/core/mesh_io.h"
-#include "isowave/codec/convert.h"
+#include "isowave/pipeline/prepare.h"
 #include "isowave/transform/hierarchy.h"
 #include "isowave/transform/limit_surface.h"
 #include "isowave/transform/wavelet_transform.h"
@@ -42,7 +42,7 @@ int subdivide(const Args& raw) {
   PolygonMesh base = read_mesh(input);
   const std::size_t unreferenced = remove_unreferenced_vertices(base);
   // Peak about 80 bytes per fine vertex (8.5 GB at 105 M), more for the limit surface.
-  cli::check_memory(static_cast<double>(fine_vertex_count(base, levels)), args.has("limit") ? 160 : 100,
+  check_memory(static_cast<double>(fine_vertex_count(base, levels)), args.has("limit") ? 160 : 100,
                     "--levels " + std::to_string(levels));
   const SubdivisionHierarchy hierarchy(base, levels);
   const std::vector<Vec3> points = subdivide(hierarchy, base.positions);

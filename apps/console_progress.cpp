@@ -7,7 +7,7 @@ namespace isowave::cli {
 
 ProgressMode default_progress_mode(bool quiet) {
   if (quiet) return ProgressMode::Quiet;
-  return isatty(fileno(stderr)) ? ProgressMode::LiveBar : ProgressMode::Lines;
+  return isatty(fileno(stderr)) ? ProgressMode::LiveBar : ProgressMode::Line;
 }
 
 ConsoleProgress::~ConsoleProgress() {
@@ -36,11 +36,38 @@ void ConsoleProgress::end_stage() {
   draw(1.0, true);
 }
 
+void ConsoleProgress::finish(const std::string& outcome) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  switch (mode_) {
+    case ProgressMode::Quiet:
+      return;
+    case ProgressMode::Line:
+      std::fprintf(stderr, "%s%s\n", line_open_ ? "; " : (label_ + ": ").c_str(), outcome.c_str());
+      break;
+    case ProgressMode::BufferedLine:
+      std::fprintf(stderr, "%s: %s%s%s\n", label_.c_str(), line_.c_str(), line_.empty() ? "" : "; ", outcome.c_str());
+      break;
+    case ProgressMode::LiveBar:
+      std::fprintf(stderr, "%s%s: %s\n", line_open_ ? "\n" : "", label_.c_str(), outcome.c_str());
+      break;
+  }
+  line_open_ = false;
+  std::fflush(stderr);
+}
+
 void ConsoleProgress::draw(double fraction, bool final_line) {
   last_draw_ = Clock::now();
   const double elapsed = std::chrono::duration<double>(last_draw_ - stage_start_).count();
-  if (mode_ == ProgressMode::Lines) {
-    std::fprintf(stderr, "%s: %s done in %.2f s\n", label_.c_str(), stage_.c_str(), elapsed);
+  char stage[128];
+  std::snprintf(stage, sizeof stage, "%s %.2f s", stage_.c_str(), elapsed);
+  if (mode_ == ProgressMode::BufferedLine) {
+    line_ += (line_.empty() ? "" : ", ") + std::string(stage);
+    return;
+  }
+  if (mode_ == ProgressMode::Line) {
+    std::fprintf(stderr, "%s%s", line_open_ ? ", " : (label_ + ": ").c_str(), stage);
+    line_open_ = true;
+    std::fflush(stderr);
     return;
   }
   const int width = 24;

@@ -1,7 +1,8 @@
 #pragma once
-// Shows the progress the library stages report: on a terminal a live line per
-// stage (label, stage, percent, elapsed, ETA), otherwise one line per finished
-// stage, or nothing.
+// Shows the progress the library stages report for one run (one input of a
+// batch): on a terminal a live line per stage (label, stage, percent,
+// elapsed, ETA); otherwise one line per run, the stages and their seconds as
+// they finish; or nothing. finish() ends the run with its outcome.
 #include <chrono>
 #include <mutex>
 #include <string>
@@ -10,22 +11,33 @@
 
 namespace isowave::cli {
 
-enum class ProgressMode { Quiet, Lines, LiveBar };
+enum class ProgressMode {
+  Quiet,
+  // One line per run: "LABEL: load 0.02 s, contour 0.10 s, ...; OUTCOME".
+  // Written as the stages finish, so that a log shows where a run is.
+  Line,
+  // The same line, written at once by finish(): for runs side by side.
+  BufferedLine,
+  LiveBar,
+};
 
-// LiveBar when stderr is a terminal and nothing asks for quiet or lines.
+// LiveBar when stderr is a terminal, else Line; Quiet when asked.
 ProgressMode default_progress_mode(bool quiet);
 
 class ConsoleProgress : public ProgressSink {
  public:
   ConsoleProgress(std::string label, ProgressMode mode) : label_(std::move(label)), mode_(mode) {}
-  // Ends a live line left open by a stage that threw, so that the error
-  // message starts on a line of its own.
+  // Ends a line left open by a stage that threw, so that what follows
+  // starts on a line of its own.
   ~ConsoleProgress();
   ConsoleProgress(const ConsoleProgress&) = delete;
   ConsoleProgress& operator=(const ConsoleProgress&) = delete;
   void begin_stage(std::string_view name) override;
   void update(double fraction) override;
   void end_stage() override;
+  // Ends the run's line with `outcome` (one line, no newline); on a terminal
+  // "LABEL: OUTCOME" on a line of its own. Nothing when quiet.
+  void finish(const std::string& outcome);
 
  private:
   using Clock = std::chrono::steady_clock;
@@ -34,7 +46,8 @@ class ConsoleProgress : public ProgressSink {
   std::string label_;
   ProgressMode mode_;
   std::string stage_;
-  bool line_open_ = false;  // a live line without its newline yet
+  std::string line_;        // BufferedLine: the line so far
+  bool line_open_ = false;  // a line without its newline yet
   Clock::time_point stage_start_{};
   Clock::time_point last_draw_{};
   std::mutex mutex_;

@@ -47,13 +47,11 @@
 #include "isowave/core/error.h"
 #include "isowave/codec/importance.h"
 #include "isowave/core/mesh_io.h"
-#include "isowave/extract/isosurface.h"
-#include "isowave/extract/volume_io.h"
 #include "isowave/fit/fit_quality.h"
 #include "isowave/fit/shrink_wrap.h"
-#include "isowave/fit/signed_distance.h"
 #include "isowave/core/binned_surface_distance.h"
 #include "isowave/fit/trilinear.h"
+#include "isowave/pipeline/prepare.h"
 #include "isowave/simplify/simplify.h"
 #include "isowave/transform/hierarchy.h"
 #include "isowave/transform/wavelet_transform.h"
@@ -167,36 +165,34 @@ int main(int argc, char** argv) {
 
   try {
     auto start = std::chrono::steady_clock::now();
-    const Volume volume = read_volume(input);
-    std::printf("%s: %zux%zux%zu, read in %.2f s, %d threads\n", input.c_str(), volume.dims[0], volume.dims[1],
-                volume.dims[2], seconds_since(start), threads);
+    Volume loaded = load_volume(input, {});
+    std::printf("%s: %zux%zux%zu, read in %.2f s, %d threads\n", input.c_str(), loaded.dims[0], loaded.dims[1],
+                loaded.dims[2], seconds_since(start), threads);
 
     start = std::chrono::steady_clock::now();
-    IsosurfaceOptions extract_options;
-    extract_options.iso = iso;
-    extract_options.min_component_vertices = min_component;
-    const Isosurface surface = extract_isosurface(volume, extract_options);
-    const PolygonMesh& extracted = surface.mesh;
+    PrepareOptions prepare_options;
+    prepare_options.extract.iso = iso;
+    prepare_options.extract.min_component_vertices = min_component;
+    prepare_options.distance_band_cells = band;
+    PreparedSurface prepared = extract_surface(std::move(loaded), prepare_options, input);
+    const Volume& volume = prepared.field;
+    const PolygonMesh& extracted = prepared.isosurface.mesh;
     std::printf("extracted: %zu vertices, %zu triangles, genus %lld, %zu components in %.2f s\n",
-                extracted.vertex_count(), extracted.face_count(), surface.report.after.genus,
-                surface.report.after.components, seconds_since(start));
+                extracted.vertex_count(), extracted.face_count(), prepared.isosurface.report.after.genus,
+                prepared.isosurface.report.after.components, seconds_since(start));
 
     // Our distance field: the narrow band the fit uses (--band, default 3
     // cells, OpenVDB's half width) and, for reference, the whole grid.
-    SignedDistanceOptions distance_options;
-    distance_options.iso = iso;
-    distance_options.band_cells = band;
-    distance_options.surface = &extracted;
-    SignedDistanceField distance;
     double distance_seconds = 0;
     for (int run = 0; run < repeat; ++run) {
       const double cpu_start = cpu_seconds();
       start = std::chrono::steady_clock::now();
-      distance = compute_signed_distance(volume, distance_options);
+      prepared.distance = surface_distance_field(prepared, prepare_options);
       const double seconds = seconds_since(start);
       if (repeat > 1) std::printf("  distance run %d: %.3f s (cpu %.3f s)\n", run + 1, seconds, cpu_seconds() - cpu_start);
       distance_seconds = run == 0 ? seconds : std::min(distance_seconds, seconds);
     }
+    const SignedDistanceField& distance = prepared.distance;
     const SignedDistanceStatistics& ds = distance.statistics;
     std::printf("signed distance (band %g cells): %.3f s%s (seeding %.3f, propagation %.3f, finishing %.3f) | %zu nodes, "
                 "%zu seeds, %zu pops, %zu updates, peak queue %zu, working set %.1f MB; %zu nodes on dropped "
@@ -206,10 +202,10 @@ int main(int argc, char** argv) {
                 ds.unseeded_crossing_nodes, ds.flipped_nodes);
     double whole_seconds = 0;
     if (peer) {
-      SignedDistanceOptions whole_options = distance_options;
-      whole_options.band_cells = 0;
+      PrepareOptions whole_options = prepare_options;
+      whole_options.distance_band_cells = 0;
       start = std::chrono::steady_clock::now();
-      const SignedDistanceField whole = compute_signed_distance(volume, whole_options);
+      const SignedDistanceField whole = surface_distance_field(prepared, whole_options);
       whole_seconds = seconds_since(start);
       std::printf("signed distance (whole grid): %.3f s | %zu pops, %zu updates, working set %.1f MB\n",
                   whole_seconds, whole.statistics.queue_pops, whole.statistics.updates,

@@ -204,17 +204,17 @@ TEST_F(CliTest, BatchReportsEmptyDirectoriesAndPatternsMatchingNothing) {
 }
 
 // Signals at several stages, the last ones around the writing of the file:
-// a stage's progress line (stderr, not a terminal) is read, then the signal
-// sent. Whatever the run was doing, it leaves no .isw or a complete one, and
+// a stage's entry on the progress line (stderr, not a terminal) is read,
+// then the signal sent. Whatever the run was doing, it leaves no .isw or a complete one, and
 // no temporary file (after SIGKILL too, where the file system gives unnamed
 // files: see AtomicFileWriter).
 TEST_F(CliTest, AnInterruptedRunLeavesNoPartialOutput) {
   const int probe = open(dir_.c_str(), O_TMPFILE | O_WRONLY, 0600);
   const bool unnamed_files = probe >= 0 && access("/proc/self/fd", X_OK) == 0;
   if (probe >= 0) close(probe);
-  const std::pair<int, const char*> cases[] = {{SIGTERM, "shrink-wrap done"}, {SIGINT, "encode done"},
-                                               {SIGKILL, "analysis done"},    {SIGKILL, "encode done"},
-                                               {SIGKILL, "evaluate done"},    {SIGTERM, "evaluate done"}};
+  const std::pair<int, const char*> cases[] = {{SIGTERM, ", shrink-wrap "}, {SIGINT, ", encode "},
+                                               {SIGKILL, ", analysis "},    {SIGKILL, ", encode "},
+                                               {SIGKILL, ", evaluate "},    {SIGTERM, ", evaluate "}};
   for (const auto& [signal_number, stage] : cases) {
     SCOPED_TRACE(std::string(strsignal(signal_number)) + " after " + stage);
     int progress[2];
@@ -436,6 +436,82 @@ TEST_F(CliTest, BadInputGivesOneLineAndANonZeroExitCode) {
   EXPECT_FALSE(fs::exists(path("x.ply")));
   EXPECT_FALSE(fs::exists(path("x.isw")));
   EXPECT_FALSE(fs::exists(path("x")));
+}
+
+// Without a terminal a batch prints one line per input, "k of N" in it, the
+// stages and their seconds, then what it wrote or why it failed; a failed
+// input's error appears once (before, it came again in the summary table,
+// and every stage had a "done in" line of its own). The summary ends with the
+// totals.
+TEST_F(CliTest, BatchPrintsOneLinePerInputAnErrorOnceAndTotals) {
+  fs::create_directories(path("in"));
+  write_sphere_nrrd(path("in/a.nrrd"), 20, 5);
+  write_sphere_nrrd(path("in/b.nrrd"), 16, 4);
+  std::ofstream(path("in/broken.nrrd")) << "NRRD0004\ntype: float\nsizes: 10 10\n";  // unreadable
+  const RunResult r = run({"convert", path("in"), "--iso", "0", "--out-dir", path("out"), "--levels", "1"}, dir_);
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 3) << r.err;
+  EXPECT_EQ(r.err.find("done in"), std::string::npos) << r.err;
+  std::istringstream lines(r.err);
+  std::string line;
+  for (const char* expected : {"[1/3] a @0: load ", "[2/3] b @0: load ", "[3/3] broken @0: FAILED: "}) {
+    ASSERT_TRUE(std::getline(lines, line)) << r.err;
+    EXPECT_EQ(line.rfind(expected, 0), 0u) << line;
+  }
+  const std::string error = "broken.nrrd: ";
+  const std::string all = r.out + r.err;
+  const std::size_t first = all.find(error);
+  ASSERT_NE(first, std::string::npos) << all;
+  EXPECT_EQ(all.find(error, first + 1), std::string::npos) << "error repeated: " << all;
+  // Totals: 3 inputs, 1 failed, the two volumes' float samples in, the two files out.
+  const double in = 4.0 * (20 * 20 * 20 + 16 * 16 * 16) / 1e6;
+  const double out = double(fs::file_size(path("out/a.isw")) + fs::file_size(path("out/b.isw"))) / 1e6;
+  char totals[128];
+  std::snprintf(totals, sizeof totals, "3 inputs, 1 failed; volumes %.3g MB in, %.3g MB out (%.1f : 1)", in, out,
+                in / out);
+  EXPECT_NE(r.out.find(totals), std::string::npos) << totals << "\n" << r.out;
+}
+
+// Six levels of the mixing layer's whole isosurface (a base mesh as large
+// as the 70,880 extracted vertices) make at least 290 M fine points, about
+// 87 GB at 300 bytes each, more than a test machine has: one line naming
+// the levels, at once, where a bare std::bad_alloc came after the base mesh
+// had been made.
+TEST_F(CliTest, ConvertRefusesAFineMeshLargerThanMemoryWithOneLine) {
+  const RunResult r = run(
+      {"convert", "builtin:mixing", "--levels", "6", "--base-vertices", "1000000", "-o", path("x.isw")}, dir_);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  EXPECT_NE(r.err.find("6 levels"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("more than this machine's"), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find("alloc"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(path("x.isw")));
+}
+
+// The torus from 9 base vertices at 3 levels folds over half its fine faces:
+// the file would be a crumpled sheet. convert says so as a failure, with the
+// remedy, writes nothing and exits non-zero; --allow-folded writes it, with
+// the warning, the share in fixed notation.
+TEST_F(CliTest, ConvertRefusesAFitThatMostlyFolds) {
+  const std::vector<std::string> arguments = {"convert", "builtin:torus:160", "--base-vertices", "9", "--levels",
+                                              "3", "-o", path("x.isw")};
+  const RunResult refused = run(arguments, dir_);
+  EXPECT_EQ(refused.exit_code, 1);
+  EXPECT_NE(refused.err.find("unusable"), std::string::npos) << refused.err;
+  EXPECT_NE(refused.err.find("a larger base mesh"), std::string::npos) << refused.err;
+  EXPECT_FALSE(fs::exists(path("x.isw")));
+  std::vector<std::string> allowed = arguments;
+  allowed.push_back("--allow-folded");
+  const RunResult written = run(allowed, dir_);
+  EXPECT_EQ(written.exit_code, 0) << written.err;
+  EXPECT_TRUE(fs::exists(path("x.isw")));
+  const std::size_t fold = written.err.find("% of the fine faces fold");
+  ASSERT_NE(fold, std::string::npos) << written.err;
+  const std::size_t begin = written.err.rfind(' ', fold) + 1;
+  const std::string share = written.err.substr(begin, fold - begin);  // e.g. 57.12
+  EXPECT_GT(std::stod(share), 50.0) << share;
+  EXPECT_EQ(share.find('e'), std::string::npos) << share;
+  EXPECT_EQ(share.size() - share.find('.'), 3u) << share;
 }
 
 // A missing input names its real cause (not its file name's ending), with

@@ -19,6 +19,7 @@
 #include "isowave/fit/shrink_wrap.h"
 #include "isowave/fit/trilinear.h"
 #include "isowave/fit/signed_distance.h"
+#include "isowave/pipeline/prepare.h"
 #include "isowave/simplify/simplify.h"
 #include "isowave/transform/wavelet_transform.h"
 #include "support/test_meshes.h"
@@ -34,22 +35,15 @@ struct Pipeline {
 };
 
 Pipeline prepare(Volume field, double iso, std::size_t base_vertices, std::size_t min_component_vertices = 0) {
-  Pipeline p;
-  p.field = std::move(field);
-  p.iso = iso;
-  IsosurfaceOptions options;
-  options.iso = iso;
-  options.min_component_vertices = min_component_vertices;
-  p.extracted = extract_isosurface(p.field, options).mesh;
+  PrepareOptions options;
+  options.extract.iso = iso;
+  options.extract.min_component_vertices = min_component_vertices;
+  PreparedSurface prepared = prepare_surface(std::move(field), options, "test");
+  Pipeline p{std::move(prepared.field), iso, std::move(prepared.isosurface.mesh), {}, std::move(prepared.distance)};
   simplify::SimplifyOptions simplify_options;
   simplify_options.target_vertices = base_vertices;
   simplify_options.compute_distance = false;
   p.base = simplify::simplify(p.extracted, simplify_options).base;
-  SignedDistanceOptions distance_options;
-  distance_options.iso = iso;
-  distance_options.surface = &p.extracted;
-  distance_options.band_cells = 3;
-  p.distance = compute_signed_distance(p.field, distance_options);
   return p;
 }
 

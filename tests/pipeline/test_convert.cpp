@@ -7,12 +7,15 @@
 #include <string>
 #include <vector>
 
-#include "isowave/codec/convert.h"
+#include "isowave/pipeline/convert.h"
 #include "isowave/codec/statistics.h"
 #include "isowave/core/binned_surface_distance.h"
+#include "isowave/core/error.h"
 #include "isowave/core/surface_distance.h"
 #include "isowave/extract/builtin_fields.h"
+#include "isowave/extract/volume_io.h"
 #include "isowave/fit/fit_quality.h"
+#include "support/test_meshes.h"
 
 namespace isowave {
 namespace {
@@ -55,9 +58,10 @@ TEST(Convert, WarnsWhenTheFitLeavesPartsOfTheSurfaceOut) {
   // Without the coverage pull, which would cover part of what these bases
   // leave out (on the finest level it reaches 8 cells): this test is about
   // the warnings and the point test, not the pull.
-  options.coverage_pull = false;
+  options.shrink_wrap.coverage_pull = false;
+  options.folded_fit = FoldedFit::Keep;  // from 9 base vertices over half the faces fold
 
-  options.base_vertices = 18;
+  options.base.vertices = 18;
   const ConvertResult partial = convert_volume(torus, "torus", options);
   ASSERT_EQ(partial.base_vertices, 18u);
   std::vector<double> distances = coverage(partial);
@@ -71,7 +75,7 @@ TEST(Convert, WarnsWhenTheFitLeavesPartsOfTheSurfaceOut) {
   EXPECT_LE(partial.uncovered_share, share_over(distances, kUncoveredCells - 0.5));
   EXPECT_GT(partial.uncovered_share, 0.2);
 
-  options.base_vertices = 9;
+  options.base.vertices = 9;
   const ConvertResult coarse = convert_volume(torus, "torus", options);
   ASSERT_EQ(coarse.base_vertices, 9u);
   EXPECT_GT(coarse.fit.correction.from_extracted_surface, 0u);
@@ -81,8 +85,8 @@ TEST(Convert, WarnsWhenTheFitLeavesPartsOfTheSurfaceOut) {
   EXPECT_TRUE(warns(coarse, kFolded));
 
   // Grown until it covers: 18 -> 36 base vertices.
-  options.base_vertices = 18;
-  options.grow_base_until_covered = true;
+  options.base.vertices = 18;
+  options.base.growth = BaseGrowth::UntilCovered;
   const ConvertResult grown = convert_volume(torus, "torus", options);
   EXPECT_GT(grown.base_attempts, 1);
   EXPECT_EQ(grown.first_base_vertices, 18u);
@@ -91,9 +95,9 @@ TEST(Convert, WarnsWhenTheFitLeavesPartsOfTheSurfaceOut) {
   EXPECT_FALSE(warns(grown, kUncovered));
   distances = coverage(grown);
   EXPECT_LE(share_over(distances, kUncoveredCells), kUncoveredWarning);
-  options.grow_base_until_covered = false;
+  options.base.growth = BaseGrowth::Fixed;
 
-  options.base_vertices = 0;
+  options.base.vertices = 0;
   const ConvertResult exact = convert_volume(torus, "torus", options);
   EXPECT_TRUE(exact.warnings.empty());
   EXPECT_LE(double(exact.fit_isosurface.far), kFarPointsWarning * double(exact.fine_vertices));
@@ -114,9 +118,24 @@ TEST(Convert, WarnsWhenFitPointsStayOffTheIsosurface) {
   const Volume torus = make_builtin_field("torus", n);
   ConvertOptions options;
   options.summary_percents = {100};
-  options.base_vertices = 9;
+  options.base.vertices = 9;
   options.levels = 3;
+  // Over kUnusableFolded of its fine faces fold: refused before coding
+  // unless kept.
+  try {
+    convert_volume(torus, "torus", options);
+    ADD_FAILURE() << "a fit folded over half refused no error";
+  } catch (const Error& error) {
+    EXPECT_EQ(error.kind(), ErrorKind::Unsupported);
+    EXPECT_NE(std::string(error.what()).find("unusable"), std::string::npos) << error.what();
+  }
+  options.folded_fit = FoldedFit::Keep;
   const ConvertResult result = convert_volume(torus, "torus", options);
+  EXPECT_GT(result.tangled_share(), kUnusableFolded);
+  // Shares in fixed notation with two decimals ("1e+02%" before).
+  for (const std::string& warning : result.warnings)
+    for (std::size_t at = warning.find('%'); at != std::string::npos; at = warning.find('%', at + 1))
+      EXPECT_EQ(warning.substr(at - 3, 1), ".") << warning;
   ASSERT_EQ(result.base_vertices, 9u);
   const double size = double(n - 1), centre = 0.5 * size, major = 0.25 * size, minor = 0.1 * size;
   std::size_t exact_far = 0;
@@ -148,7 +167,7 @@ TEST(Convert, WarnsWhenFitPointsStayOffTheIsosurface) {
   EXPECT_TRUE(warns(result, kFolded));
   EXPECT_TRUE(warns(result, "the base mesh is too coarse"));
   EXPECT_FALSE(warns(result, "--smooth 1"));
-  options.smooth_sigma = 1.0;
+  options.prepare.extract.smooth_sigma = 1.0;
   const ConvertResult smoothed = convert_volume(torus, "torus", options);
   EXPECT_GT(smoothed.tangled_share(), kFoldedWarning);
   EXPECT_TRUE(warns(smoothed, "the base mesh is too coarse"));
@@ -167,7 +186,7 @@ TEST(Convert, ReportsTheShareOfFoldedFineFaces) {
   const IswDecoded decoded = decode_isw(result.bytes, "test");
   const BinnedSurfaceDistance reference(result.extracted_mesh);
   const FitQuality quality = measure_fit_quality(*decoded.hierarchy, decoded.hierarchy->levels(), result.fit.positions,
-                                                 result.extracted_mesh, reference, field, options.iso, options.flip);
+                                                 result.extracted_mesh, reference, field, options.prepare.extract.iso, options.prepare.extract.flip);
   EXPECT_GT(quality.tangled_faces, 0u);
   EXPECT_EQ(result.fine_faces, quality.faces);
   EXPECT_EQ(result.fit.tangled_faces, quality.tangled_faces);
@@ -186,10 +205,32 @@ TEST(Convert, WarnsAboutFoldsWhichThePreFilterRemoves) {
   EXPECT_GT(raw.tangled_share(), kFoldedWarning);
   EXPECT_TRUE(warns(raw, kFolds));
   EXPECT_TRUE(warns(raw, "--smooth 1"));
-  options.smooth_sigma = 1.0;
+  options.prepare.extract.smooth_sigma = 1.0;
   const ConvertResult smoothed = convert_volume(field, "mixing", options);
   EXPECT_LT(smoothed.tangled_share(), 0.001);
   EXPECT_FALSE(warns(smoothed, kFolds));
+}
+
+// The stent CT at 300 (thin struts, noise): the fit leaves parts of the
+// isosurface out, yet its folds sit on features under a cell across, and
+// more levels make them worse; the one-voxel pre-filter removes them. The
+// warning names --smooth 1 and not more levels (it named more levels,
+// as for a base mesh too coarse for the surface).
+TEST(Convert, NamesThePreFilterForFoldsOnANoisyScan) {
+  ISOWAVE_REQUIRE_SHARED_FILE(path, "volumes/stent_128x128x256.nrrd");
+  ConvertOptions options;
+  options.prepare.extract.iso = 300;
+  options.base.growth = BaseGrowth::UntilCovered;  // as the command runs it
+  options.summary_percents = {100};
+  const ConvertResult raw = convert_volume(read_volume(path), path, options);
+  ASSERT_GT(raw.tangled_share(), kFoldedWarning);
+  EXPECT_TRUE(warns(raw, kFolded));
+  EXPECT_TRUE(warns(raw, "--smooth 1"));
+  EXPECT_FALSE(warns(raw, "--levels"));
+  options.prepare.extract.smooth_sigma = 1.0;
+  const ConvertResult smoothed = convert_volume(read_volume(path), path, options);
+  EXPECT_LT(smoothed.tangled_share(), kFoldedWarning);
+  EXPECT_FALSE(warns(smoothed, kFolded));
 }
 
 }  // namespace

@@ -1,0 +1,155 @@
+#pragma once
+// The whole conversion of paper Sec. 4-5 for one volume and isovalue:
+// preparation (pre-filter, extraction, signed distance; prepare.h) -> base
+// mesh -> shrink-wrap -> analysis -> quantization and coding into an .isw
+// file, with the figures users need (sizes, stage timings, RMSE at several
+// coefficient percentages) and warnings where the fit did not follow the
+// surface.
+#include <string>
+#include <vector>
+
+#include "isowave/codec/isw_format.h"
+#include "isowave/codec/statistics.h"
+#include "isowave/core/progress.h"
+#include "isowave/core/volume.h"
+#include "isowave/extract/isosurface.h"
+#include "isowave/fit/fit_quality.h"
+#include "isowave/fit/shrink_wrap.h"
+#include "isowave/pipeline/prepare.h"
+#include "isowave/simplify/simplify.h"
+
+namespace isowave {
+
+// How the base mesh's size follows the fit.
+enum class BaseGrowth {
+  Fixed,  // one base mesh of the requested size
+  // While more than kUncoveredWarning of the isosurface lies more than
+  // kUncoveredCells cells from every fine control point, simplify again to
+  // twice the base's vertex count and fit again: at most kBaseAttempts tries,
+  // while the base stays under a quarter of the isosurface's vertices, and
+  // only with automatic levels (with fixed levels a larger base multiplies
+  // the fine mesh).
+  UntilCovered,
+};
+
+struct BaseMeshOptions {
+  // Target vertex count (>= 4); 0: `ratio` times the extracted vertex count.
+  std::size_t vertices = 0;
+  double ratio = 0.0625;  // in (0, 1]
+  BaseGrowth growth = BaseGrowth::Fixed;
+  // The simplifier's rules (Sec. 4.1, valence flips, edge removal);
+  // convert_volume() sets target_vertices, compute_distance and
+  // serial_phase_begins itself.
+  simplify::SimplifyOptions simplify;
+};
+
+// What convert_volume() does with a fit whose fine faces mostly fold
+// (more than kUnusableFolded of them): its surface is a crumpled sheet, and
+// a file of it is unusable.
+enum class FoldedFit {
+  Refuse,  // throw Error(Unsupported) naming the remedy, before coding
+  Keep,    // code it anyway (the warning stays)
+};
+
+// Whether convert_volume() decodes its own file once more.
+enum class FileCheck {
+  None,
+  // Decode the encoded bytes again and require exactly the coded
+  // coefficients in the coded order (a self-check; the round-trip tests
+  // check the coder; serial, about 1.5 s on miranda). The summary never
+  // needs it: it is made from what the encoder stored.
+  DecodeAgain,
+};
+
+struct ConvertOptions {
+  // Isovalue, orientation, clean-up, pre-filter and the distance band.
+  PrepareOptions prepare;
+  BaseMeshOptions base;
+  // Subdivision levels 1..6; 0 picks the level whose fine mesh has about as
+  // many vertices as the extracted isosurface (the paper: 1.19 M fine control
+  // points for a 0.98 M-vertex isosurface).
+  int levels = 0;
+  // The fit (Sec. 4.2); convert_volume() sets `surface` to the extracted mesh.
+  ShrinkWrapOptions shrink_wrap;
+  // Quantization step in cells (IswEncodeOptions::step / cell size, > 0);
+  // the expected RMSE it adds is about half of it.
+  double step_cells = 0.01;
+  // Percentages for the error summary (the base-mesh row is added).
+  std::vector<double> summary_percents{100, 20, 10, 5};
+  FoldedFit folded_fit = FoldedFit::Refuse;
+  FileCheck file_check = FileCheck::None;
+  // Keep the extracted triangle mesh in the result (for comparisons).
+  bool keep_extracted_mesh = false;
+};
+
+// Wall-clock seconds per stage. The signed-distance field is computed
+// alongside the base mesh; `distance` is only the wait for it afterwards, so
+// that the stages add up to the whole conversion.
+struct ConvertTimings {
+  double extract = 0, simplify = 0, distance = 0, fit = 0, analysis = 0, encode = 0, evaluate = 0;
+  double total() const { return extract + simplify + distance + fit + analysis + encode + evaluate; }
+};
+
+// Share of the fine control points that may lie more than a cell off the
+// isosurface before convert_volume() warns (see ConvertResult::fit_isosurface).
+inline constexpr double kFarPointsWarning = 0.005;
+// Share of the isosurface that may lie more than kUncoveredCells cells from
+// every fine control point before convert_volume() warns.
+inline constexpr double kUncoveredCells = 2.0;
+inline constexpr double kUncoveredWarning = 0.01;
+// More than this share of the isosurface left out means the base mesh spans
+// whole parts of it: a fold warning then names a larger base mesh, not the
+// pre-filter.
+inline constexpr double kUncoveredCoarse = 0.1;
+// More than this share of folded fine faces (ConvertResult::tangled_share)
+// adds a warning naming the remedy: a larger base mesh where it is too coarse
+// for the surface (the fine mesh under half the isosurface's vertices, points
+// left off it, over kUncoveredCoarse of it left out), else a one-voxel
+// pre-filter (--smooth 1): the folds then sit on features under a cell
+// across (necks, tunnels, specks of noisy scans).
+inline constexpr double kFoldedWarning = 0.01;
+// More than this share of folded fine faces makes the fit unusable (FoldedFit).
+inline constexpr double kUnusableFolded = 0.5;
+inline constexpr int kBaseAttempts = 3;
+
+struct ConvertResult {
+  std::string bytes;  // the .isw file
+  PolygonMesh extracted_mesh;  // with keep_extracted_mesh
+  IsosurfaceReport extraction;
+  simplify::SimplifyReport simplification;
+  ShrinkWrapResult fit;  // positions: the fitted fine control points
+  int levels = 0;
+  std::size_t extracted_vertices = 0, base_vertices = 0, fine_vertices = 0, fine_faces = 0;
+  double cell_size = 1;
+  ConvertTimings seconds;
+  // The fitted fine control points against the isosurface of the field they
+  // were fitted to (first order, cells). More than kFarPointsWarning of them
+  // farther than a cell away adds a warning.
+  IsosurfaceDistance fit_isosurface;
+  // The share of the extracted isosurface's vertices (sampled) farther than
+  // kUncoveredCells cells from every fine control point (share_farther_than):
+  // what the fit left out. More than kUncoveredWarning adds a warning.
+  double uncovered_share = 0;
+  // The share of the fine faces whose normal disagrees with the field
+  // gradient (ShrinkWrapResult::tangled_faces): folds of the parameterization.
+  double tangled_share() const;
+  // Tries at the base mesh (BaseGrowth::UntilCovered) and the first one's
+  // vertex count; base_vertices is the last one's.
+  int base_attempts = 1;
+  std::size_t first_base_vertices = 0;
+  // Against the fitted (unquantized) fine control points; see rate_distortion().
+  std::vector<RateDistortionRow> summary;
+  std::vector<std::string> warnings;  // one line each, e.g. a base mesh kept large by the topology
+};
+
+// Converts one isosurface of `volume` (moved in: the pre-filtered field
+// replaces it). `source` names the input in the file's metadata and in
+// errors. Throws Error(InvalidArgument) for invalid options, an empty
+// isosurface or a fine mesh larger than this machine's memory (checked before
+// it is built), Error(Unsupported) for an unusable fit (FoldedFit::Refuse),
+// and what the stages throw. Memory: about kFitBytesPerFineVertex per fine
+// control point.
+ConvertResult convert_volume(Volume volume, const std::string& source, const ConvertOptions& options,
+                             ProgressSink& progress = no_progress());
+
+}  // namespace isowave

@@ -1,0 +1,394 @@
+#include "isowave/pipeline/convert.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <future>
+#include <iomanip>
+#include <memory>
+#include <sstream>
+#include <stdexcept>
+
+#include <tbb/task_arena.h>
+
+#include "isowave/codec/importance.h"
+#include "isowave/codec/statistics.h"
+#include "isowave/core/error.h"
+#include "isowave/core/mesh_topology.h"
+#include "isowave/fit/signed_distance.h"
+#include "isowave/transform/wavelet_transform.h"
+
+namespace isowave {
+
+double ConvertResult::tangled_share() const {
+  return fine_faces ? double(fit.tangled_faces) / double(fine_faces) : 0.0;
+}
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
+
+std::string number(double v) {
+  std::ostringstream s;
+  s.precision(10);
+  s << v;
+  return s.str();
+}
+
+// A share as a percentage in fixed notation ("100.00%", never "1e+02%").
+std::string percent(double share) {
+  std::ostringstream s;
+  s << std::fixed << std::setprecision(2) << 100.0 * share << '%';
+  return s.str();
+}
+
+void check_options(const ConvertOptions& options) {
+  if (options.levels < 0 || options.levels > 6)
+    throw Error(ErrorKind::InvalidArgument, "levels must be in 1..6, or 0 for automatic");
+  if (!(options.base.ratio > 0 && options.base.ratio <= 1))
+    throw Error(ErrorKind::InvalidArgument, "the base ratio must be in (0, 1]");
+  if (!(options.step_cells > 0) || !std::isfinite(options.step_cells))
+    throw Error(ErrorKind::InvalidArgument, "the quantization step must be positive");
+}
+
+// The level whose fine mesh has about as many vertices as the isosurface.
+int automatic_levels(const PolygonMesh& base, std::size_t isosurface_vertices) {
+  int levels = 1;
+  double best = 1e300;
+  const std::vector<LevelCounts> counts = refinement_counts(level_counts(base, summarize_topology(base).edges), 6);
+  for (int l = 1; l <= 6; ++l) {
+    const double fine = std::floor(counts[static_cast<std::size_t>(l)].vertices);
+    const double misfit = std::abs(std::log(fine / static_cast<double>(isosurface_vertices)));
+    if (misfit < best) {
+      best = misfit;
+      levels = l;
+    }
+    if (fine > 4.0 * static_cast<double>(isosurface_vertices)) break;
+  }
+  return levels;
+}
+
+std::size_t base_target(const BaseMeshOptions& base, std::size_t extracted_vertices) {
+  if (base.vertices > 0) return base.vertices;
+  return std::max<std::size_t>(4, static_cast<std::size_t>(std::llround(base.ratio * double(extracted_vertices))));
+}
+
+// The signed-distance field needs only the field and the extracted mesh: it
+// is computed alongside the base mesh, started when the simplification turns
+// serial and leaves a core idle (on miranda 1.2 s sooner than when both
+// competed for the cores from the start), on one thread (two would take the
+// core the simplification runs on). No progress from it: the sink shows one
+// stage at a time.
+class BackgroundDistance {
+ public:
+  // The future's destructor waits for a computation still running (it reads `prepared`).
+  BackgroundDistance(PreparedSurface& prepared, const PrepareOptions& options) : prepared_(prepared), options_(options) {}
+
+  void start() {
+    pending_ = std::async(std::launch::async, [this] {
+      tbb::task_arena one_thread(1);
+      return one_thread.execute([this] { return surface_distance_field(prepared_, options_); });
+    });
+  }
+
+  // Puts the field into prepared.distance, once (stage "signed distance");
+  // returns the seconds waited.
+  double wait(ProgressSink& progress) {
+    if (done_) return 0;
+    const auto start_time = Clock::now();
+    progress.begin_stage("signed distance");
+    if (!pending_.valid()) start();
+    prepared_.distance = pending_.get();
+    progress.end_stage();
+    done_ = true;
+    return seconds_since(start_time);
+  }
+
+ private:
+  PreparedSurface& prepared_;
+  const PrepareOptions& options_;
+  std::future<SignedDistanceField> pending_;
+  bool done_ = false;
+};
+
+// One base mesh of `target` vertices (simplify, Sec. 4.1) and its levels.
+PolygonMesh simplify_base(const PreparedSurface& prepared, const simplify::SimplifyOptions& simplify_options,
+                          const ConvertOptions& options, ConvertResult& result, ProgressSink& progress) {
+  const auto start = Clock::now();
+  simplify::SimplifyResult simplified = simplify::simplify(prepared.isosurface.mesh, simplify_options, progress);
+  result.simplification = simplified.report;
+  result.base_vertices = simplified.base.vertex_count();
+  if (result.base_attempts == 1) result.first_base_vertices = result.base_vertices;
+  result.levels = options.levels > 0 ? options.levels : automatic_levels(simplified.base, result.extracted_vertices);
+  result.seconds.simplify += seconds_since(start);
+  return std::move(simplified.base);
+}
+
+// The shrink-wrap of `base` (Sec. 4.2) and the fit against the isosurface,
+// both ways; the error rows, measured against the fit, cannot show what it
+// missed. A base mesh too coarse for the surface leaves parts of it out of
+// the attraction's reach and the fine points there off the isosurface, and
+// parts of the isosurface no fine point comes near (thin features the base
+// mesh spans; every stride-th isosurface vertex, at most 100,000).
+std::shared_ptr<const SubdivisionHierarchy> fit_base(const PolygonMesh& base, const PreparedSurface& prepared,
+                                                     const ConvertOptions& options, ConvertResult& result,
+                                                     ProgressSink& progress) {
+  const auto start = Clock::now();
+  auto hierarchy = std::make_shared<const SubdivisionHierarchy>(base, result.levels);
+  result.fine_vertices = hierarchy->fine_vertex_count();
+  // Each parent face of n corners gives n quads.
+  result.fine_faces = result.levels > 0 ? hierarchy->step(result.levels).face_vertices.size() : base.face_count();
+  ShrinkWrapOptions wrap_options = options.shrink_wrap;
+  wrap_options.surface = &prepared.isosurface.mesh;
+  result.fit = shrink_wrap(*hierarchy, base.positions, prepared.distance, prepared.field, wrap_options, progress);
+  result.fit_isosurface =
+      isosurface_distance(result.fit.positions, result.fine_vertices, prepared.field, options.prepare.extract.iso, 1.0);
+  const PolygonMesh& surface = prepared.isosurface.mesh;
+  const std::size_t stride = std::max<std::size_t>(1, surface.vertex_count() / 100000);
+  result.uncovered_share = share_farther_than(surface.positions, stride, result.fit.positions, result.fine_vertices,
+                                              kUncoveredCells * result.cell_size);
+  result.seconds.fit += seconds_since(start);
+  return hierarchy;
+}
+
+// Base mesh, levels, shrink-wrap and the fit check; with
+// BaseGrowth::UntilCovered, again from a base mesh twice as large while more
+// than kUncoveredWarning of the isosurface is left out. Returns the last
+// fit's hierarchy and, in `target`, the last base mesh's target.
+std::shared_ptr<const SubdivisionHierarchy> fit_surface(PreparedSurface& prepared, const ConvertOptions& options,
+                                                        ConvertResult& result, std::size_t& target,
+                                                        ProgressSink& progress) {
+  BackgroundDistance distance(prepared, options.prepare);
+  simplify::SimplifyOptions simplify_options = options.base.simplify;
+  simplify_options.target_vertices = target = base_target(options.base, result.extracted_vertices);
+  simplify_options.compute_distance = false;
+  simplify_options.serial_phase_begins = [&distance] { distance.start(); };
+  // Each level multiplies the vertices by about 4 (the first by about 6): a
+  // lower bound of the fine mesh before the base mesh is made.
+  if (options.levels > 0)
+    check_memory(double(std::min(target, result.extracted_vertices)) * std::pow(4.0, options.levels),
+                 kFitBytesPerFineVertex, std::to_string(options.levels) + " levels");
+  std::shared_ptr<const SubdivisionHierarchy> hierarchy;
+  for (result.base_attempts = 1;; ++result.base_attempts) {
+    const PolygonMesh base = simplify_base(prepared, simplify_options, options, result, progress);
+    simplify_options.serial_phase_begins = nullptr;  // the distance field is on its way
+    check_memory(double(fine_vertex_count(base, result.levels)), kFitBytesPerFineVertex,
+                 std::to_string(result.levels) + " levels of a " + std::to_string(base.vertex_count()) +
+                     "-vertex base mesh");
+    result.seconds.distance += distance.wait(progress);
+    result.fit = ShrinkWrapResult{};  // the previous try's, before the next one's peak
+    hierarchy.reset();
+    hierarchy = fit_base(base, prepared, options, result, progress);
+    // With the levels fixed, a larger base multiplies the fine mesh: it grows
+    // only when the levels follow it.
+    const std::size_t grown = 2 * base.vertex_count();
+    if (options.base.growth != BaseGrowth::UntilCovered || options.levels != 0 ||
+        result.uncovered_share <= kUncoveredWarning || result.base_attempts == kBaseAttempts ||
+        grown > result.extracted_vertices / 4)
+      break;
+    simplify_options.target_vertices = target = grown;
+  }
+  return hierarchy;
+}
+
+// What the folds of a fit that folds more than kFoldedWarning of its fine
+// faces come from, and the remedy; empty where the options hold it already.
+// - A fine mesh too coarse for the surface (fine_mesh_too_coarse): a larger
+//   base mesh or more levels.
+// - Points left off the surface, or over kUncoveredCoarse of the surface
+//   left out: the base mesh spans whole parts of the surface and the folds
+//   are its own, which the pre-filter does not change (the torus at 160^3
+//   from 9 base vertices, 3 levels: 57% folded, 44% with --smooth 1); a
+//   larger base mesh. Not more levels: the automatic levels already give
+//   about as many fine points as the isosurface has vertices, and more make
+//   the folds of the next case worse.
+// - Otherwise the folds sit on necks, tunnels and specks under a cell across
+//   (noisy scans and fine-grained fields, also where thin features are left
+//   out: the stent CT at 300 leaves 1.2% out and folds 5.1%, 7.2% at one
+//   level more, 0.29% with smooth_sigma = 1): a one-voxel pre-filter.
+std::string fold_cause(const ConvertResult& result, const ConvertOptions& options) {
+  if (fine_mesh_too_coarse(result.fine_vertices, result.extracted_vertices))
+    return "where the base mesh is too coarse for the surface at " + std::to_string(result.levels) +
+           " levels; a larger base mesh (--base-ratio, --base-vertices) or more levels (--levels) follow it";
+  const bool far_off = double(result.fit_isosurface.far) > kFarPointsWarning * double(result.fine_vertices);
+  if (far_off || result.uncovered_share > kUncoveredCoarse)
+    return "where the base mesh is too coarse for the surface; a larger base mesh (--base-ratio, --base-vertices) "
+           "follows it";
+  if (options.prepare.extract.smooth_sigma == 0)
+    return "mostly on necks, tunnels and specks under a cell across; a one-voxel pre-filter (--smooth 1) removes "
+           "most of them";
+  return {};
+}
+
+// The warnings on the base mesh and the fit (one line each).
+void add_fit_warnings(const ConvertOptions& options, std::size_t target, ConvertResult& result) {
+  if (result.base_vertices > 3 * target / 2) {
+    std::ostringstream warning;
+    warning << "the base mesh keeps " << result.base_vertices << " vertices (target " << target
+            << "): the isosurface has " << result.extraction.after.components << " components and genus "
+            << result.extraction.after.genus
+            << ", which the base mesh must keep; --min-component-vertices N and --smooth SIGMA remove small bubbles "
+               "and handles";
+    result.warnings.push_back(warning.str());
+  }
+  if (double(result.fit_isosurface.far) > kFarPointsWarning * double(result.fine_vertices)) {
+    std::ostringstream warning;
+    warning << "the fit leaves " << result.fit_isosurface.far << " of the " << result.fine_vertices
+            << " fine control points (" << percent(double(result.fit_isosurface.far) / double(result.fine_vertices))
+            << ") more than a cell off the isosurface, up to " << std::setprecision(3) << result.fit_isosurface.max
+            << " cells: parts of the surface lie beyond the reach of the base mesh; a larger base mesh "
+               "(--base-ratio, --base-vertices) usually fixes it";
+    result.warnings.push_back(warning.str());
+  }
+  if (result.uncovered_share > kUncoveredWarning) {
+    std::ostringstream warning;
+    warning << percent(result.uncovered_share) << " of the isosurface lies more than " << kUncoveredCells
+            << " cells from every fine control point: the fit did not reach into features the base mesh spans; "
+               "a larger base mesh (--base-ratio, --base-vertices) covers more";
+    result.warnings.push_back(warning.str());
+  }
+  const std::string cause = fold_cause(result, options);
+  if (result.tangled_share() > kFoldedWarning && !cause.empty())
+    result.warnings.push_back(percent(result.tangled_share()) + " of the fine faces fold against the field gradient, " +
+                              cause);
+}
+
+// A fit whose faces mostly fold is a crumpled sheet: refused unless asked for.
+void refuse_unusable_fit(const std::string& source, const ConvertOptions& options, const ConvertResult& result) {
+  if (result.tangled_share() <= kUnusableFolded || options.folded_fit == FoldedFit::Keep) return;
+  std::string cause = fold_cause(result, options);
+  if (cause.empty()) cause = "where the fit did not follow the surface";
+  throw Error(ErrorKind::Unsupported, source + ": " + percent(result.tangled_share()) +
+                                          " of the fine faces fold against the field gradient, " + cause +
+                                          "; the file would be unusable and is not written (--allow-folded writes it)");
+}
+
+IswMetadata metadata_of(const Volume& volume, const std::string& source, const ConvertOptions& options,
+                        const ConvertResult& result) {
+  const IsosurfaceOptions& extract = options.prepare.extract;
+  IswMetadata metadata;
+  metadata.values["source"] = source;
+  metadata.values["isovalue"] = number(extract.iso);
+  metadata.values["spacing"] = number(volume.spacing.x) + "," + number(volume.spacing.y) + "," + number(volume.spacing.z);
+  metadata.values["origin"] = number(volume.origin.x) + "," + number(volume.origin.y) + "," + number(volume.origin.z);
+  metadata.values["dims"] = std::to_string(volume.dims[0]) + "," + std::to_string(volume.dims[1]) + "," +
+                            std::to_string(volume.dims[2]);
+  metadata.values["cell_size"] = number(result.cell_size);
+  if (volume.spacing.x != volume.spacing.y || volume.spacing.y != volume.spacing.z)
+    metadata.values["cell_size_note"] = "geometric mean of the anisotropic spacing";
+  metadata.values["levels"] = std::to_string(result.levels);
+  metadata.values["extracted_vertices"] = std::to_string(result.extracted_vertices);
+  metadata.values["base_vertices"] = std::to_string(result.base_vertices);
+  metadata.values["fine_vertices"] = std::to_string(result.fine_vertices);
+  metadata.values["fit_isosurface_rms_cells"] = number(result.fit_isosurface.rms);
+  metadata.values["fit_isosurface_max_cells"] = number(result.fit_isosurface.max);
+  metadata.values["isosurface_uncovered_share"] = number(result.uncovered_share);
+  metadata.values["fit_tangled_share"] = number(result.tangled_share());
+  metadata.values["options"] =
+      "flip=" + std::to_string(extract.flip) + " min_component_vertices=" +
+      std::to_string(extract.min_component_vertices) + " smooth_sigma=" + number(extract.smooth_sigma) +
+      " levels=" + (options.levels > 0 ? std::to_string(options.levels) : std::string("auto")) +
+      (options.base.vertices > 0 ? " base_vertices=" + std::to_string(options.base.vertices)
+                                 : " base_ratio=" + number(options.base.ratio)) +
+      " grow_base_until_covered=" + std::to_string(options.base.growth == BaseGrowth::UntilCovered) +
+      " valence_flips=" + std::to_string(options.base.simplify.valence_flips) +
+      " coverage_pull=" + std::to_string(options.shrink_wrap.coverage_pull) +
+      " unfold_max_tangled_fraction=" + number(options.shrink_wrap.unfold_max_tangled_fraction) +
+      " step_cells=" + number(options.step_cells);
+  return metadata;
+}
+
+// What the encoder stored, for the evaluation.
+struct Coded {
+  std::vector<Vec3> stored;            // the coefficients as quantized
+  std::vector<std::uint32_t> ranked;   // the order the file sends them
+  PointErrors quantization_errors;     // of all stored coefficients against the fit
+};
+
+// Analysis (Sec. 3) and coding: records the error quantization adds,
+// measured on the coefficients exactly as stored; the evaluation's row of
+// every coefficient is the same synthesis.
+Coded analyze_and_encode(const SubdivisionHierarchy& hierarchy, IswMetadata metadata, const ConvertOptions& options,
+                         ConvertResult& result, ProgressSink& progress) {
+  auto start = Clock::now();
+  progress.begin_stage("analysis");
+  std::vector<Vec3> coefficients = result.fit.positions;
+  analyze(hierarchy, coefficients);
+  progress.end_stage();
+  result.seconds.analysis = seconds_since(start);
+
+  start = Clock::now();
+  progress.begin_stage("encode");
+  IswEncodeOptions encode_options;
+  encode_options.step = options.step_cells * result.cell_size;
+  encode_options.class_weights = wavelet_norms(hierarchy);
+  Coded coded;
+  coded.stored = quantize_coefficients(hierarchy, coefficients, encode_options.step, encode_options.class_weights);
+  {
+    std::vector<Vec3> synthesized = coded.stored;
+    synthesize(hierarchy, synthesized);
+    coded.quantization_errors = point_errors(synthesized, result.fit.positions, synthesized.size());
+    metadata.values["quantization_rmse"] = number(coded.quantization_errors.rms);
+  }
+  result.bytes = encode_isw(hierarchy, coefficients, metadata, encode_options, &coded.ranked);
+  progress.end_stage();
+  result.seconds.encode = seconds_since(start);
+  return coded;
+}
+
+// Error summary against the fitted control points, from what the file holds
+// as the encoder stored it (decoding the file again took half of this
+// stage's time on miranda; FileCheck::DecodeAgain still does).
+void evaluate(const std::shared_ptr<const SubdivisionHierarchy>& hierarchy, Coded coded, const std::string& source,
+              const ConvertOptions& options, ConvertResult& result, ProgressSink& progress) {
+  const auto start = Clock::now();
+  progress.begin_stage("evaluate");
+  const IswDecoded expected =
+      expected_decode(hierarchy, std::move(coded.stored), std::move(coded.ranked), result.bytes, source);
+  std::future<bool> decodes_as_expected;
+  if (options.file_check == FileCheck::DecodeAgain)
+    decodes_as_expected = std::async(std::launch::async, [&] {
+      IswDecodeOptions decode_options;
+      decode_options.hierarchy = hierarchy;
+      const IswDecoded decoded = decode_isw(result.bytes, source, decode_options);
+      return decoded.ranked == expected.ranked && decoded.coefficients == expected.coefficients;
+    });
+  result.summary = rate_distortion(expected, options.summary_percents, &result.fit.positions, &coded.quantization_errors);
+  if (decodes_as_expected.valid() && !decodes_as_expected.get())
+    throw std::logic_error(source + ": the file written does not decode to the coefficients it was coded from");
+  progress.end_stage();
+  result.seconds.evaluate = seconds_since(start);
+}
+
+}  // namespace
+
+ConvertResult convert_volume(Volume volume, const std::string& source, const ConvertOptions& options,
+                             ProgressSink& progress) {
+  check_options(options);
+  ConvertResult result;
+  result.cell_size = volume.cell_size();
+
+  const auto start = Clock::now();
+  PreparedSurface prepared = extract_surface(std::move(volume), options.prepare, source, progress);
+  result.extraction = prepared.isosurface.report;
+  result.extracted_vertices = prepared.isosurface.mesh.vertex_count();
+  result.seconds.extract = seconds_since(start);
+
+  std::size_t target = 0;
+  const std::shared_ptr<const SubdivisionHierarchy> hierarchy = fit_surface(prepared, options, result, target, progress);
+  add_fit_warnings(options, target, result);
+  refuse_unusable_fit(source, options, result);
+  IswMetadata metadata = metadata_of(prepared.field, source, options, result);
+
+  // What the coding stages no longer need goes before their peak.
+  if (options.keep_extracted_mesh) result.extracted_mesh = std::move(prepared.isosurface.mesh);
+  prepared = PreparedSurface{};
+
+  Coded coded = analyze_and_encode(*hierarchy, std::move(metadata), options, result, progress);
+  evaluate(hierarchy, std::move(coded), source, options, result, progress);
+  return result;
+}
+
+}  // namespace isowave
