@@ -21,8 +21,8 @@
 
 namespace isowave {
 
-double ConvertResult::tangled_share() const {
-  return fine_faces ? double(fit.tangled_faces) / double(fine_faces) : 0.0;
+double ConvertResult::folded_share() const {
+  return fine_faces ? double(fit.folded_faces) / double(fine_faces) : 0.0;
 }
 
 namespace {
@@ -212,9 +212,9 @@ ConvertResult convert_volume(const Volume& volume, const std::string& source, co
   // base vertices, 3 levels: 57% folded, 44% with --smooth 1).
   const bool too_coarse = far_off || result.uncovered_share > kUncoveredWarning ||
                           fine_mesh_too_coarse(result.fine_vertices, result.extracted_vertices);
-  if (result.tangled_share() > kFoldedWarning && (too_coarse || options.smooth_sigma == 0)) {
+  if (result.folded_share() > kFoldedWarning && (too_coarse || options.smooth_sigma == 0)) {
     std::ostringstream warning;
-    warning << std::setprecision(2) << 100.0 * result.tangled_share() << "% of the fine faces fold against the field gradient";
+    warning << std::setprecision(2) << 100.0 * result.folded_share() << "% of the fine faces fold against the field gradient";
     if (too_coarse)
       warning << ", where the base mesh is too coarse for the surface; a larger base mesh (--base-ratio, --base-vertices) "
                  "or more levels (--levels) follow it";
@@ -255,7 +255,7 @@ ConvertResult convert_volume(const Volume& volume, const std::string& source, co
   metadata.values["fit_isosurface_rms_cells"] = number(result.fit_isosurface.rms);
   metadata.values["fit_isosurface_max_cells"] = number(result.fit_isosurface.max);
   metadata.values["isosurface_uncovered_share"] = number(result.uncovered_share);
-  metadata.values["fit_tangled_share"] = number(result.tangled_share());
+  metadata.values["fit_folded_share"] = number(result.folded_share());
   metadata.values["options"] =
       "flip=" + std::to_string(options.flip) + " min_component_vertices=" +
       std::to_string(options.min_component_vertices) + " smooth_sigma=" + number(options.smooth_sigma) +
@@ -265,7 +265,7 @@ ConvertResult convert_volume(const Volume& volume, const std::string& source, co
       " grow_base_until_covered=" + std::to_string(options.grow_base_until_covered) +
       " valence_flips=" + std::to_string(options.valence_flips) +
       " coverage_pull=" + std::to_string(options.coverage_pull) +
-      " unfold_max_tangled_fraction=" + number(options.shrink_wrap.unfold_max_tangled_fraction) +
+      " unfold_max_folded_fraction=" + number(options.shrink_wrap.unfold_max_folded_fraction) +
       " step_cells=" + number(options.step_cells);
   IswEncodeOptions encode_options;
   encode_options.step = options.step_cells * result.cell_size;

@@ -150,7 +150,7 @@ TEST(Convert, WarnsWhenFitPointsStayOffTheIsosurface) {
   EXPECT_FALSE(warns(result, "--smooth 1"));
   options.smooth_sigma = 1.0;
   const ConvertResult smoothed = convert_volume(torus, "torus", options);
-  EXPECT_GT(smoothed.tangled_share(), kFoldedWarning);
+  EXPECT_GT(smoothed.folded_share(), kFoldedWarning);
   EXPECT_TRUE(warns(smoothed, "the base mesh is too coarse"));
 }
 
@@ -167,11 +167,12 @@ TEST(Convert, ReportsTheShareOfFoldedFineFaces) {
   const IswDecoded decoded = decode_isw(result.bytes, "test");
   const BinnedSurfaceDistance reference(result.extracted_mesh);
   const FitQuality quality = measure_fit_quality(*decoded.hierarchy, decoded.hierarchy->levels(), result.fit.positions,
-                                                 result.extracted_mesh, reference, field, options.iso, options.flip);
-  EXPECT_GT(quality.tangled_faces, 0u);
+                                                 result.extracted_mesh, reference, field, options.iso,
+                                                 orientation_from_flip(options.flip));
+  EXPECT_GT(quality.folded_faces, 0u);
   EXPECT_EQ(result.fine_faces, quality.faces);
-  EXPECT_EQ(result.fit.tangled_faces, quality.tangled_faces);
-  EXPECT_DOUBLE_EQ(result.tangled_share(), quality.tangled_fraction);
+  EXPECT_EQ(result.fit.folded_faces, quality.folded_faces);
+  EXPECT_DOUBLE_EQ(result.folded_share(), quality.folded_fraction);
 }
 
 // The mixing layer sampled coarsely (40^3) is all necks and specks a cell
@@ -183,12 +184,12 @@ TEST(Convert, WarnsAboutFoldsWhichThePreFilterRemoves) {
   options.summary_percents = {100};
   const std::string kFolds = "fold against the field gradient";
   const ConvertResult raw = convert_volume(field, "mixing", options);
-  EXPECT_GT(raw.tangled_share(), kFoldedWarning);
+  EXPECT_GT(raw.folded_share(), kFoldedWarning);
   EXPECT_TRUE(warns(raw, kFolds));
   EXPECT_TRUE(warns(raw, "--smooth 1"));
   options.smooth_sigma = 1.0;
   const ConvertResult smoothed = convert_volume(field, "mixing", options);
-  EXPECT_LT(smoothed.tangled_share(), 0.001);
+  EXPECT_LT(smoothed.folded_share(), 0.001);
   EXPECT_FALSE(warns(smoothed, kFolds));
 }
 

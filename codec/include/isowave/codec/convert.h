@@ -76,7 +76,7 @@ inline constexpr double kFarPointsWarning = 0.005;
 // every fine control point before convert_volume() warns.
 inline constexpr double kUncoveredCells = 2.0;
 inline constexpr double kUncoveredWarning = 0.01;
-// More than this share of folded fine faces (ConvertResult::tangled_share)
+// More than this share of folded fine faces (ConvertResult::folded_share)
 // adds a warning without a pre-filter: on noisy scans and fine-grained fields
 // (stent, HCCI, MRI, embryo, miranda: 3-5%) the folds sit on necks, tunnels
 // and specks under a cell across, which smooth_sigma = 1 removes (stent
@@ -106,8 +106,8 @@ struct ConvertResult {
   // what the fit left out. More than kUncoveredWarning adds a warning.
   double uncovered_share = 0;
   // The share of the fine faces whose normal disagrees with the field
-  // gradient (ShrinkWrapResult::tangled_faces): folds of the parameterization.
-  double tangled_share() const;
+  // gradient (ShrinkWrapResult::folded_faces): folds of the parameterization.
+  double folded_share() const;
   // Tries at the base mesh (ConvertOptions::grow_base_until_covered) and the
   // first one's vertex count; base_vertices is the last one's.
   int base_attempts = 1;
