@@ -23,6 +23,7 @@
 
 namespace isowave::wrap {
 namespace {
+
 // Throws Error(InvalidArgument) naming the first of positions[0 .. count)
 // more than a cell outside the volume's box. A base from another volume
 // (other spacing or origin) would be pressed onto the box and fitted to
@@ -199,7 +200,8 @@ struct FitContext {
     const std::size_t fine_count = hierarchy.vertex_count(levels);
     reserve_on_huge_pages(positions, fine_count);
     reserve_on_huge_pages(scratch, fine_count);
-    positions.assign(base_positions.begin(), base_positions.begin() + static_cast<std::ptrdiff_t>(hierarchy.vertex_count(0)));
+    const std::size_t base_count = hierarchy.vertex_count(0);
+    positions.assign(base_positions.begin(), base_positions.begin() + static_cast<std::ptrdiff_t>(base_count));
     reserve_on_huge_pages(face_normals, levels > 0 ? std::size_t{hierarchy.step(levels).face_offsets.back()} : 0);
     reserve_finest_wrap_level_mesh(hierarchy, mesh);
     field_values = prepared_field_values(field, distance);
