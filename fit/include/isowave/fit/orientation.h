@@ -14,6 +14,8 @@ enum class Orientation : std::uint8_t {
 };
 
 // The orientation extraction with `flip` gives.
-inline Orientation orientation_from_flip(bool flip) { return flip ? Orientation::TowardHigher : Orientation::TowardLower; }
+inline Orientation orientation_from_flip(bool flip) {
+  return flip ? Orientation::TowardHigher : Orientation::TowardLower;
+}
 
 }  // namespace isowave
