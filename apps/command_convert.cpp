@@ -302,11 +302,11 @@ void print_json_result(const JobOutcome& o) {
               "\"extract\": %.3f, \"simplify\": %.3f, \"distance\": %.3f, \"fit\": %.3f, \"analysis\": %.3f, "
               "\"encode\": %.3f, \"evaluate\": %.3f}, \"fit_isosurface_rms_cells\": %.6g, "
               "\"fit_isosurface_max_cells\": %.6g, \"fit_points_beyond_one_cell\": %zu, "
-              "\"isosurface_uncovered_share\": %.6g, \"fit_tangled_share\": %.6g, \"base_attempts\": %d, ",
+              "\"isosurface_uncovered_share\": %.6g, \"fit_folded_share\": %.6g, \"base_attempts\": %d, ",
               r.bytes.size(), o.volume_bytes, r.cell_size, r.extracted_vertices, r.base_vertices, r.fine_vertices,
               r.levels, o.load_seconds, r.seconds.extract, r.seconds.simplify, r.seconds.distance, r.seconds.fit,
               r.seconds.analysis, r.seconds.encode, r.seconds.evaluate, r.fit_isosurface.rms, r.fit_isosurface.max,
-              r.fit_isosurface.far, r.uncovered_share, r.tangled_share(), r.base_attempts);
+              r.fit_isosurface.far, r.uncovered_share, r.folded_share(), r.base_attempts);
   for (std::size_t k = 0; k < r.warnings.size(); ++k)
     std::printf("%s%s", k ? ", " : "\"warnings\": [", cli::json_string(r.warnings[k]).c_str());
   std::printf("%s\"rows\": [", r.warnings.empty() ? "" : "], ");
@@ -362,7 +362,7 @@ void print_table_row(const std::string& output, const JobOutcome& o) {
               "more than a cell; %.2f%% of the isosurface lies more than %g cells from all of them; %.2f%% of the "
               "fine faces are folded against the field gradient\n",
               "", r.fit_isosurface.rms, r.fit_isosurface.max, r.fit_isosurface.far, 100.0 * r.uncovered_share,
-              kUncoveredCells, 100.0 * r.tangled_share());
+              kUncoveredCells, 100.0 * r.folded_share());
   if (r.base_attempts > 1)
     std::printf("%-28s the base mesh grew from %zu to %zu vertices (%d tries) to cover the isosurface\n", "",
                 r.first_base_vertices, r.base_vertices, r.base_attempts);

@@ -39,7 +39,7 @@ void print_quality(const FitQuality& q) {
               q.surface_max, q.surface_far, kSurfaceFarCells);
   std::printf("    coverage (extracted vertices to the fit): rms %.4f, 99th percentile %.4f, max %.4f cell\n",
               q.coverage_rms, q.coverage_p99, q.coverage_max);
-  std::printf("    tangled faces: %zu (%.4f%%)\n", q.tangled_faces, 100.0 * q.tangled_fraction);
+  std::printf("    folded faces: %zu (%.4f%%)\n", q.folded_faces, 100.0 * q.folded_fraction);
   std::printf("    face area / patch mean: min %.3f, 1%% %.3f, median %.3f, 99%% %.3f, max %.3f, deviation %.3f\n",
               q.area_ratio_min, q.area_ratio_p1, q.area_ratio_median, q.area_ratio_p99, q.area_ratio_max,
               q.area_ratio_deviation);
@@ -100,8 +100,8 @@ int fit(const Args& raw) {
   wrap_options.iterations = args.get_int("iterations", wrap_options.iterations, 0, 100);
   wrap_options.final_level_iterations = args.get_int("final-iterations", wrap_options.final_level_iterations, 0, 100);
   wrap_options.attraction.reach_edges = args.get_double("reach", wrap_options.attraction.reach_edges);
-  wrap_options.small_component_vertices = static_cast<std::size_t>(
-      args.get_int("droplet-vertices", static_cast<int>(wrap_options.small_component_vertices), 0, 1000000));
+  wrap_options.droplet_vertices = static_cast<std::size_t>(
+      args.get_int("droplet-vertices", static_cast<int>(wrap_options.droplet_vertices), 0, 1000000));
   wrap_options.final_correction = !args.has("no-correction");
   cli::set_unfold_limit(args, wrap_options);
   const bool report = !args.has("no-report") && !args.has("quiet");
@@ -177,25 +177,25 @@ int fit(const Args& raw) {
                 result.correction.from_nearest_point, result.correction.along_box_face,
                 result.correction.from_neighbours, result.correction.from_wide_search,
                 result.correction.from_extracted_surface, result.correction.failed);
-  if (result.untangle.tangled_before > 0)
-    std::printf("  untangle: %zu tangled faces on level %d before, %zu after %d rounds\n", result.untangle.tangled_before,
-                levels, result.untangle.tangled_after, result.untangle.rounds);
+  if (result.untangle.folded_before > 0)
+    std::printf("  untangle: %zu folded faces on level %d before, %zu after %d rounds\n", result.untangle.folded_before,
+                levels, result.untangle.folded_after, result.untangle.rounds);
   if (result.unfold.skipped)
-    std::printf("  unfold: skipped, over %.2f%% of the faces tangled (--unfold-limit 100 forces it)\n",
-                100.0 * wrap_options.unfold_max_tangled_fraction);
-  else if (result.unfold.tangled_before > 0)
-    std::printf("  unfold: %zu tangled faces before, %zu after %d rounds\n", result.unfold.tangled_before,
-                result.unfold.tangled_after, result.unfold.rounds);
+    std::printf("  unfold: skipped, over %.2f%% of the faces folded (--unfold-limit 100 forces it)\n",
+                100.0 * wrap_options.unfold_max_folded_fraction);
+  else if (result.unfold.folded_before > 0)
+    std::printf("  unfold: %zu folded faces before, %zu after %d rounds\n", result.unfold.folded_before,
+                result.unfold.folded_after, result.unfold.rounds);
   const bool coarse = fine_mesh_too_coarse(fine.vertex_count(), surface.mesh.vertex_count());
   const std::size_t suggested = std::max<std::size_t>(4, surface.mesh.vertex_count() >> (2 * levels));
   if (coarse)
     std::printf("  note: %zu fine vertices for an isosurface of %zu: %d levels of this base are too coarse to follow it "
                 "(a base of about %zu vertices, or more levels, would)\n",
                 fine.vertex_count(), surface.mesh.vertex_count(), levels, suggested);
-  else if (smooth == 0 && result.tangled_faces > fine.face_count() / 1000)
-    std::printf("  note: %.2f%% of the fine faces stay tangled; folds sit mostly on necks and tunnels thinner than a "
+  else if (smooth == 0 && result.folded_faces > fine.face_count() / 1000)
+    std::printf("  note: %.2f%% of the fine faces stay folded; folds sit mostly on necks and tunnels thinner than a "
                 "cell, which a one-voxel pre-filter (--smooth 1) removes\n",
-                100.0 * double(result.tangled_faces) / double(fine.face_count()));
+                100.0 * double(result.folded_faces) / double(fine.face_count()));
   if (report) {
     std::fflush(stdout);  // the report so far before the live line of the measurement
     progress.begin_stage("quality");
@@ -207,7 +207,7 @@ int fit(const Args& raw) {
     for (int level = 0; level <= levels; ++level) {
       qualities.push_back(measure_fit_quality(
           hierarchy, level, level < levels ? result.level_positions[static_cast<std::size_t>(level)] : result.positions,
-          surface.mesh, reference, field, extract_options.iso, extract_options.flip));
+          surface.mesh, reference, field, extract_options.iso, orientation_from_flip(extract_options.flip)));
       work += double(hierarchy.vertex_count(level));
       progress.update(work / total);
     }

@@ -99,10 +99,10 @@ void add_unfold_option(std::vector<OptionSpec>& options) {
 }
 
 void set_unfold_limit(const Arguments& args, ShrinkWrapOptions& options) {
-  const double percent = args.get_double("unfold-limit", 100.0 * options.unfold_max_tangled_fraction);
+  const double percent = args.get_double("unfold-limit", 100.0 * options.unfold_max_folded_fraction);
   if (!(percent >= 0 && percent <= 100))
     throw Error(ErrorKind::InvalidArgument, "--unfold-limit must be in 0..100 percent, got " + args.get("unfold-limit"));
-  options.unfold_max_tangled_fraction = percent / 100.0;
+  options.unfold_max_folded_fraction = percent / 100.0;
   if (percent == 0) options.unfold_rounds = 0;
 }
 

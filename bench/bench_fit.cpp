@@ -17,7 +17,7 @@
 //                  [--correction-cells C] [--untangle N] [--coarse-untangle N] [--unfold N]
 //                  [--unfold-limit FRACTION] [--base FILE]
 //                  [--write-base FILE] [--no-peer] [--repeat N] [--final-quality] [--rmse]
-//                  [--small-components N] [--no-nearest-correction]
+//                  [--droplet-vertices N] [--no-nearest-correction]
 //   INPUT is a volume file or builtin:NAME[:N]; --base-vertices 0 simplifies
 //   as far as the rules allow (default). --base reads the base mesh instead of
 //   simplifying (e.g. one saved with --write-base: repeatable runs while the
@@ -81,10 +81,10 @@ double peak_megabytes() {
 void print_quality(const FitQuality& q) {
   std::printf(
       "  level %d: %zu vertices, %zu faces | isosurface rms %.4f max %.3f cell (%zu over 1) | to extracted rms %.4f "
-      "max %.3f cell (%zu over 0.5) | coverage rms %.3f p99 %.3f max %.3f cell | tangled %zu (%.4f%%) | area/patch "
+      "max %.3f cell (%zu over 0.5) | coverage rms %.3f p99 %.3f max %.3f cell | folded %zu (%.4f%%) | area/patch "
       "mean p1 %.2f median %.2f p99 %.2f (sd %.2f)%s\n",
       q.level, q.vertices, q.faces, q.isosurface_rms, q.isosurface_max, q.isosurface_far, q.surface_rms, q.surface_max,
-      q.surface_far, q.coverage_rms, q.coverage_p99, q.coverage_max, q.tangled_faces, 100 * q.tangled_fraction,
+      q.surface_far, q.coverage_rms, q.coverage_p99, q.coverage_max, q.folded_faces, 100 * q.folded_fraction,
       q.area_ratio_p1, q.area_ratio_median, q.area_ratio_p99, q.area_ratio_deviation,
       q.nonfinite_vertices ? " NON-FINITE" : "");
 }
@@ -107,8 +107,8 @@ int main(int argc, char** argv) {
   int untangle_rounds = ShrinkWrapOptions().untangle_rounds;
   int coarse_untangle_rounds = ShrinkWrapOptions().coarse_untangle_rounds;
   int unfold_rounds = ShrinkWrapOptions().unfold_rounds;
-  double unfold_limit = ShrinkWrapOptions().unfold_max_tangled_fraction;
-  std::size_t small_components = ShrinkWrapOptions().small_component_vertices;
+  double unfold_limit = ShrinkWrapOptions().unfold_max_folded_fraction;
+  std::size_t droplet_vertices = ShrinkWrapOptions().droplet_vertices;
   bool nearest_correction = ShrinkWrapOptions().correction_from_nearest_point;
   double weight = 0.5, correction_cells = ShrinkWrapOptions().correction_max_cells;
   double reach = ShrinkWrapOptions().attraction.reach_edges, min_reach = ShrinkWrapOptions().attraction.min_reach_cells;
@@ -139,7 +139,7 @@ int main(int argc, char** argv) {
     else if (arg == "--coarse-untangle") coarse_untangle_rounds = std::stoi(next());
     else if (arg == "--unfold") unfold_rounds = std::stoi(next());
     else if (arg == "--unfold-limit") unfold_limit = std::stod(next());
-    else if (arg == "--small-components") small_components = std::stoul(next());
+    else if (arg == "--droplet-vertices") droplet_vertices = std::stoul(next());
     else if (arg == "--no-nearest-correction") nearest_correction = false;
     else if (arg == "--reach") reach = std::stod(next());
     else if (arg == "--min-reach") min_reach = std::stod(next());
@@ -267,8 +267,8 @@ int main(int argc, char** argv) {
     wrap_options.untangle_rounds = untangle_rounds;
     wrap_options.coarse_untangle_rounds = coarse_untangle_rounds;
     wrap_options.unfold_rounds = unfold_rounds;
-    wrap_options.unfold_max_tangled_fraction = unfold_limit;
-    wrap_options.small_component_vertices = small_components;
+    wrap_options.unfold_max_folded_fraction = unfold_limit;
+    wrap_options.droplet_vertices = droplet_vertices;
     wrap_options.correction_from_nearest_point = nearest_correction;
     wrap_options.surface = &extracted;
     wrap_options.coverage_pull = coverage_pull;
@@ -316,10 +316,10 @@ int main(int argc, char** argv) {
                 wrapped.correction.from_nearest_point, wrapped.correction.along_box_face,
                 wrapped.correction.from_neighbours, wrapped.correction.from_wide_search,
                 wrapped.correction.from_extracted_surface, wrapped.correction.failed);
-    std::printf("  untangle: %zu tangled faces before, %zu after %d rounds\n", wrapped.untangle.tangled_before,
-                wrapped.untangle.tangled_after, wrapped.untangle.rounds);
-    std::printf("  unfold: %zu tangled faces before, %zu after %d rounds (%zu moves)%s\n",
-                wrapped.unfold.tangled_before, wrapped.unfold.tangled_after, wrapped.unfold.rounds, wrapped.unfold.moved,
+    std::printf("  untangle: %zu folded faces before, %zu after %d rounds\n", wrapped.untangle.folded_before,
+                wrapped.untangle.folded_after, wrapped.untangle.rounds);
+    std::printf("  unfold: %zu folded faces before, %zu after %d rounds (%zu moves)%s\n",
+                wrapped.unfold.folded_before, wrapped.unfold.folded_after, wrapped.unfold.rounds, wrapped.unfold.moved,
                 wrapped.unfold.skipped ? ", skipped: over the limit" : "");
     {
       // FNV-1a over the fitted positions' bytes: equal hashes mean bit-identical fits.
@@ -339,7 +339,7 @@ int main(int argc, char** argv) {
       for (int level = final_quality_only ? levels : 0; level <= levels; ++level)
         print_quality(measure_fit_quality(hierarchy, level,
                                           level < levels ? wrapped.level_positions[std::size_t(level)] : wrapped.positions,
-                                          extracted, reference, volume, iso, false));
+                                          extracted, reference, volume, iso, Orientation::TowardLower));
       std::printf("quality measured in %.1f s\n", seconds_since(start));
     }
     if (rmse) {

@@ -17,8 +17,8 @@ namespace {
 
 constexpr std::uint32_t kNone = WrapLevelMesh::kNone;
 // Bins of 2 x 2 x 2 volume cells: a search to the default reach of 4 cells
-// then scans at most 125 bins (729 of single cells took 1 s per pull on
-// miranda's level 2, most of it waiting for the bins' offsets).
+// then scans at most 125 bins (against 729 of single cells, most of the time
+// spent waiting for the bins' offsets).
 constexpr int kBinCells = 2;
 
 // Whether p lies within sqrt(squared) of a face around control point v or
@@ -94,8 +94,8 @@ CoveragePullStatistics CoveragePull::apply(const WrapLevelMesh& mesh, std::vecto
   const std::size_t bin_count = static_cast<std::size_t>(bins_[0] * bins_[1] * bins_[2]);
   // The buffers on huge pages faulted in on all threads: the scatter below
   // and the copy of the positions in bin order write and read them at random,
-  // and on miranda's level 3 (6.7 M points) their first touch on one thread
-  // and TLB misses took 0.6 of the sort's 0.7 s.
+  // where a first touch on one thread and TLB misses would cost most of the
+  // sort's time.
   reserve_on_huge_pages(vertex_bin_, n);
   reserve_on_huge_pages(order_, n);
   reserve_on_huge_pages(sorted_, n);
@@ -124,8 +124,7 @@ CoveragePullStatistics CoveragePull::apply(const WrapLevelMesh& mesh, std::vecto
   // Each sample's nearest control point when the sample is uncovered. The
   // bins of one row (fixed y and z) are consecutive in bin order, so the
   // control points of any run of bins along x are one contiguous range of
-  // sorted_: the scans below go row by row, with no per-bin work (miranda,
-  // both pulls' scans with the hints: 1.6 -> 1.0 s).
+  // sorted_: the scans below go row by row, with no per-bin work.
   const double covered_distance = std::sqrt(covered_squared_);
   const std::int64_t max_ring = static_cast<std::int64_t>(std::ceil(reach / min_spacing_));
   std::vector<std::uint32_t> nearest(samples_.size(), kNone);

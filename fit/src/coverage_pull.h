@@ -3,8 +3,7 @@
 // ShrinkWrapOptions::surface). The attraction moves each control point to
 // the surface along its own normal, so it never goes where no control point
 // points: bumps, filaments and sheets a few cells across that the base mesh
-// cut off stay left out (miranda: 12.2% of the extracted vertices over 2
-// cells from the fit). The pull goes the other way, from the surface: every
+// cut off stay left out. The pull goes the other way, from the surface: every
 // extracted vertex farther than `covered` from the mesh (nearest control
 // point, then the faces around it and its neighbours) picks its nearest
 // control point within `reach`, and each picked point moves to the mean of
@@ -27,7 +26,7 @@
 
 #include "isowave/core/vec3.h"
 #include "isowave/core/volume.h"
-#include "isowave/fit/shrink_wrap.h"
+#include "isowave/fit/wrap_level_mesh.h"
 
 namespace isowave {
 

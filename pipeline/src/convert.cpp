@@ -21,8 +21,8 @@
 
 namespace isowave {
 
-double ConvertResult::tangled_share() const {
-  return fine_faces ? double(fit.tangled_faces) / double(fine_faces) : 0.0;
+double ConvertResult::folded_share() const {
+  return fine_faces ? double(fit.folded_faces) / double(fine_faces) : 0.0;
 }
 
 namespace {
@@ -250,17 +250,17 @@ void add_fit_warnings(const ConvertOptions& options, std::size_t target, Convert
     result.warnings.push_back(warning.str());
   }
   const std::string cause = fold_cause(result, options);
-  if (result.tangled_share() > kFoldedWarning && !cause.empty())
-    result.warnings.push_back(percent(result.tangled_share()) + " of the fine faces fold against the field gradient, " +
+  if (result.folded_share() > kFoldedWarning && !cause.empty())
+    result.warnings.push_back(percent(result.folded_share()) + " of the fine faces fold against the field gradient, " +
                               cause);
 }
 
 // A fit whose faces mostly fold is a crumpled sheet: refused unless asked for.
 void refuse_unusable_fit(const std::string& source, const ConvertOptions& options, const ConvertResult& result) {
-  if (result.tangled_share() <= kUnusableFolded || options.folded_fit == FoldedFit::Keep) return;
+  if (result.folded_share() <= kUnusableFolded || options.folded_fit == FoldedFit::Keep) return;
   std::string cause = fold_cause(result, options);
   if (cause.empty()) cause = "where the fit did not follow the surface";
-  throw Error(ErrorKind::Unsupported, source + ": " + percent(result.tangled_share()) +
+  throw Error(ErrorKind::Unsupported, source + ": " + percent(result.folded_share()) +
                                           " of the fine faces fold against the field gradient, " + cause +
                                           "; the file would be unusable and is not written (--allow-folded writes it)");
 }
@@ -285,7 +285,7 @@ IswMetadata metadata_of(const Volume& volume, const std::string& source, const C
   metadata.values["fit_isosurface_rms_cells"] = number(result.fit_isosurface.rms);
   metadata.values["fit_isosurface_max_cells"] = number(result.fit_isosurface.max);
   metadata.values["isosurface_uncovered_share"] = number(result.uncovered_share);
-  metadata.values["fit_tangled_share"] = number(result.tangled_share());
+  metadata.values["fit_folded_share"] = number(result.folded_share());
   metadata.values["options"] =
       "flip=" + std::to_string(extract.flip) + " min_component_vertices=" +
       std::to_string(extract.min_component_vertices) + " smooth_sigma=" + number(extract.smooth_sigma) +
@@ -295,7 +295,7 @@ IswMetadata metadata_of(const Volume& volume, const std::string& source, const C
       " grow_base_until_covered=" + std::to_string(options.base.growth == BaseGrowth::UntilCovered) +
       " valence_flips=" + std::to_string(options.base.simplify.valence_flips) +
       " coverage_pull=" + std::to_string(options.shrink_wrap.coverage_pull) +
-      " unfold_max_tangled_fraction=" + number(options.shrink_wrap.unfold_max_tangled_fraction) +
+      " unfold_max_folded_fraction=" + number(options.shrink_wrap.unfold_max_folded_fraction) +
       " step_cells=" + number(options.step_cells);
   return metadata;
 }

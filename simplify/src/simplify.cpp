@@ -356,7 +356,7 @@ class CollapseLoop {
     // An edge at v: its E_acc rose and its ring changed, so it is evaluated
     // at once even when lazy. Waiting until popped (at the bound E_acc + 1e-8
     // on its E) saved 0.45 s of the miranda two-thread phase but left the
-    // mixing field's fit with 0.44% of its faces tangled instead of 0.33%
+    // mixing field's fit with 0.44% of its faces folded instead of 0.33%
     // (bases of 2,200-2,600 vertices), its surface max 0.9-1.7 cells instead
     // of 0.65, and miranda's Table 1 rows 0.1-0.5% of a cell higher.
     if (!lazy_ || origin == v || target == v)

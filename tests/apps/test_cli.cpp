@@ -276,7 +276,7 @@ TEST_F(CliTest, FitWritesAClosedQuadMeshOnTheSphere) {
         dir_);
     ASSERT_EQ(fit.exit_code, 0) << fit.err;
     for (const char* line : {"quality:", "the extracted triangles themselves lie", "  level 0:", "  level 3:",
-                             "tangled faces:", "to the extracted mesh:"})
+                             "folded faces:", "to the extracted mesh:"})
       EXPECT_NE(fit.out.find(line), std::string::npos) << line << " missing from:\n" << fit.out;
     const PolygonMesh fine = read_mesh(path("fine.ply"));
     EXPECT_EQ(fine.vertex_count(), fine.face_count() + 2);

@@ -61,13 +61,14 @@ void expect_targets(const Pipeline& p, const std::string& name) {
   ASSERT_EQ(result.positions.size(), hierarchy.fine_vertex_count());
   for (const Vec3& v : result.positions) ASSERT_TRUE(is_finite(v));
   const BinnedSurfaceDistance reference(p.extracted);
-  const FitQuality q = measure_fit_quality(hierarchy, 3, result.positions, p.extracted, reference, p.field, p.iso, false);
+  const FitQuality q = measure_fit_quality(hierarchy, 3, result.positions, p.extracted, reference, p.field, p.iso,
+                                           Orientation::TowardLower);
   EXPECT_EQ(q.nonfinite_vertices, 0u);
   EXPECT_LE(q.isosurface_rms, 0.01);
   EXPECT_LE(q.surface_rms, 0.05);
   EXPECT_LE(q.surface_max, 0.5);
   EXPECT_LE(q.coverage_p99, 0.5);
-  EXPECT_LE(q.tangled_fraction, 0.001);
+  EXPECT_LE(q.folded_fraction, 0.001);
 }
 
 // A sphere cut by a slab of NaN samples (one of them Inf): extraction counts
@@ -122,13 +123,13 @@ TEST(ShrinkWrap, IronProteinMeetsTheTargets) {
   ISOWAVE_REQUIRE_SHARED_FILE(path, "volumes/ironProt.vtk");
   // A legacy VTK electron density; base of 1/16 of the 7,424 extracted
   // vertices (2026-11-26: 0.0369 RMS / 0.344 max from the extracted mesh,
-  // coverage p99 0.14, 1 of 26,112 faces tangled).
+  // coverage p99 0.14, 1 of 26,112 faces folded).
   expect_targets(prepare(read_volume(path), 128, 464), "iron protein");
 }
 
 // The built-in mixing layer has droplets and filaments a few cells across,
 // finer than a base mesh of 1/16 of the extracted vertices can follow. The
-// coverage, isosurface and tangle targets are met (tangled 0.32% before the
+// coverage, isosurface and fold targets are met (folded 0.32% before the
 // unfold, on necks and tunnels thinner than a cell: see the next test), and
 // the maximum distance to the extracted mesh (0.395 cells; 1.42 before the
 // correction's second step rule on the distance field, from one vertex
@@ -144,30 +145,31 @@ TEST(ShrinkWrap, MixingStaysFiniteAndMostlyOnTheIsosurface) {
   for (const Vec3& v : result.positions) ASSERT_TRUE(is_finite(v));
   EXPECT_GE(double(result.correction.corrected), 0.97 * double(result.correction.movable));
   const BinnedSurfaceDistance reference(p.extracted);
-  const FitQuality q = measure_fit_quality(hierarchy, 3, result.positions, p.extracted, reference, p.field, p.iso, false);
+  const FitQuality q = measure_fit_quality(hierarchy, 3, result.positions, p.extracted, reference, p.field, p.iso,
+                                           Orientation::TowardLower);
   EXPECT_EQ(q.nonfinite_vertices, 0u);
   EXPECT_LE(q.surface_rms, 1.25 * extracted_surface_deviation(p.extracted, p.field, p.iso).rms);
   EXPECT_LE(q.surface_max, 0.5);
-  // The droplets no longer fold (small_component_vertices): coverage p99 0.31
-  // cells (0.93 with the paper's steps). Tangled 0.06% with the unfold, 0.32%
+  // The droplets no longer fold (droplet_vertices): coverage p99 0.31
+  // cells (0.93 with the paper's steps). Folded 0.06% with the unfold, 0.32%
   // with the coarse untangle and the local reverts in untangle() alone (0.78%
   // without those, 1.83% with the paper's steps); isosurface RMS 0.0005
   // cells (0.0051 with Newton's steps alone on the distance field, within 2
   // cells).
   EXPECT_LE(q.coverage_p99, 0.5);
-  EXPECT_LE(q.tangled_fraction, 0.001);
+  EXPECT_LE(q.folded_fraction, 0.001);
   EXPECT_FALSE(result.unfold.skipped);
-  EXPECT_EQ(result.unfold.tangled_after, q.tangled_faces);  // the same measure, counted independently
+  EXPECT_EQ(result.unfold.folded_after, q.folded_faces);  // the same measure, counted independently
   EXPECT_LE(q.isosurface_rms, 0.002);
   EXPECT_GT(result.correction.along_box_face, 0u);
 }
 
 // What the raw mixing layer misses comes from its sub-cell topology: the
-// tangled faces sit on necks and tunnels thinner than a cell (genus 24 at
+// folded faces sit on necks and tunnels thinner than a cell (genus 24 at
 // 96^3), which the base mesh must keep and the fine mesh wraps as spirals
 // and pinches. A Gaussian pre-filter of one voxel (isowave --smooth 1)
 // removes those (genus 4, 29 components instead of 79), and then every
-// target holds: tangled 0.06%, distance to the extracted mesh 0.020 RMS and
+// target holds: folded 0.06%, distance to the extracted mesh 0.020 RMS and
 // 0.36 cells max, coverage p99 0.12 cells.
 TEST(ShrinkWrap, MixingSmoothedByOneVoxelMeetsTheTargets) {
   // Base of about 1/16 of the 29,577 extracted vertices, as for the raw field.
@@ -177,7 +179,7 @@ TEST(ShrinkWrap, MixingSmoothedByOneVoxelMeetsTheTargets) {
 // The raw field sampled finer: at 128^3 its flat triangles stray less from
 // the exact isosurface, and every target holds without a pre-filter
 // (2026-11-26: distance to the extracted mesh 0.0454 RMS / 0.391 max,
-// isosurface RMS 0.0022, coverage p99 0.26, tangled 0.064%; at 112^3
+// isosurface RMS 0.0022, coverage p99 0.26, folded 0.064%; at 112^3
 // 0.0497 / 0.384, at 160^3 0.0405 / 0.400).
 TEST(ShrinkWrap, MixingAt128MeetsTheTargets) {
   // Base of about 1/16 of the 70,880 extracted vertices.
@@ -190,12 +192,12 @@ TEST(ShrinkWrap, TetrahedronDropletDoesNotTurnInsideOut) {
   // the tetrahedron, the attraction along its corners' normals flattens it).
   const Pipeline p = prepare(make_builtin_field("sphere", 8), 0.0, 4);
   ASSERT_EQ(p.base.vertex_count(), 4u);
-  expect_targets(p, "tetrahedron droplet");  // of its 192 fine faces, none tangled
+  expect_targets(p, "tetrahedron droplet");  // of its 192 fine faces, none folded
 }
 
 TEST(ShrinkWrap, SmallComponentInsideAThinDiscStaysNearItsBase) {
   // A tetrahedron of radius 1.39 cells inside a disc 3 cells thick and 24
-  // across: a small component whose inside reaches far. The rays from its
+  // across: a droplet candidate whose inside reaches far. The rays from its
   // centroid that run along the disc cross the surface at the rim, 12 cells
   // away; the search along them used to reach three times the current
   // radius, so a vertex that went farther let the next round go farther
@@ -251,15 +253,17 @@ TEST(ShrinkWrap, CoveragePullCoversWhatTheBaseMeshCutOff) {
   const ShrinkWrapResult paper = shrink_wrap(hierarchy, p.base.positions, p.distance, p.field);
   const ShrinkWrapResult pulled = shrink_wrap(hierarchy, p.base.positions, p.distance, p.field, options_for(p));
   const BinnedSurfaceDistance reference(p.extracted);
-  const FitQuality before = measure_fit_quality(hierarchy, 3, paper.positions, p.extracted, reference, p.field, 0.0, false);
-  const FitQuality after = measure_fit_quality(hierarchy, 3, pulled.positions, p.extracted, reference, p.field, 0.0, false);
+  const FitQuality before = measure_fit_quality(hierarchy, 3, paper.positions, p.extracted, reference, p.field, 0.0,
+                                                Orientation::TowardLower);
+  const FitQuality after = measure_fit_quality(hierarchy, 3, pulled.positions, p.extracted, reference, p.field, 0.0,
+                                               Orientation::TowardLower);
   EXPECT_GT(before.coverage_rms, 1.0);  // the fingers are left out without the pull
   EXPECT_LT(after.coverage_rms, 0.75 * before.coverage_rms);
   EXPECT_LT(after.coverage_p99, before.coverage_p99 - 1.0);
   EXPECT_GT(pulled.levels.back().pulled_vertices, 0u);
   EXPECT_EQ(after.nonfinite_vertices, 0u);
   EXPECT_LE(after.isosurface_rms, 0.01);
-  EXPECT_LE(after.tangled_fraction, 0.001);
+  EXPECT_LE(after.folded_fraction, 0.001);
   // The finest level is pulled last, after its correction: each pulled point
   // is corrected onto the isosurface or goes back where it was, so no more
   // points lie off it than the correction itself left.
@@ -296,10 +300,11 @@ TEST(ShrinkWrap, CoveragePullStretchesBoundaryCurvesOnABoxFace) {
   ASSERT_GT(on_face, 100u);
   EXPECT_LE(farthest, 2.5);  // 5.87 cells when only points off the box were pulled, 1.97 now
   const BinnedSurfaceDistance reference(p.extracted);
-  const FitQuality q = measure_fit_quality(hierarchy, 3, pulled.positions, p.extracted, reference, p.field, 0.0, false);
+  const FitQuality q = measure_fit_quality(hierarchy, 3, pulled.positions, p.extracted, reference, p.field, 0.0,
+                                           Orientation::TowardLower);
   EXPECT_EQ(q.nonfinite_vertices, 0u);
   EXPECT_LE(q.isosurface_rms, 0.01);
-  EXPECT_LE(q.tangled_fraction, 0.001);
+  EXPECT_LE(q.folded_fraction, 0.001);
 }
 
 TEST(ShrinkWrap, BoundaryCurvesLeaveABoxEdgeIntoTheFaceTheyLieIn) {
@@ -364,7 +369,7 @@ TEST(ShrinkWrap, ResultDoesNotDependOnThreadCount) {
   const SubdivisionHierarchy hierarchy(p.base, 2);
   ShrinkWrapOptions options = options_for(p);
   options.pull_max_edge_cells = 2.0;  // level 2's edges average 1.07 cells: pull there too
-  options.unfold_max_tangled_fraction = 1.0;  // 62 faces tangled, over the default limit: unfold too
+  options.unfold_max_folded_fraction = 1.0;  // 62 faces folded, over the default limit: unfold too
   std::vector<Vec3> one, two;
   {
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
@@ -389,14 +394,15 @@ TEST(ShrinkWrap, WithoutTheUntangleTheUnfoldLimitStillHolds) {
   const SubdivisionHierarchy hierarchy(p.base, 2);
   ShrinkWrapOptions options = options_for(p);
   options.untangle_rounds = 0;
-  options.unfold_max_tangled_fraction = 0.0;  // unfold only a fit without folds
+  options.unfold_max_folded_fraction = 0.0;  // unfold only a fit without folds
   const ShrinkWrapResult result = shrink_wrap(hierarchy, p.base.positions, p.distance, p.field, options);
   const BinnedSurfaceDistance reference(p.extracted);
-  const FitQuality q = measure_fit_quality(hierarchy, 2, result.positions, p.extracted, reference, p.field, p.iso, false);
-  ASSERT_GT(q.tangled_faces, 0u);
+  const FitQuality q = measure_fit_quality(hierarchy, 2, result.positions, p.extracted, reference, p.field, p.iso,
+                                           Orientation::TowardLower);
+  ASSERT_GT(q.folded_faces, 0u);
   EXPECT_TRUE(result.unfold.skipped);
   EXPECT_EQ(result.unfold.moved, 0u);
-  EXPECT_EQ(result.tangled_faces, q.tangled_faces);  // the same measure, counted independently
+  EXPECT_EQ(result.folded_faces, q.folded_faces);  // the same measure, counted independently
 }
 
 TEST(ShrinkWrap, BoundaryVerticesStayOnTheBoxAndSharpOnesNeverMove) {
@@ -488,12 +494,12 @@ GridAbovePlane grid_above_plane(int nx, int ny) {
 
 TEST(ShrinkWrap, CorrectionsWideSearchFindsRootsBeyondItsRange) {
   // The wide search (6 cells, 26 directions) finds each root straight below,
-  // which tangles no face (a vertical move keeps a face's projected area).
+  // which folds no face (a vertical move keeps a face's projected area).
   const GridAbovePlane g = grid_above_plane(4, 4);
   std::vector<Vec3> narrow = g.grid.positions;
   EXPECT_EQ(correct_to_isosurface(g.mesh, g.field, 6.0, 2.0, narrow).failed, g.grid.vertex_count());
   std::vector<Vec3> wide = g.grid.positions;
-  const CorrectionStatistics stats = correct_to_isosurface(g.mesh, g.field, 6.0, 2.0, wide, true, false);
+  const CorrectionStatistics stats = correct_to_isosurface(g.mesh, g.field, 6.0, 2.0, wide, {Orientation::TowardLower});
   EXPECT_EQ(stats.from_wide_search, g.grid.vertex_count());
   EXPECT_EQ(stats.failed, 0u);
   for (std::size_t v = 0; v < wide.size(); ++v) {
@@ -504,7 +510,8 @@ TEST(ShrinkWrap, CorrectionsWideSearchFindsRootsBeyondItsRange) {
   // Beyond three times the range it gives up: 7 cells above the plane.
   std::vector<Vec3> far = g.grid.positions;
   for (Vec3& p : far) p.z = 11.0;
-  EXPECT_EQ(correct_to_isosurface(g.mesh, g.field, 6.0, 2.0, far, true, false).failed, g.grid.vertex_count());
+  EXPECT_EQ(correct_to_isosurface(g.mesh, g.field, 6.0, 2.0, far, {Orientation::TowardLower}).failed,
+            g.grid.vertex_count());
 }
 
 TEST(ShrinkWrap, CorrectionStartsStrandedVerticesFromTheExtractedSurface) {
@@ -525,9 +532,11 @@ TEST(ShrinkWrap, CorrectionStartsStrandedVerticesFromTheExtractedSurface) {
   const WrapLevelMesh mesh = make_wrap_level_mesh(SubdivisionHierarchy(grid, 1), 0, grid.positions, field);
   for (std::size_t v = 0; v < grid.vertex_count(); ++v) ASSERT_LT(mesh.box_face[v], 0);
   std::vector<Vec3> without = grid.positions;
-  EXPECT_EQ(correct_to_isosurface(mesh, field, 6.0, 2.0, without, true, false).failed, grid.vertex_count());
+  EXPECT_EQ(correct_to_isosurface(mesh, field, 6.0, 2.0, without, {Orientation::TowardLower}).failed,
+            grid.vertex_count());
   std::vector<Vec3> with = grid.positions;
-  const CorrectionStatistics stats = correct_to_isosurface(mesh, field, 6.0, 2.0, with, true, false, &plane, &distance);
+  const CorrectionFallbacks fallbacks{Orientation::TowardLower, &plane, &distance};
+  const CorrectionStatistics stats = correct_to_isosurface(mesh, field, 6.0, 2.0, with, fallbacks);
   EXPECT_EQ(stats.from_extracted_surface, grid.vertex_count());
   EXPECT_EQ(stats.failed, 0u);
   EXPECT_NEAR(stats.max_move_cells, 9.0, 1e-6);
@@ -538,12 +547,12 @@ TEST(ShrinkWrap, CorrectionStartsStrandedVerticesFromTheExtractedSurface) {
   }
   std::vector<Vec3> far = grid.positions;
   for (Vec3& p : far) p.z = 24.0;
-  const CorrectionStatistics beyond = correct_to_isosurface(mesh, field, 6.0, 2.0, far, true, false, &plane, &distance);
+  const CorrectionStatistics beyond = correct_to_isosurface(mesh, field, 6.0, 2.0, far, fallbacks);
   EXPECT_EQ(beyond.from_extracted_surface, 0u);
   EXPECT_EQ(beyond.failed, grid.vertex_count());
   for (Vec3& p : far) p.z = 44.0;
   const std::vector<Vec3> farther = far;
-  EXPECT_EQ(correct_to_isosurface(mesh, field, 6.0, 2.0, far, true, false, &plane, &distance).failed,
+  EXPECT_EQ(correct_to_isosurface(mesh, field, 6.0, 2.0, far, fallbacks).failed,
             grid.vertex_count());
   EXPECT_EQ(far, farther);
 }
@@ -571,7 +580,8 @@ TEST(ShrinkWrap, CorrectionsWideSearchIsALastResortForFewVertices) {
   // 10,000 failures (1% of the vertices, but at least 10,000).
   const GridAbovePlane g = grid_above_plane(110, 100);
   std::vector<Vec3> positions = g.grid.positions;
-  const CorrectionStatistics stats = correct_to_isosurface(g.mesh, g.field, 6.0, 2.0, positions, true, false);
+  const CorrectionStatistics stats = correct_to_isosurface(g.mesh, g.field, 6.0, 2.0, positions,
+                                                           {Orientation::TowardLower});
   EXPECT_EQ(stats.from_wide_search, 10000u);
   EXPECT_EQ(stats.failed, g.grid.vertex_count() - 10000);
   for (std::size_t v = 0; v < positions.size(); ++v)
@@ -590,17 +600,18 @@ TEST(ShrinkWrap, UnfoldOpensAFoldAndKeepsThePointsOnTheIsosurface) {
   const SubdivisionHierarchy hierarchy(grid, 1);
   const WrapLevelMesh mesh = make_wrap_level_mesh(hierarchy, 0, folded, field);
   std::vector<Vec3> flat = grid.positions;
-  ASSERT_EQ(unfold(mesh, field, 6.0, false, 0, 2.0, flat).tangled_before, 0u);  // the grid's own orientation
+  // The grid's own orientation.
+  ASSERT_EQ(unfold(mesh, field, 6.0, Orientation::TowardLower, 0, 2.0, flat).folded_before, 0u);
   std::vector<Vec3> unfolded = folded;
-  const UnfoldStatistics stats = unfold(mesh, field, 6.0, false, 10, 2.0, unfolded);
-  EXPECT_EQ(stats.tangled_before, 6u);
-  EXPECT_EQ(stats.tangled_after, 0u);
+  const UnfoldStatistics stats = unfold(mesh, field, 6.0, Orientation::TowardLower, 10, 2.0, unfolded);
+  EXPECT_EQ(stats.folded_before, 6u);
+  EXPECT_EQ(stats.folded_after, 0u);
   EXPECT_GT(stats.moved, 0u);
   for (std::size_t v = 0; v < unfolded.size(); ++v) EXPECT_NEAR(unfolded[v].z, 4.0, 1e-9) << "vertex " << v;
   std::vector<Vec3> one_thread = folded;
   {
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
-    unfold(mesh, field, 6.0, false, 10, 2.0, one_thread);
+    unfold(mesh, field, 6.0, Orientation::TowardLower, 10, 2.0, one_thread);
   }
   for (std::size_t v = 0; v < unfolded.size(); ++v) ASSERT_TRUE(one_thread[v] == unfolded[v]) << "vertex " << v;
 }
@@ -674,14 +685,15 @@ TEST(FitQuality, FineFacesAreNumberedByParentFace) {
   }
 }
 
-TEST(FitQuality, ReportsDistancesTanglesAndEvenness) {
+TEST(FitQuality, ReportsDistancesFoldsAndEvenness) {
   const Pipeline p = prepare(make_builtin_field("sphere", 40), 0.0, 60);
   const SubdivisionHierarchy hierarchy(p.base, 2);
   const BinnedSurfaceDistance reference(p.extracted);
   // Perfect fit: the sphere's own subdivided control points pulled onto the isosurface.
   const ShrinkWrapResult result = shrink_wrap(hierarchy, p.base.positions, p.distance, p.field, options_for(p));
-  const FitQuality good = measure_fit_quality(hierarchy, 2, result.positions, p.extracted, reference, p.field, 0.0, false);
-  EXPECT_EQ(good.tangled_faces, 0u);
+  const FitQuality good = measure_fit_quality(hierarchy, 2, result.positions, p.extracted, reference, p.field, 0.0,
+                                              Orientation::TowardLower);
+  EXPECT_EQ(good.folded_faces, 0u);
   EXPECT_LT(good.surface_max, 0.5);
   EXPECT_EQ(good.surface_far, 0u);
   EXPECT_EQ(good.isosurface_far, 0u);
@@ -701,14 +713,16 @@ TEST(FitQuality, ReportsDistancesTanglesAndEvenness) {
     EXPECT_NEAR(good.coverage_max, coverage_max, 1e-9);
     EXPECT_GT(coverage_max, 0.0);
   }
-  // The same mesh with reversed orientation is entirely tangled.
-  const FitQuality flipped = measure_fit_quality(hierarchy, 2, result.positions, p.extracted, reference, p.field, 0.0, true);
-  EXPECT_EQ(flipped.tangled_faces, flipped.faces);
+  // The same mesh with reversed orientation is entirely folded.
+  const FitQuality flipped = measure_fit_quality(hierarchy, 2, result.positions, p.extracted, reference, p.field,
+                                                 0.0, Orientation::TowardHigher);
+  EXPECT_EQ(flipped.folded_faces, flipped.faces);
   // Moving one vertex 3 cells outward shows in the maximum distances.
   std::vector<Vec3> moved = result.positions;
   const Vec3 centre{19.5, 19.5, 19.5};
   moved[0] = moved[0] + 3.0 * normalized(moved[0] - centre);
-  const FitQuality bad = measure_fit_quality(hierarchy, 2, moved, p.extracted, reference, p.field, 0.0, false);
+  const FitQuality bad = measure_fit_quality(hierarchy, 2, moved, p.extracted, reference, p.field, 0.0,
+                                             Orientation::TowardLower);
   EXPECT_NEAR(bad.surface_max, 3.0, 0.3);
   EXPECT_EQ(bad.surface_far, 1u);
   EXPECT_GT(bad.isosurface_max, 2.5);
@@ -720,7 +734,7 @@ TEST(FitQuality, ReportsDistancesTanglesAndEvenness) {
   std::vector<Vec3> squeezed = result.positions;
   squeezed[face[0]] = result.positions[face[0]] + 0.95 * (result.positions[face[2]] - result.positions[face[0]]);
   const FitQuality uneven =
-      measure_fit_quality(hierarchy, 2, squeezed, p.extracted, reference, p.field, 0.0, false);
+      measure_fit_quality(hierarchy, 2, squeezed, p.extracted, reference, p.field, 0.0, Orientation::TowardLower);
   EXPECT_LT(uneven.area_ratio_min, 0.5 * good.area_ratio_min);
 }
 
@@ -773,7 +787,7 @@ TEST(ShrinkWrap, RejectsBadInput) {
   options.unfold_rounds = -1;
   EXPECT_THROW(shrink_wrap(hierarchy, p.base.positions, p.distance, p.field, options), Error);
   options = ShrinkWrapOptions();
-  options.unfold_max_tangled_fraction = std::nan("");
+  options.unfold_max_folded_fraction = std::nan("");
   EXPECT_THROW(shrink_wrap(hierarchy, p.base.positions, p.distance, p.field, options), Error);
   const Volume other = make_builtin_field("sphere", 20);
   EXPECT_THROW(shrink_wrap(hierarchy, p.base.positions, p.distance, other), Error);

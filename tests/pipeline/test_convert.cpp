@@ -131,7 +131,7 @@ TEST(Convert, WarnsWhenFitPointsStayOffTheIsosurface) {
   }
   options.folded_fit = FoldedFit::Keep;
   const ConvertResult result = convert_volume(torus, "torus", options);
-  EXPECT_GT(result.tangled_share(), kUnusableFolded);
+  EXPECT_GT(result.folded_share(), kUnusableFolded);
   // Shares in fixed notation with two decimals ("1e+02%" before).
   for (const std::string& warning : result.warnings)
     for (std::size_t at = warning.find('%'); at != std::string::npos; at = warning.find('%', at + 1))
@@ -169,7 +169,7 @@ TEST(Convert, WarnsWhenFitPointsStayOffTheIsosurface) {
   EXPECT_FALSE(warns(result, "--smooth 1"));
   options.prepare.extract.smooth_sigma = 1.0;
   const ConvertResult smoothed = convert_volume(torus, "torus", options);
-  EXPECT_GT(smoothed.tangled_share(), kFoldedWarning);
+  EXPECT_GT(smoothed.folded_share(), kFoldedWarning);
   EXPECT_TRUE(warns(smoothed, "the base mesh is too coarse"));
 }
 
@@ -186,11 +186,12 @@ TEST(Convert, ReportsTheShareOfFoldedFineFaces) {
   const IswDecoded decoded = decode_isw(result.bytes, "test");
   const BinnedSurfaceDistance reference(result.extracted_mesh);
   const FitQuality quality = measure_fit_quality(*decoded.hierarchy, decoded.hierarchy->levels(), result.fit.positions,
-                                                 result.extracted_mesh, reference, field, options.prepare.extract.iso, options.prepare.extract.flip);
-  EXPECT_GT(quality.tangled_faces, 0u);
+                                                 result.extracted_mesh, reference, field, options.prepare.extract.iso,
+                                                 orientation_from_flip(options.prepare.extract.flip));
+  EXPECT_GT(quality.folded_faces, 0u);
   EXPECT_EQ(result.fine_faces, quality.faces);
-  EXPECT_EQ(result.fit.tangled_faces, quality.tangled_faces);
-  EXPECT_DOUBLE_EQ(result.tangled_share(), quality.tangled_fraction);
+  EXPECT_EQ(result.fit.folded_faces, quality.folded_faces);
+  EXPECT_DOUBLE_EQ(result.folded_share(), quality.folded_fraction);
 }
 
 // The mixing layer sampled coarsely (40^3) is all necks and specks a cell
@@ -202,12 +203,12 @@ TEST(Convert, WarnsAboutFoldsWhichThePreFilterRemoves) {
   options.summary_percents = {100};
   const std::string kFolds = "fold against the field gradient";
   const ConvertResult raw = convert_volume(field, "mixing", options);
-  EXPECT_GT(raw.tangled_share(), kFoldedWarning);
+  EXPECT_GT(raw.folded_share(), kFoldedWarning);
   EXPECT_TRUE(warns(raw, kFolds));
   EXPECT_TRUE(warns(raw, "--smooth 1"));
   options.prepare.extract.smooth_sigma = 1.0;
   const ConvertResult smoothed = convert_volume(field, "mixing", options);
-  EXPECT_LT(smoothed.tangled_share(), 0.001);
+  EXPECT_LT(smoothed.folded_share(), 0.001);
   EXPECT_FALSE(warns(smoothed, kFolds));
 }
 
@@ -223,13 +224,13 @@ TEST(Convert, NamesThePreFilterForFoldsOnANoisyScan) {
   options.base.growth = BaseGrowth::UntilCovered;  // as the command runs it
   options.summary_percents = {100};
   const ConvertResult raw = convert_volume(read_volume(path), path, options);
-  ASSERT_GT(raw.tangled_share(), kFoldedWarning);
+  ASSERT_GT(raw.folded_share(), kFoldedWarning);
   EXPECT_TRUE(warns(raw, kFolded));
   EXPECT_TRUE(warns(raw, "--smooth 1"));
   EXPECT_FALSE(warns(raw, "--levels"));
   options.prepare.extract.smooth_sigma = 1.0;
   const ConvertResult smoothed = convert_volume(read_volume(path), path, options);
-  EXPECT_LT(smoothed.tangled_share(), kFoldedWarning);
+  EXPECT_LT(smoothed.folded_share(), kFoldedWarning);
   EXPECT_FALSE(warns(smoothed, kFolded));
 }
 

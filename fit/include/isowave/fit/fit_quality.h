@@ -8,9 +8,8 @@
 // - surface: exact distance of each vertex to the extracted triangle mesh;
 // - coverage: exact distance of each extracted-mesh vertex to the fitted mesh
 //   (quads split into two triangles), so gaps and missed features show;
-// - tangles: faces whose normal disagrees with the field's gradient at the
-//   face centroid (normals should point toward lower values, higher with
-//   flip); zero-area faces count as tangled;
+// - folds: faces whose normal disagrees with the field's gradient at the
+//   face centroid (orientation.h); zero-area faces count as folded;
 // - evenness: each face's area divided by the mean face area of its patch
 //   (the faces descending from one base face).
 // Sharp (fixed) vertices are included in every figure.
@@ -20,6 +19,7 @@
 #include "isowave/core/mesh.h"
 #include "isowave/core/volume.h"
 #include "isowave/core/binned_surface_distance.h"
+#include "isowave/fit/orientation.h"
 #include "isowave/transform/hierarchy.h"
 
 namespace isowave {
@@ -30,11 +30,8 @@ inline constexpr double kSurfaceFarCells = 0.5;
 
 // Whether a fine mesh with `fine_vertices` is too coarse to follow an
 // isosurface extracted with `isosurface_vertices`: fewer than half as many.
-// A sphere of radius 8 cells simplified to a tetrahedron, 3 levels (194
-// fine vertices for 1,210 extracted), stays up to 5 cells inside with a
-// third of its faces folded, where a base of 1/64 of the extracted vertices
-// (18) comes within 0.015 cell of the extracted mesh, no fold. Folds of such
-// a fit come from the base mesh, not from features under a cell.
+// Such a fit stays inside the surface with many faces folded, and its folds
+// come from the base mesh, not from features under a cell.
 constexpr bool fine_mesh_too_coarse(std::size_t fine_vertices, std::size_t isosurface_vertices) {
   return 2 * fine_vertices < isosurface_vertices;
 }
@@ -48,21 +45,18 @@ struct FitQuality {
   double isosurface_rms = 0, isosurface_max = 0;
   std::size_t isosurface_undefined = 0;  // vertices off the isovalue with a zero or non-finite gradient (left out)
   // Vertices more than a cell off: where the field is nearly flat a few of
-  // these can dominate the RMS (embryo: one 655 cells off, 8 cells from the
-  // extracted mesh).
+  // these can dominate the RMS.
   std::size_t isosurface_far = 0;
 
   double surface_rms = 0, surface_max = 0;
   // Vertices farther than the target's maximum (kSurfaceFarCells) from the
-  // extracted mesh: how many points the maximum stands for (stent, base
-  // 1/16, 3 levels: a maximum of 1.62 cells, 8 of 704,712 points over 0.5;
-  // 252 before the fit stopped landing on components extraction dropped).
+  // extracted mesh: how many points the maximum stands for.
   std::size_t surface_far = 0;
 
   double coverage_rms = 0, coverage_p99 = 0, coverage_max = 0;
 
-  std::size_t tangled_faces = 0;
-  double tangled_fraction = 0;
+  std::size_t folded_faces = 0;
+  double folded_fraction = 0;  // of the faces, in [0, 1]
 
   // Face area relative to its patch's mean: percentiles and spread.
   double area_ratio_min = 0, area_ratio_p1 = 0, area_ratio_median = 0, area_ratio_p99 = 0, area_ratio_max = 0;
@@ -89,8 +83,7 @@ IsosurfaceDistance isosurface_distance(const std::vector<Vec3>& points, std::siz
 // centroid and each corner), in cells: RMS weighted by triangle area, and
 // maximum. Marching cubes' flat triangles cut across the curved trilinear
 // isosurface, so a fit whose points lie on that isosurface cannot come much
-// nearer to them than this: in 20 fits of 16 data sets the fit's distance
-// to the extracted mesh was 0.9-1.55 times it. Polygons count as fans of
+// nearer to them than this. Polygons count as fans of
 // triangles; samples without a gradient are left out. Parallel,
 // deterministic, O(triangles).
 struct SurfaceDeviation {
@@ -104,9 +97,7 @@ SurfaceDeviation extracted_surface_deviation(const PolygonMesh& extracted, const
 // test, so it can only overstate the share farther than `distance` from the
 // fitted surface, by the points within a fitted face's reach of its corners
 // (fine faces are mostly a fraction of a cell; where they are stretched over
-// thin features it shows: 42.5% against the exact 36.5% on the aneurism
-// fitted from 2% of its vertices, 12.5% against 12.3% on miranda). Parallel and
-// deterministic; O(count log count) to sort the fitted points into cubes of
+// thin features it shows). Parallel and deterministic; O(count log count) to sort the fitted points into cubes of
 // side `distance`, then 27 cube lookups per sample.
 double share_farther_than(const std::vector<Vec3>& reference, std::size_t stride, const std::vector<Vec3>& fitted,
                           std::size_t count, double distance);
@@ -115,11 +106,11 @@ double share_farther_than(const std::vector<Vec3>& reference, std::size_t stride
 // least vertex_count(level)) against the extracted mesh (`extracted`, and
 // `extracted_distance` built from it) and the scalar field. Parallel (TBB),
 // deterministic. O(n) for the fitted mesh's bins, then a distance query per
-// vertex each way (BinnedSurfaceDistance: exact, as CGAL's AABB tree, which
-// took a minute and 5 GB on miranda's finest level).
+// vertex each way (BinnedSurfaceDistance: exact, as CGAL's AABB tree).
+// Folds are judged against faces of `orientation`.
 FitQuality measure_fit_quality(const SubdivisionHierarchy& hierarchy, int level, const std::vector<Vec3>& positions,
                                const PolygonMesh& extracted, const BinnedSurfaceDistance& extracted_distance,
-                               const Volume& field, double iso, bool flip);
+                               const Volume& field, double iso, Orientation orientation);
 
 // The value below which `fraction` (in [0, 1]) of `values` lie (nearest rank);
 // reorders `values`. 0 for an empty vector.

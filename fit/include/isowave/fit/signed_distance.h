@@ -39,7 +39,7 @@
 // Memory (N grid nodes, S seeds): during the run 4 bytes of squared distance,
 // 4 bytes of closest-point index and 1 byte of flags per node, 12 bytes per
 // seed point and the queue (at most N indices, usually far fewer); flat arrays
-// because miranda's 256^3 grid has 16.7 M nodes and a node object with a
+// because grids have tens of millions of nodes and a node object with a
 // pointer or an embedded point would double the footprint. The result keeps
 // only one float per node. The node arrays live on transparent huge pages
 // (random access in the propagation). Time O(N + updates); seeding is
@@ -108,12 +108,9 @@ SignedDistanceField compute_signed_distance(const Volume& field, const SignedDis
 // field.sample_count()). The trilinear isosurface of the result is the
 // field's without the closed components extraction dropped, so that the
 // shrink-wrap's searches along the field (final correction, untangling) do
-// not put points on them (bench_fit, base 1/16, 3 levels, points over 0.5
-// cell from the extracted mesh: stent 60 -> 8, MRI head 96 -> 33, embryo
-// 165 -> 55; maxima MRI 1.65 -> 0.58, embryo 5.84 -> 1.30 cells). Where such a
-// sample is a corner of a cell the kept surface passes through, that cell's
-// trilinear surface moves a little (fitted points up to 0.004 cell RMS off
-// the unmirrored field's isosurface). `distance` must come from `field`.
+// not put points on them. Where such a sample is a corner of a cell the kept
+// surface passes through, that cell's trilinear surface moves a little.
+// `distance` must come from `field`.
 // Returns how many samples changed. Parallel (TBB), O(samples).
 std::size_t mirror_enclosed_samples(const Volume& field, const SignedDistanceField& distance, float* out);
 
@@ -126,9 +123,8 @@ std::size_t mirror_enclosed_samples(const Volume& field, const SignedDistanceFie
 // vertices; the others get the field's lowest finite value (or that step
 // below iso, if higher). Every sample keeps extraction's inside/outside
 // class. Without this, points and faces in cells with a NaN corner have no
-// value or gradient: a sphere cut by a slab of NaN samples (test) left the
-// correction nothing to follow on its two flat lids, and the fit's report
-// counted every lid face as folded (28%). `out` holds the finite samples
+// value or gradient: the correction would have nothing to follow there, and
+// every face there would count as folded. `out` holds the finite samples
 // (the field's, or mirror_enclosed_samples's); only the entries of
 // non-finite ones are written. Returns how many. Parallel (TBB),
 // O(samples).

@@ -101,7 +101,7 @@ inline constexpr double kUncoveredWarning = 0.01;
 // whole parts of it: a fold warning then names a larger base mesh, not the
 // pre-filter.
 inline constexpr double kUncoveredCoarse = 0.1;
-// More than this share of folded fine faces (ConvertResult::tangled_share)
+// More than this share of folded fine faces (ConvertResult::folded_share)
 // adds a warning naming the remedy: a larger base mesh where it is too coarse
 // for the surface (the fine mesh under half the isosurface's vertices, points
 // left off it, over kUncoveredCoarse of it left out), else a one-voxel
@@ -131,8 +131,8 @@ struct ConvertResult {
   // what the fit left out. More than kUncoveredWarning adds a warning.
   double uncovered_share = 0;
   // The share of the fine faces whose normal disagrees with the field
-  // gradient (ShrinkWrapResult::tangled_faces): folds of the parameterization.
-  double tangled_share() const;
+  // gradient (ShrinkWrapResult::folded_faces): folds of the parameterization.
+  double folded_share() const;
   // Tries at the base mesh (BaseGrowth::UntilCovered) and the first one's
   // vertex count; base_vertices is the last one's.
   int base_attempts = 1;
