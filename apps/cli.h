@@ -22,7 +22,11 @@ struct CommandSpec {
   std::vector<OptionSpec> options;
   int min_positional = 0;
   int max_positional = 0;  // -1 for any number
+  std::string example;     // one command line, without "isowave "
 };
+
+// Width of the --help text: usage() wraps every line to it.
+constexpr std::size_t kHelpColumns = 100;
 
 class Arguments {
  public:
@@ -46,6 +50,8 @@ class Arguments {
   bool help_ = false;
 };
 
+// The --help text: synopsis, description, options and the example, every
+// line wrapped to kHelpColumns.
 std::string usage(const CommandSpec& spec);
 
 // Prints the usage on stdout if -h/--help was given; true if it did (the
@@ -64,6 +70,9 @@ void check_outputs(const Arguments& args, const std::vector<std::string>& output
 // (fine_vertices x bytes_per_vertex) exceeds this machine's physical memory:
 // a clear message at once rather than minutes of swapping or the OOM killer.
 void check_memory(double fine_vertices, double bytes_per_vertex, const std::string& what);
+
+// True if `path` ends in `extension` (".isw", ".svg"), in any case.
+bool has_extension(const std::string& path, const std::string& extension);
 
 // `text` as a JSON string literal, quotes included (control characters as \u escapes).
 std::string json_string(const std::string& text);

@@ -128,14 +128,18 @@ int convert(const Args& raw) {
       "Converts isosurfaces of volumes into wavelet files: extraction -> base mesh -> signed distance ->\n"
       "shrink-wrap -> wavelet analysis -> quantization and coding. INPUT may be files, directories (all their\n"
       "volume files) or glob patterns. A failing input is reported and skipped; the exit code is non-zero if\n"
-      "any failed. Outputs are written atomically and never overwritten without --force.",
+      "any failed. Outputs are written atomically and never overwritten without --force. Prints each\n"
+      "input's value range on load ('isowave info VOLUME' shows it with a histogram, to choose V).",
       options,
       1,
-      -1};
+      -1,
+      "convert engine.nrrd --iso 100 -o engine.isw"};
   const cli::Arguments args(spec, raw);
   if (cli::print_help_if_requested(spec, args)) return 0;
   if (args.has("output") == args.has("out-dir"))
     throw Error(ErrorKind::InvalidArgument, "give exactly one of -o OUT.isw and --out-dir DIR");
+  if (args.has("output") && !cli::has_extension(args.get("output"), ".isw"))
+    throw Error(ErrorKind::InvalidArgument, args.get("output") + ": convert writes .isw files (name the output OUT.isw)");
   if (args.has("base-vertices") && args.has("base-ratio"))
     throw Error(ErrorKind::InvalidArgument, "give at most one of --base-vertices and --base-ratio");
 
@@ -164,6 +168,8 @@ int convert(const Args& raw) {
   // --json keeps stdout for the JSON object; warnings still go to stderr.
   const bool quiet = args.has("quiet") || json;
   const bool warn = !args.has("quiet");
+  const cli::LoadReport load_report =
+      !warn ? cli::LoadReport::Nothing : (quiet ? cli::LoadReport::WarningsOnly : cli::LoadReport::RangeAndWarnings);
 
   std::vector<Job> jobs;
   for (const auto& [input, problem] : expand_inputs(args.positional())) {
@@ -229,6 +235,10 @@ int convert(const Args& raw) {
         progress.begin_stage("load");
         const Volume volume = read_volume(job.input, read_options);
         progress.end_stage();
+        {
+          std::lock_guard<std::mutex> lock(print_mutex);
+          cli::report_loaded_volume("convert", job.input, volume, load_report);
+        }
         outcome.load_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         ConvertOptions job_options = convert_options;
         job_options.iso = job.iso;

@@ -16,6 +16,7 @@
 #include "isowave/core/mesh_io.h"
 #include "isowave/extract/isosurface.h"
 #include "isowave/extract/volume_io.h"
+#include "isowave/extract/volume_summary.h"
 #include "isowave/fit/fit_quality.h"
 #include "isowave/fit/shrink_wrap.h"
 #include "isowave/fit/signed_distance.h"
@@ -62,7 +63,8 @@ int fit(const Args& raw) {
       "prints a quality report per level (distances in cells).",
       {{"iso", true, "isovalue (samples >= V are inside)", "V"}},
       1,
-      1};
+      1,
+      "fit engine.nrrd --iso 100 --base engine_base.ply --levels 3 -o engine_fine.ply"};
   cli::add_volume_options(spec.options);
   cli::add_extraction_options(spec.options);
   spec.options.push_back({"base", true, "base mesh (.ply, .obj, .off), e.g. from the base-mesh stage", "BASE"});
@@ -129,14 +131,14 @@ int fit(const Args& raw) {
   progress.begin_stage("load");
   Volume field = read_volume(input, read_options);
   progress.end_stage();
+  cli::report_loaded_volume("fit", input, field,
+                            args.has("quiet") ? cli::LoadReport::Nothing : cli::LoadReport::RangeAndWarnings);
   if (field.dims[0] < 2 || field.dims[1] < 2 || field.dims[2] < 2)
     throw Error(ErrorKind::InvalidArgument, input + ": fitting needs at least 2 samples along each axis");
   // The fit sees the same (pre-filtered) field the surface is extracted from.
   if (smooth > 0) field = gaussian_smoothed(field, smooth);
   const Isosurface surface = extract_isosurface(field, extract_options, progress);
-  if (surface.mesh.face_count() == 0)
-    throw Error(ErrorKind::InvalidArgument,
-                input + ": the isosurface at " + args.get("iso", "0") + " is empty" + value_range_note(field));
+  if (surface.mesh.face_count() == 0) throw empty_isosurface_error(input, extract_options.iso, field);
   const double extract_seconds = seconds_since(start);
 
   start = Clock::now();

@@ -35,6 +35,14 @@ IsosurfaceOptions extraction_options(const Arguments& args);
 void add_unfold_option(std::vector<OptionSpec>& options);
 void set_unfold_limit(const Arguments& args, ShrinkWrapOptions& options);
 
+// What a command prints once a volume is loaded (see report_loaded_volume).
+enum class LoadReport { RangeAndWarnings, WarningsOnly, Nothing };
+
+// Prints "INPUT: values LOW .. HIGH, N NaN, M Inf" on stdout (RangeAndWarnings)
+// and each of value_warnings() on stderr as "isowave COMMAND: warning: INPUT:
+// ..." (unless Nothing), so that a misread file is caught before the work.
+void report_loaded_volume(const std::string& command, const std::string& input, const Volume& volume, LoadReport report);
+
 // True for generated inputs (builtin:NAME[:N]), whose surface is at 0.
 bool is_builtin_volume(const std::string& input);
 
