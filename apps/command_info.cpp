@@ -53,8 +53,7 @@ void print_volume_info(const std::string& input, const Volume& volume, int bins)
   std::printf("%s: %zu x %zu x %zu %s samples, spacing %g %g %g, origin %g %g %g\n", input.c_str(), volume.dims[0],
               volume.dims[1], volume.dims[2], to_string(volume.source_type), volume.spacing.x, volume.spacing.y,
               volume.spacing.z, volume.origin.x, volume.origin.y, volume.origin.z);
-  cli::report_loaded_volume("info", input, volume, cli::LoadReport::RangeAndWarnings);
-  const ValueSummary summary = summarize_values(volume);
+  const ValueSummary summary = cli::report_loaded_volume("info", input, volume, cli::LoadReport::RangeAndWarnings);
   if (summary.finite == 0) return;
   const std::vector<std::size_t> counts = value_histogram(volume, summary, bins);
   const std::size_t largest = *std::max_element(counts.begin(), counts.end());

@@ -5,7 +5,6 @@
 #include <cstdio>
 
 #include "isowave/core/error.h"
-#include "isowave/extract/volume_summary.h"
 
 namespace isowave::cli {
 namespace {
@@ -84,8 +83,9 @@ VolumeReadOptions volume_read_options(const Arguments& args) {
   return options;
 }
 
-void report_loaded_volume(const std::string& command, const std::string& input, const Volume& volume, LoadReport report) {
-  if (report == LoadReport::Nothing) return;
+ValueSummary report_loaded_volume(const std::string& command, const std::string& input, const Volume& volume,
+                                  LoadReport report) {
+  if (report == LoadReport::Nothing) return {};
   const ValueSummary summary = summarize_values(volume);
   if (report == LoadReport::RangeAndWarnings) {
     std::printf("%s: %s\n", input.c_str(), value_range_text(summary).c_str());
@@ -93,6 +93,7 @@ void report_loaded_volume(const std::string& command, const std::string& input, 
   }
   for (const std::string& warning : value_warnings(summary))
     std::fprintf(stderr, "isowave %s: warning: %s: %s\n", command.c_str(), input.c_str(), warning.c_str());
+  return summary;
 }
 
 bool is_builtin_volume(const std::string& input) { return input.rfind("builtin:", 0) == 0; }
