@@ -1,5 +1,7 @@
 #include "cli.h"
 
+#include <algorithm>
+#include <cctype>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
@@ -21,6 +23,50 @@ const OptionSpec* find_option(const CommandSpec& spec, const std::string& name) 
   for (const OptionSpec& option : spec.options)
     if (option.name == name) return &option;
   return nullptr;
+}
+
+// `text` on one line: newlines and runs of spaces become one space.
+std::string one_line(const std::string& text) {
+  std::string line;
+  for (const char c : text)
+    if (!((c == ' ' || c == '\n') && !line.empty() && line.back() == ' ')) line += c == '\n' ? ' ' : c;
+  return line;
+}
+
+// `text` with its single line breaks as spaces: blank lines separate paragraphs.
+std::string paragraphs(const std::string& text) {
+  std::string out = text;
+  for (std::size_t i = 0; i < out.size(); ++i)
+    if (out[i] == '\n' && (i + 1 == out.size() || out[i + 1] != '\n') && (i == 0 || out[i - 1] != '\n')) out[i] = ' ';
+  return out;
+}
+
+// `text` broken at spaces into lines of at most kHelpColumns (a word longer
+// than that stays whole), continued after `indent` spaces; its own line
+// breaks are kept. Each line ends with '\n'.
+std::string wrap(const std::string& text, std::size_t indent) {
+  std::string out;
+  std::size_t start = 0;
+  while (start < text.size()) {
+    const std::size_t end = std::min(text.find('\n', start), text.size());
+    std::string line;
+    for (std::size_t pos = start; pos <= end;) {
+      const std::size_t space = std::min(text.find(' ', pos), end);
+      const std::string word = text.substr(pos, space - pos);
+      const bool has_text = line.find_first_not_of(' ') != std::string::npos && line.size() > indent;
+      if (!word.empty() && has_text && line.size() + 1 + word.size() > kHelpColumns) {
+        line.erase(line.find_last_not_of(' ') + 1);
+        out += line + "\n";
+        line = std::string(indent, ' ') + word;
+      } else {
+        line += (pos == start ? "" : " ") + word;
+      }
+      pos = space + 1;
+    }
+    out += line + "\n";
+    start = end + 1;
+  }
+  return out;
 }
 
 }  // namespace
@@ -59,10 +105,7 @@ Arguments::Arguments(const CommandSpec& spec, const std::vector<std::string>& ar
   }
   const int count = static_cast<int>(positional_.size());
   if (count < spec.min_positional || (spec.max_positional >= 0 && count > spec.max_positional)) {
-    std::string synopsis;  // on one line
-    for (const char c : spec.synopsis)
-      if (!((c == ' ' || c == '\n') && !synopsis.empty() && synopsis.back() == ' ')) synopsis += c == '\n' ? ' ' : c;
-    usage_error("wrong number of arguments (usage: isowave " + spec.name + " " + synopsis + ")");
+    usage_error("wrong number of arguments (usage: isowave " + spec.name + " " + one_line(spec.synopsis) + ")");
   }
 }
 
@@ -142,6 +185,12 @@ void check_outputs(const Arguments& args, const std::vector<std::string>& output
   }
 }
 
+bool has_extension(const std::string& path, const std::string& extension) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  return ext == extension;
+}
+
 std::string json_string(const std::string& text) {
   std::string out = "\"";
   for (const char c : text) {
@@ -164,16 +213,19 @@ bool print_help_if_requested(const CommandSpec& spec, const Arguments& args) {
 }
 
 std::string usage(const CommandSpec& spec) {
-  std::string text = "usage: isowave " + spec.name + " " + spec.synopsis + "\n\n" + spec.description + "\n";
+  std::string text = wrap("usage: isowave " + spec.name + " " + one_line(spec.synopsis), 8) + "\n";
+  text += wrap(paragraphs(spec.description), 0);
   if (!spec.options.empty()) text += "\noptions:\n";
+  constexpr std::size_t kHelpIndent = 30;
   for (const OptionSpec& option : spec.options) {
     std::string left = "  --" + option.name + (option.takes_value ? " " + option.value_name : "");
     if (option.name == "output") left = "  -o, --output " + option.value_name;
-    if (left.size() < 30) left.resize(30, ' ');
-    else left += "  ";
-    text += left + option.help + "\n";
+    if (left.size() < kHelpIndent) left.resize(kHelpIndent, ' ');
+    else left += "\n" + std::string(kHelpIndent, ' ');
+    text += wrap(left + option.help, kHelpIndent);
   }
   text += "  -h, --help                  show this help\n";
+  if (!spec.example.empty()) text += "\nExample:\n" + wrap("  isowave " + spec.example, 4);
   return text;
 }
 

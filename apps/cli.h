@@ -22,7 +22,11 @@ struct CommandSpec {
   std::vector<OptionSpec> options;
   int min_positional = 0;
   int max_positional = 0;  // -1 for any number
+  std::string example;     // one command line, without "isowave "
 };
+
+// Width of the --help text: usage() wraps every line to it.
+constexpr std::size_t kHelpColumns = 100;
 
 class Arguments {
  public:
@@ -46,6 +50,8 @@ class Arguments {
   bool help_ = false;
 };
 
+// The --help text: synopsis, description, options and the example, every
+// line wrapped to kHelpColumns.
 std::string usage(const CommandSpec& spec);
 
 // Prints the usage on stdout if -h/--help was given; true if it did (the
@@ -59,6 +65,9 @@ inline OptionSpec force_option() { return {"force", false, "overwrite existing o
 // in an existing directory, not an existing file unless --force was given,
 // and no two outputs the same file. Throws Error with one line naming it.
 void check_outputs(const Arguments& args, const std::vector<std::string>& outputs);
+
+// True if `path` ends in `extension` (".isw", ".svg"), in any case.
+bool has_extension(const std::string& path, const std::string& extension);
 
 // `text` as a JSON string literal, quotes included (control characters as \u escapes).
 std::string json_string(const std::string& text);

@@ -129,10 +129,12 @@ cli::CommandSpec convert_spec() {
       "Converts isosurfaces of volumes into wavelet files: extraction -> base mesh -> signed distance ->\n"
       "shrink-wrap -> wavelet analysis -> quantization and coding. INPUT may be files, directories (all their\n"
       "volume files) or glob patterns. A failing input is reported and skipped; the exit code is non-zero if\n"
-      "any failed. Outputs are written atomically and never overwritten without --force.",
+      "any failed. Outputs are written atomically and never overwritten without --force. Prints each\n"
+      "input's value range on load ('isowave info VOLUME' shows it with a histogram, to choose V).",
       options,
       1,
-      -1};
+      -1,
+      "convert engine.nrrd --iso 100 -o engine.isw"};
 }
 
 ConvertOptions convert_options_from(const cli::Arguments& args) {
@@ -213,16 +215,22 @@ struct RunSettings {
   ConvertOptions convert;
   cli::ProgressMode mode = cli::ProgressMode::Quiet;
   bool force = false, warn = true, label_iso = false;
+  cli::LoadReport load_report = cli::LoadReport::RangeAndWarnings;  // the value range printed on load
 };
 
 // Loads, converts and writes one job; throws what goes wrong.
-void run_job(const Job& job, const RunSettings& settings, JobOutcome& outcome, cli::ConsoleProgress& progress) {
+void run_job(const Job& job, const RunSettings& settings, JobOutcome& outcome, cli::ConsoleProgress& progress,
+             std::mutex& print_mutex) {
   if (!job.problem.empty()) throw Error(ErrorKind::InvalidArgument, job.input + ": " + job.problem);
   if (!settings.force && fs::exists(job.output))
     throw Error(ErrorKind::Io, job.output + ": already exists (use --force to overwrite)");
   const auto start = std::chrono::steady_clock::now();
   Volume volume = load_volume(job.input, settings.read, progress);
   outcome.load_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  {
+    std::lock_guard<std::mutex> lock(print_mutex);
+    cli::report_loaded_volume("convert", job.input, volume, settings.load_report);
+  }
   outcome.volume_bytes = volume.sample_count() * scalar_type_size(volume.source_type);
   ConvertOptions options = settings.convert;
   options.prepare.extract.iso = job.iso;
@@ -245,7 +253,7 @@ std::vector<JobOutcome> run_jobs(const std::vector<Job>& jobs, const RunSettings
                                 stem_of(job.input) + (settings.label_iso ? " @" + iso_text(job.iso) : "");
       cli::ConsoleProgress progress(label, settings.mode);
       try {
-        run_job(job, settings, outcome, progress);
+        run_job(job, settings, outcome, progress, print_mutex);
         char done[64];
         std::snprintf(done, sizeof done, " (%zu bytes, %.1f s)", outcome.result.bytes.size(),
                       outcome.load_seconds + outcome.result.seconds.total());
@@ -391,6 +399,8 @@ int convert(const Args& raw) {
   if (cli::print_help_if_requested(spec, args)) return 0;
   if (args.has("output") == args.has("out-dir"))
     throw Error(ErrorKind::InvalidArgument, "give exactly one of -o OUT.isw and --out-dir DIR");
+  if (args.has("output") && !cli::has_extension(args.get("output"), ".isw"))
+    throw Error(ErrorKind::InvalidArgument, args.get("output") + ": convert writes .isw files (name the output OUT.isw)");
   RunSettings settings;
   settings.read = cli::volume_read_options(args);
   settings.convert = convert_options_from(args);
@@ -401,6 +411,8 @@ int convert(const Args& raw) {
   const bool quiet = args.has("quiet") || json;
   settings.warn = !args.has("quiet");
   settings.label_iso = args.has("iso");
+  settings.load_report = !settings.warn ? cli::LoadReport::Nothing
+                                        : (quiet ? cli::LoadReport::WarningsOnly : cli::LoadReport::RangeAndWarnings);
   const std::vector<Job> jobs = plan_jobs(args);
 
   // Runs side by side write their lines whole.

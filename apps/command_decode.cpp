@@ -20,7 +20,8 @@ int decode(const Args& raw) {
       "IN.isw (--percent P | --coefficients N) [--level L] [--limit] [--triangulate] [--ascii] [--force] -o OUT.ply|OUT.obj|OUT.off",
       "Rebuilds the surface from the base mesh and the most important wavelet coefficients of IN.isw.\n"
       "--percent counts as the paper does: the total is the number of fine control points (base vertices plus\n"
-      "all coefficients), and the base mesh alone is the smallest choice. Decodes only the chunks it needs.",
+      "all coefficients), and the base mesh alone is the smallest choice: a percentage below the base mesh's\n"
+      "share gives the base mesh, and says so. Decodes only the chunks it needs.",
       {{"percent", true, "keep this percentage of full resolution (0..100)", "P"},
        {"coefficients", true, "keep this many wavelet coefficients (besides the base mesh)", "N"},
        {"level", true, "write the control mesh of this level (default: the finest)", "L"},
@@ -31,7 +32,8 @@ int decode(const Args& raw) {
        cli::force_option(),
        {"output", true, "output mesh (.ply, .obj or .off)", "OUT"}},
       1,
-      1};
+      1,
+      "decode engine.isw --percent 5 -o engine_5pct.ply"};
   const cli::Arguments args(spec, raw);
   if (cli::print_help_if_requested(spec, args)) return 0;
   if (args.has("percent") == args.has("coefficients"))
@@ -77,6 +79,10 @@ int decode(const Args& raw) {
             ? std::max(options.max_percent, base_percent)
             : 100.0 * static_cast<double>(base + std::min<std::uint64_t>(options.max_coefficients, fine - base)) /
                   static_cast<double>(fine);
+    if (args.has("percent") && options.max_percent < base_percent)
+      std::printf("%g%% is below the base mesh's share (%.2f%% of the fine control points): writing the base mesh "
+                  "alone\n",
+                  options.max_percent, base_percent);
     std::printf("%s: %.2f%% of %zu fine control points: base mesh + %zu non-zero coefficients (of %llu), level %d%s\n",
                 input.c_str(), percent, fine, decoded.ranked.size(),
                 static_cast<unsigned long long>(decoded.coefficients_total), level, args.has("limit") ? ", limit surface" : "");

@@ -17,6 +17,7 @@
 #include "isowave/core/mesh_io.h"
 #include "isowave/extract/isosurface.h"
 #include "isowave/extract/volume_io.h"
+#include "isowave/extract/volume_summary.h"
 #include "volume_options.h"
 
 namespace isowave::commands {
@@ -96,11 +97,14 @@ int extract(const Args& raw) {
       "INPUT --iso V [reader options] [--min-component-vertices N] [--smooth SIGMA] [--flip] -o MESH.ply|MESH.obj",
       "Extracts the isosurface of a volume as a 2-manifold, consistently oriented triangle mesh (normals\n"
       "toward lower values). INPUT is .raw, .nrrd/.nhdr, .vtk, .vti, .vdb or builtin:NAME[:N] with NAME one of\n"
-      "sphere, torus, genus3, marschner-lobb, mixing (--iso defaults to 0 for these). Vertices where the surface\n"
-      "meets an edge of the volume box are marked sharp (PLY vertex property 'sharp'). Prints a topology report.",
+      "sphere, torus, genus3, marschner-lobb, mixing (--iso defaults to 0 for these); with --dims and --type,\n"
+      "any file is read as raw samples. Vertices where the surface meets an edge of the volume box are marked\n"
+      "sharp (PLY vertex property 'sharp'). Prints the value range on load ('isowave info VOLUME' shows it\n"
+      "with a histogram, to choose V) and a topology report.",
       {{"iso", true, "isovalue (samples >= V are inside)", "V"}},
       1,
-      1};
+      1,
+      "extract engine.nrrd --iso 100 --min-component-vertices 50 -o engine.ply"};
   cli::add_volume_options(spec.options);
   cli::add_extraction_options(spec.options);
   spec.options.push_back({"ascii", false, "write ASCII PLY instead of binary", ""});
@@ -125,14 +129,13 @@ int extract(const Args& raw) {
   const auto load_start = Clock::now();
   const Volume volume = read_volume(input, read_options);
   const double load_seconds = seconds_since(load_start);
+  cli::report_loaded_volume("extract", input, volume,
+                            args.has("quiet") ? cli::LoadReport::Nothing : cli::LoadReport::RangeAndWarnings);
 
   const auto extract_start = Clock::now();
   Isosurface result = extract_isosurface(volume, options);
   const double extract_seconds = seconds_since(extract_start);
-  if (result.mesh.face_count() == 0)
-    throw Error(ErrorKind::InvalidArgument, input + ": no surface at iso " + number(options.iso) +
-                                                value_range_note(volume) +
-                                                (options.smooth_sigma > 0 ? " before smoothing" : ""));
+  if (result.mesh.face_count() == 0) throw empty_isosurface_error(input, options.iso, volume);
   MeshWriteOptions write_options;
   write_options.ascii = args.has("ascii");
   write_mesh(output, result.mesh, write_options);

@@ -14,6 +14,7 @@
 #include "isowave/pipeline/prepare.h"
 #include "isowave/core/error.h"
 #include "isowave/core/mesh_io.h"
+#include "isowave/extract/volume_summary.h"
 #include "isowave/fit/fit_quality.h"
 #include "isowave/fit/shrink_wrap.h"
 #include "isowave/core/binned_surface_distance.h"
@@ -59,7 +60,8 @@ int fit(const Args& raw) {
       "prints a quality report per level (distances in cells).",
       {{"iso", true, "isovalue (samples >= V are inside)", "V"}},
       1,
-      1};
+      1,
+      "fit engine.nrrd --iso 100 --base engine_base.ply --levels 3 -o engine_fine.ply"};
   cli::add_volume_options(spec.options);
   cli::add_extraction_options(spec.options);
   spec.options.push_back({"base", true, "base mesh (.ply, .obj, .off), e.g. from the base-mesh stage", "BASE"});
@@ -124,8 +126,10 @@ int fit(const Args& raw) {
   const bool live = cli::default_progress_mode(args.has("quiet")) == cli::ProgressMode::LiveBar;
   cli::ConsoleProgress progress(input, live ? cli::ProgressMode::LiveBar : cli::ProgressMode::Quiet);
   auto start = Clock::now();
-  PreparedSurface prepared =
-      extract_surface(load_volume(input, read_options, progress), prepare_options, input, progress);
+  Volume loaded = load_volume(input, read_options, progress);
+  cli::report_loaded_volume("fit", input, loaded,
+                            args.has("quiet") ? cli::LoadReport::Nothing : cli::LoadReport::RangeAndWarnings);
+  PreparedSurface prepared = extract_surface(std::move(loaded), prepare_options, input, progress);
   const Volume& field = prepared.field;
   const Isosurface& surface = prepared.isosurface;
   const double extract_seconds = seconds_since(start);

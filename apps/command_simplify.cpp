@@ -15,7 +15,7 @@ namespace isowave::commands {
 int simplify(const Args& raw) {
   const cli::CommandSpec spec{
       "simplify",
-      "MESH (--target-vertices N | --ratio R) [--no-edge-removal] [--normal-threshold D] [--no-flips] [--no-boundary-curve-error] [--flip-threshold D] [--eager-stencil] [--batch-factor F] -o BASE.ply|BASE.obj",
+      "MESH (--target-vertices N | --ratio R) [options] -o BASE.ply|BASE.obj",
       "Builds a base mesh from a 2-manifold triangle mesh (Bertram et al. 2000, Sec. 4.1): edge collapses in\n"
       "bucket-priority order keep genus, components and boundary loops and valences 3..8 (2..8 on the\n"
       "boundary); then edges are removed to form quads and pentagons. Unreferenced vertices are dropped\n"
@@ -37,7 +37,8 @@ int simplify(const Args& raw) {
        cli::force_option(),
        {"output", true, "base mesh (.ply or .obj)", "BASE"}},
       1,
-      1};
+      1,
+      "simplify engine.ply --ratio 0.0625 -o engine_base.ply"};
   const cli::Arguments args(spec, raw);
   if (cli::print_help_if_requested(spec, args)) return 0;
   if (args.has("target-vertices") == args.has("ratio"))

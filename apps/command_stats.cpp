@@ -1,8 +1,7 @@
 // isowave stats: the paper's Table 1 for an .isw file, as text, CSV or JSON,
 // optionally plotted as SVG.
-#include <algorithm>
-#include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <string>
 
 #include "cli.h"
@@ -11,71 +10,9 @@
 #include "isowave/codec/statistics.h"
 #include "isowave/core/atomic_file.h"
 #include "isowave/core/error.h"
+#include "rate_distortion_plot.h"
 
 namespace isowave::commands {
-namespace {
-
-std::string svg_plot(const std::vector<RateDistortionRow>& rows, double cell, const std::string& title) {
-  std::vector<RateDistortionRow> sorted = rows;
-  std::sort(sorted.begin(), sorted.end(), [](const auto& a, const auto& b) { return a.percent < b.percent; });
-  const double width = 640, height = 420, left = 70, right = 20, top = 40, bottom = 60;
-  double max_x = 0, max_y = 0;
-  for (const auto& r : sorted) {
-    max_x = std::max(max_x, r.percent);
-    max_y = std::max(max_y, 100 * r.rms / cell);
-  }
-  max_x = max_x > 0 ? max_x : 1;
-  max_y = max_y > 0 ? max_y * 1.1 : 1;
-  const auto x = [&](double v) { return left + (width - left - right) * v / max_x; };
-  const auto y = [&](double v) { return height - bottom - (height - top - bottom) * v / max_y; };
-  char buffer[512];
-  std::string svg = "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n";
-  std::snprintf(buffer, sizeof buffer,
-                "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"%.0f\" height=\"%.0f\" font-family=\"sans-serif\" font-size=\"12\">\n"
-                "<rect width=\"100%%\" height=\"100%%\" fill=\"white\"/>\n",
-                width, height);
-  svg += buffer;
-  std::snprintf(buffer, sizeof buffer, "<text x=\"%.0f\" y=\"22\" text-anchor=\"middle\" font-size=\"14\">%s</text>\n",
-                width / 2, title.c_str());
-  svg += buffer;
-  // Axes, ticks and labels.
-  std::snprintf(buffer, sizeof buffer,
-                "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"black\"/>\n"
-                "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"black\"/>\n",
-                left, y(0), width - right, y(0), left, y(0), left, top);
-  svg += buffer;
-  for (int t = 0; t <= 5; ++t) {
-    const double vx = max_x * t / 5, vy = max_y * t / 5;
-    std::snprintf(buffer, sizeof buffer,
-                  "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"black\"/>"
-                  "<text x=\"%.1f\" y=\"%.1f\" text-anchor=\"middle\">%.3g</text>\n"
-                  "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"#ddd\"/>"
-                  "<text x=\"%.1f\" y=\"%.1f\" text-anchor=\"end\">%.3g</text>\n",
-                  x(vx), y(0), x(vx), y(0) + 5, x(vx), y(0) + 20, vx, left, y(vy), width - right, y(vy), left - 6,
-                  y(vy) + 4, vy);
-    svg += buffer;
-  }
-  std::snprintf(buffer, sizeof buffer,
-                "<text x=\"%.1f\" y=\"%.1f\" text-anchor=\"middle\">coefficients kept [%% of full resolution]</text>\n"
-                "<text x=\"18\" y=\"%.1f\" text-anchor=\"middle\" transform=\"rotate(-90 18 %.1f)\">RMSE [%% of cell edge]</text>\n",
-                (left + width - right) / 2, height - 18, (top + height - bottom) / 2, (top + height - bottom) / 2);
-  svg += buffer;
-  svg += "<polyline fill=\"none\" stroke=\"#1f5fbf\" stroke-width=\"2\" points=\"";
-  for (const auto& r : sorted) {
-    std::snprintf(buffer, sizeof buffer, "%.1f,%.1f ", x(r.percent), y(100 * r.rms / cell));
-    svg += buffer;
-  }
-  svg += "\"/>\n";
-  for (const auto& r : sorted) {
-    std::snprintf(buffer, sizeof buffer, "<circle cx=\"%.1f\" cy=\"%.1f\" r=\"3.5\" fill=\"#1f5fbf\"/>\n", x(r.percent),
-                  y(100 * r.rms / cell));
-    svg += buffer;
-  }
-  svg += "</svg>\n";
-  return svg;
-}
-
-}  // namespace
 
 int stats(const Args& raw) {
   const cli::CommandSpec spec{
@@ -92,10 +29,15 @@ int stats(const Args& raw) {
        {"plot", true, "draw RMSE against percent as SVG", "FILE.svg"},
        cli::force_option()},
       1,
-      1};
+      1,
+      "stats engine.isw --percents 20,10,5 --plot engine_rmse.svg"};
   const cli::Arguments args(spec, raw);
   if (cli::print_help_if_requested(spec, args)) return 0;
-  if (args.has("plot")) cli::check_outputs(args, {args.get("plot")});
+  if (args.has("plot")) {
+    if (!cli::has_extension(args.get("plot"), ".svg"))
+      throw Error(ErrorKind::InvalidArgument, args.get("plot") + ": --plot writes SVG (name the file FILE.svg)");
+    cli::check_outputs(args, {args.get("plot")});
+  }
   if (args.has("csv") && args.has("json")) throw Error(ErrorKind::InvalidArgument, "give at most one of --csv and --json");
   const std::vector<double> percents = args.get_double_list("percents", "100,20,10,5", 0, 100);
   const std::string& input = args.positional()[0];
@@ -167,7 +109,8 @@ int stats(const Args& raw) {
     std::vector<double> plot_percents = {2, 3, 5, 7.5, 10, 15, 20, 30, 50, 75, 100};
     const std::vector<RateDistortionRow> curve = rate_distortion(decoded, plot_percents);
     AtomicFileWriter file(args.get("plot"));
-    file.write(svg_plot(curve, cell, "RMSE against coefficients kept: " + decoded.metadata.text("source", input)));
+    const std::string name = std::filesystem::path(decoded.metadata.text("source", input)).filename().string();
+    file.write(cli::rate_distortion_svg(curve, cell, "RMSE against coefficients kept: " + name));
     file.commit();
   }
   return 0;

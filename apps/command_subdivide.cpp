@@ -28,7 +28,8 @@ int subdivide(const Args& raw) {
        cli::force_option(),
        {"output", true, "output mesh (.ply, .obj or .off)", "OUT"}},
       1,
-      1};
+      1,
+      "subdivide engine_base.ply --levels 2 --limit -o engine_smooth.ply"};
   const cli::Arguments args(spec, raw);
   if (cli::print_help_if_requested(spec, args)) return 0;
   const int levels = args.get_int("levels", -1, 0, 8);

@@ -24,7 +24,7 @@ const Subcommand kSubcommands[] = {
     {"convert", isowave::commands::convert, "convert volumes' isosurfaces into wavelet-compressed .isw files"},
     {"decode", isowave::commands::decode, "reconstruct a mesh from an .isw file at a chosen coefficient percentage"},
     {"stats", isowave::commands::stats, "rate-distortion table of an .isw file (the paper's Table 1)"},
-    {"info", isowave::commands::info, "header, counts and bytes per section of an .isw file"},
+    {"info", isowave::commands::info, "what an .isw file or a volume holds (a volume's range and histogram)"},
     {"extract", isowave::commands::extract, "extract a manifold isosurface from a volume"},
     {"simplify", isowave::commands::simplify, "build a base mesh by edge collapse and edge removal (paper Sec. 4.1)"},
     {"fit", isowave::commands::fit, "shrink-wrap a base mesh's subdivision hierarchy onto an isosurface"},

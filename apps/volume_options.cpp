@@ -2,6 +2,7 @@
 
 #include <charconv>
 #include <cmath>
+#include <cstdio>
 
 #include "isowave/core/error.h"
 
@@ -43,7 +44,7 @@ Vec3 parse_vec3(const std::string& option, const std::string& text, bool positiv
 }  // namespace
 
 void add_volume_options(std::vector<OptionSpec>& options) {
-  options.push_back({"dims", true, "raw input: samples along x, y, z", "X,Y,Z"});
+  options.push_back({"dims", true, "raw input: samples along x, y, z (with --type, any file name is raw)", "X,Y,Z"});
   options.push_back({"type", true, "raw input: uint8|int8|uint16|int16|uint32|int32|float32|float64", "T"});
   options.push_back({"endian", true, "raw input: little (default) or big", "E"});
   options.push_back({"spacing", true, "world units between samples (overrides the file)", "SX,SY,SZ"});
@@ -80,6 +81,19 @@ VolumeReadOptions volume_read_options(const Arguments& args) {
   options.field = args.get("field");
   options.grid = args.get("grid");
   return options;
+}
+
+ValueSummary report_loaded_volume(const std::string& command, const std::string& input, const Volume& volume,
+                                  LoadReport report) {
+  if (report == LoadReport::Nothing) return {};
+  const ValueSummary summary = summarize_values(volume);
+  if (report == LoadReport::RangeAndWarnings) {
+    std::printf("%s: %s\n", input.c_str(), value_range_text(summary).c_str());
+    std::fflush(stdout);  // before the warnings on stderr and the progress lines
+  }
+  for (const std::string& warning : value_warnings(summary))
+    std::fprintf(stderr, "isowave %s: warning: %s: %s\n", command.c_str(), input.c_str(), warning.c_str());
+  return summary;
 }
 
 bool is_builtin_volume(const std::string& input) { return input.rfind("builtin:", 0) == 0; }

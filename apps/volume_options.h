@@ -9,6 +9,7 @@
 #include "cli.h"
 #include "isowave/extract/isosurface.h"
 #include "isowave/extract/volume_io.h"
+#include "isowave/extract/volume_summary.h"
 #include "isowave/fit/shrink_wrap.h"
 
 namespace isowave::cli {
@@ -34,6 +35,16 @@ IsosurfaceOptions extraction_options(const Arguments& args);
 // outside 0..100.
 void add_unfold_option(std::vector<OptionSpec>& options);
 void set_unfold_limit(const Arguments& args, ShrinkWrapOptions& options);
+
+// What a command prints once a volume is loaded (see report_loaded_volume).
+enum class LoadReport { RangeAndWarnings, WarningsOnly, Nothing };
+
+// Prints "INPUT: values LOW .. HIGH, N NaN, M Inf" on stdout (RangeAndWarnings)
+// and each of value_warnings() on stderr as "isowave COMMAND: warning: INPUT:
+// ..." (unless Nothing), so that a misread file is caught before the work.
+// Returns the summary (O(samples)); an empty one for Nothing, which skips it.
+ValueSummary report_loaded_volume(const std::string& command, const std::string& input, const Volume& volume,
+                                  LoadReport report);
 
 // True for generated inputs (builtin:NAME[:N]), whose surface is at 0.
 bool is_builtin_volume(const std::string& input);

@@ -9,6 +9,7 @@ const char* to_string(ErrorKind kind) {
     case ErrorKind::Format: return "format error";
     case ErrorKind::Topology: return "topology error";
     case ErrorKind::Unsupported: return "unsupported";
+    case ErrorKind::EmptyResult: return "empty result";
   }
   return "error";
 }

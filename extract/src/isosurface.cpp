@@ -195,19 +195,6 @@ double surface_area(const PolygonMesh& mesh) {
 
 SurfaceStatistics surface_statistics(const PolygonMesh& mesh) { return statistics_of(component_table(mesh)); }
 
-std::string value_range_note(const Volume& volume) {
-  float low = std::numeric_limits<float>::infinity(), high = -low;
-  for (const float v : volume.values)
-    if (std::isfinite(v)) {
-      low = std::min(low, v);
-      high = std::max(high, v);
-    }
-  if (!(low <= high)) return " (no finite samples)";
-  char text[96];
-  std::snprintf(text, sizeof text, " (finite values range %.9g .. %.9g)", double(low), double(high));
-  return text;
-}
-
 Isosurface extract_isosurface(const Volume& volume, const IsosurfaceOptions& options, ProgressSink& progress) {
   if (!std::isfinite(options.iso)) throw Error(ErrorKind::InvalidArgument, "the isovalue must be finite");
   if (!(options.smooth_sigma >= 0) || !std::isfinite(options.smooth_sigma))

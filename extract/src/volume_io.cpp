@@ -430,7 +430,8 @@ Volume read_volume(const std::string& path, const VolumeReadOptions& options) {
     volume = read_builtin(path);
   } else {
     const std::string ext = extension_of(path);
-    if (ext == ".raw") {
+    // Given the raw geometry, any file is raw samples (.bin, .dat, .f32, ...).
+    if (ext == ".raw" || (options.dims && options.type)) {
       volume = detail::read_raw(path, options);
     } else if (ext == ".nrrd" || ext == ".nhdr") {
       volume = detail::read_nrrd(path, options);
@@ -444,9 +445,10 @@ Volume read_volume(const std::string& path, const VolumeReadOptions& options) {
       // A missing file says so, rather than that its name has no known ending.
       struct stat info {};
       if (::stat(path.c_str(), &info) != 0) detail::io_error(path, std::string("cannot open: ") + std::strerror(errno));
+      if (!S_ISREG(info.st_mode)) detail::io_error(path, "cannot read: not a regular file");
       throw Error(ErrorKind::InvalidArgument,
                   path + ": unknown volume format '" + ext +
-                      "' (use .raw, .nrrd, .nhdr, .vtk, .vti, .vdb or builtin:NAME[:N])");
+                      "' (use .raw, .nrrd, .nhdr, .vtk, .vti, .vdb or builtin:NAME[:N]; --dims and --type read any file as raw)");
     }
   }
 

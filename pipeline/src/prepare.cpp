@@ -1,11 +1,11 @@
 #include "isowave/pipeline/prepare.h"
 
 #include <cstdio>
-#include <sstream>
 #include <unistd.h>
 
 #include "isowave/core/error.h"
 #include "isowave/core/mesh_topology.h"
+#include "isowave/extract/volume_summary.h"
 #include "isowave/transform/hierarchy.h"
 
 namespace isowave {
@@ -36,13 +36,8 @@ PreparedSurface extract_surface(Volume volume, const PrepareOptions& options, co
   extract_options.smooth_sigma = 0;  // applied above
   prepared.isosurface = extract_isosurface(prepared.field, extract_options, progress);
   prepared.isosurface.report.smooth_sigma = sigma;
-  if (prepared.isosurface.mesh.face_count() == 0) {
-    std::ostringstream iso;
-    iso.precision(10);
-    iso << options.extract.iso;
-    throw Error(ErrorKind::InvalidArgument,
-                source + ": the isosurface at " + iso.str() + " is empty" + value_range_note(prepared.field));
-  }
+  if (prepared.isosurface.mesh.face_count() == 0)
+    throw empty_isosurface_error(source, options.extract.iso, prepared.field);
   return prepared;
 }
 

@@ -16,6 +16,7 @@
 
 #include <gtest/gtest.h>
 
+#include "cli_test_support.h"
 #include "isowave/codec/importance.h"
 #include "isowave/codec/isw_format.h"
 #include "isowave/codec/statistics.h"
@@ -26,63 +27,13 @@
 namespace isowave {
 namespace {
 
+using cli_test::CliTest;
+using cli_test::run;
+using cli_test::RunResult;
+using cli_test::sphere_centre;
+using cli_test::write_nrrd;
+using cli_test::write_sphere_nrrd;
 namespace fs = std::filesystem;
-
-struct RunResult {
-  int exit_code = -1;
-  std::string out, err;
-};
-
-// Runs isowave with arguments, capturing stdout and stderr.
-RunResult run(const std::vector<std::string>& arguments, const fs::path& directory) {
-  const fs::path out = directory / "stdout.txt", err = directory / "stderr.txt";
-  std::string command = std::string(ISOWAVE_BINARY);
-  for (const std::string& a : arguments) command += " '" + a + "'";
-  command += " >'" + out.string() + "' 2>'" + err.string() + "'";
-  const int status = std::system(command.c_str());
-  RunResult r;
-  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  std::ifstream o(out), e(err);
-  r.out.assign(std::istreambuf_iterator<char>(o), {});
-  r.err.assign(std::istreambuf_iterator<char>(e), {});
-  return r;
-}
-
-class CliTest : public ::testing::Test {
- protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("isowave_cli_" + std::to_string(getpid()) + "_" + ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-  std::string path(const std::string& name) const { return (dir_ / name).string(); }
-  fs::path dir_;
-};
-
-// A small raw float NRRD volume of n^3 samples at `spacing`, value
-// field(i, j, k) at sample (i, j, k), written by the test.
-template <class Field>
-void write_nrrd(const std::string& file, int n, double spacing, const Field& field) {
-  std::ofstream out(file, std::ios::binary);
-  out << "NRRD0004\ntype: float\ndimension: 3\nsizes: " << n << " " << n << " " << n
-      << "\nencoding: raw\nendian: little\nspacings: " << spacing << " " << spacing << " " << spacing << "\n\n";
-  for (int k = 0; k < n; ++k)
-    for (int j = 0; j < n; ++j)
-      for (int i = 0; i < n; ++i) {
-        const float v = static_cast<float>(field(double(i), double(j), double(k)));
-        out.write(reinterpret_cast<const char*>(&v), 4);
-      }
-}
-
-// The sphere of write_sphere_nrrd: its centre in sample units.
-Vec3 sphere_centre(int n) { return {n / 2.0 - 0.31, n / 2.0 - 0.17, n / 2.0 - 0.23}; }
-
-// A sphere's distance field (surface at 0, radius in samples), spacing 0.5.
-void write_sphere_nrrd(const std::string& file, int n, double radius) {
-  const Vec3 centre = sphere_centre(n);
-  write_nrrd(file, n, 0.5, [&](double i, double j, double k) { return radius - norm(Vec3{i, j, k} - centre); });
-}
 
 // Each undirected edge of a polygon mesh and how many faces use it.
 std::map<std::pair<std::uint32_t, std::uint32_t>, int> edge_uses(const PolygonMesh& mesh) {

@@ -713,6 +713,30 @@ TEST(VolumeIo, RawAllTypesBothEndians) {
   }
 }
 
+// Given --dims and --type, a file of any name is raw samples (.bin, .dat and
+// .f32 are common); without them such a name is still refused as unknown.
+TEST(VolumeIo, RawDimsAndTypeReadAFileOfAnyName) {
+  TempDir dir;
+  const Samples s = make_samples(ScalarType::Float32, 60, 3, true);
+  for (const char* name : {"v.bin", "v.dat", "v.f32", "v"}) {
+    const std::string path = dir.file(name);
+    write_file(path, s.bytes(false));
+    VolumeReadOptions options;
+    options.dims = kDims;
+    options.type = ScalarType::Float32;
+    const Volume v = read_volume(path, options);
+    expect_geometry(v, kDims, {1, 1, 1}, {0, 0, 0}, path);
+    expect_values(v, s.expected, path);
+    try {
+      read_volume(path);
+      ADD_FAILURE() << path << ": expected an error without --dims and --type";
+    } catch (const Error& e) {
+      EXPECT_EQ(e.kind(), ErrorKind::InvalidArgument) << e.what();
+      EXPECT_NE(std::string(e.what()).find("--dims and --type"), std::string::npos) << e.what();
+    }
+  }
+}
+
 TEST(VolumeIo, RawNeedsDimsAndType) {
   TempDir dir;
   const std::string path = dir.file("x.raw");

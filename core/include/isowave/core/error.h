@@ -12,6 +12,7 @@ enum class ErrorKind {
   Format,           // a file's content is malformed, truncated or inconsistent
   Topology,         // a mesh is not the 2-manifold the stage requires
   Unsupported,      // a valid input the code does not handle
+  EmptyResult,      // a valid input that yields nothing to work on (an empty isosurface)
 };
 
 const char* to_string(ErrorKind kind);

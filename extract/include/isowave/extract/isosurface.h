@@ -118,10 +118,6 @@ Isosurface extract_isosurface(const Volume& volume, const IsosurfaceOptions& opt
 // reach). O(samples * sigma).
 Volume gaussian_smoothed(const Volume& volume, double sigma);
 
-// What an error about an empty isosurface adds so that the user can pick an
-// isovalue: " (finite values range LOW .. HIGH)", or " (no finite samples)".
-std::string value_range_note(const Volume& volume);
-
 struct ComponentRemoval {
   std::size_t components = 0;
   std::size_t vertices = 0;

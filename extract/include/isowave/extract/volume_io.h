@@ -12,7 +12,8 @@
 //
 // Formats, chosen by extension (case-insensitive):
 //   .raw         headerless samples; dims and type from the options, the file
-//                size must equal dims x sample size exactly.
+//                size must equal dims x sample size exactly. With dims and
+//                type given, a file of any name is read this way.
 //   .nrrd/.nhdr  NRRD0001-0005, attached or detached header (the data file is
 //                relative to the header), raw / gzip / ascii encoding, line
 //                and byte skip; 3-D scalar data only. Geometry from
@@ -38,7 +39,8 @@
 namespace isowave {
 
 struct VolumeReadOptions {
-  // .raw only (required there): samples along x, y, z and the sample type.
+  // .raw (required there; with both given, any file is read as raw): samples
+  // along x, y, z and the sample type.
   std::optional<std::array<std::size_t, 3>> dims;
   std::optional<ScalarType> type;
   bool big_endian = false;  // .raw only
@@ -54,10 +56,11 @@ struct VolumeReadOptions {
   std::string grid;
 };
 
-// Reads a volume, choosing the reader by extension (case-insensitive) or the
-// builtin: prefix (builtin:NAME[:N] calls make_builtin_field(NAME, N), N
-// defaulting to 128). NaN/Inf samples (including float64 samples beyond the
-// float range) are kept and counted in nonfinite_count.
+// Reads a volume. builtin:NAME[:N] calls make_builtin_field(NAME, N), N
+// defaulting to 128; a file is raw when options.dims and options.type are both
+// set, else its reader is chosen by extension (case-insensitive). NaN/Inf
+// samples (including float64 samples beyond the float range) are kept and
+// counted in nonfinite_count.
 Volume read_volume(const std::string& path, const VolumeReadOptions& options = {});
 
 // Parses "uint8", "int16", "float32", ... (also "float" and "double");
