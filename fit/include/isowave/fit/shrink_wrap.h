@@ -5,7 +5,8 @@
 //   relaxation  - every vertex moves to the average of its old position and
 //                 the centroid of its neighbours; a vertex on two sharp
 //                 (boundary) edges averages only its neighbours along them;
-//                 sharp vertices never move;
+//                 sharp vertices, and those held on a box face (see
+//                 Boundaries), do not relax;
 //   attraction  - every vertex moves along the unit average normal of its
 //                 faces to the nearest zero crossing of the signed-distance
 //                 field (trilinear) whose field gradient agrees with that
@@ -30,9 +31,10 @@
 //
 // Boundaries: the extracted surface's boundary lies on the faces of the
 // volume box. A boundary vertex within one cell of a box face is kept on that
-// face (snapped, relaxed along its boundary curve, attracted and corrected
-// within the face plane), so it slides along its boundary curve. Every vertex
-// is kept inside the box.
+// face (snapped, attracted and corrected within the face plane, not relaxed:
+// along its boundary curve the relaxation only shrinks the curve, which the
+// attraction does not restore where it is narrower than a cell), so it
+// slides along its boundary curve. Every vertex is kept inside the box.
 //
 // Every step is a Jacobi update (reads the previous positions, writes new
 // ones) split across threads (TBB), so results are identical for any thread
