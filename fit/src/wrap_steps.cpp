@@ -57,7 +57,9 @@ void relax_with(const WrapLevelMesh& mesh, const Volume& box_volume, double weig
     const Vec3& p = in[v];
     out[v] = p;
     Vec3 centroid;
-    if (mesh.role[v] == WrapRole::Fixed || !relaxation_centroid(mesh, v, in, centroid)) return;
+    // A vertex held on a box face does not relax: along its boundary curve the relaxation only shrinks
+    // the curve, which the attraction within the face does not restore where it is narrower than a cell.
+    if (mesh.role[v] == WrapRole::Fixed || mesh.box_face[v] >= 0 || !relaxation_centroid(mesh, v, in, centroid)) return;
     Vec3 relaxed = (1.0 - weight) * p + weight * centroid;
     if (tangent_only && tangent_only[v] && mesh.role[v] == WrapRole::Free) {
       // The unit average of the normals of its faces (as in the attraction).

@@ -3,7 +3,8 @@
 // Kobbelt et al.'s shrink-wrapping), applied to one level's control mesh:
 //   relaxation - every vertex moves toward the centroid of its neighbours
 //                (a boundary vertex: of its two boundary neighbours; fixed
-//                vertices never move);
+//                vertices and vertices held on a box face do not relax: the
+//                relaxation would only shrink a boundary curve on the face);
 //   attraction - every vertex moves along the unit average normal of its
 //                faces to the nearest zero crossing of the trilinear signed
 //                distance field whose gradient agrees with that normal.

@@ -8,23 +8,21 @@
 // the next corner of its triangle. Per corner we keep the opposite half-edge
 // (or kNone on the boundary) and its edge id; per edge one half-edge, the
 // accumulated error E_acc and the latest delta E. Flat arrays of small
-// records (vertex: position, half-edge, valence, loop, flags, region = 40
-// bytes; corner: 12 bytes, so a triangle is 36 contiguous bytes; edge: error
-// terms, stamp and bucket-queue links = 32 bytes)
-// indexed by vertex, corner or edge id: no per-element allocation for
-// millions of elements, next/prev/face are arithmetic on the corner index,
-// and the fields one evaluation reads of an element share a cache line (the
-// collapse loop works at random places, so each array an element is spread
-// over costs a miss). evaluate() with a FanCache gathers each vertex fan
-// once per collapse instead of once per stencil edge that needs it. On this
-// machine (2-core EPYC VM, ~70 ns L3, ~150 ns DRAM latency) a collapse of the
-// miranda isosurface still costs ~10 us of CPU: ~26 stencil evaluations of
-// which ~11 reach the geometry (~0.2-0.3 us each, mostly the (4.1)-(4.2)
-// arithmetic and flip tests) plus the cold misses of each neighbourhood.
+// records (vertex 40 bytes, corner 12, so a triangle is 36 contiguous bytes,
+// edge 32) indexed by vertex, corner or edge id: no per-element allocation
+// for millions of elements, next/prev/face are arithmetic on the corner
+// index, and the fields one evaluation reads of an element share a cache
+// line (the collapse loop works at random places, so each array an element
+// is spread over costs a miss). evaluate() with a FanCache gathers each
+// vertex fan once per collapse instead of once per stencil edge.
 //
 // Deleted triangles, edges and vertices are only marked; to_polygon_mesh()
 // compacts. Every operation is local: evaluate() and collapse() cost
 // O(valence of the two endpoints).
+//
+// Files: collapse_table.cpp (construction), legality.cpp (the rules,
+// evaluate), valence_flips.cpp (flips), collapse_mesh.cpp (collapse,
+// stencil, validation, output).
 #include <array>
 #include <cstdint>
 #include <memory>
@@ -261,7 +259,7 @@ class CollapseMesh {
   // those waits. For edges evaluated in a known order (a batch), three
   // steps at decreasing distance ahead, each reading only what the one
   // before fetched: the edge record, its corners, its vertices (and the
-  // opposite triangle). Miranda's collapse phase: about 3% faster.
+  // opposite triangle).
   void prefetch_edge_record(std::uint32_t e) const { __builtin_prefetch(&edges_[e]); }
   void prefetch_edge_corners(std::uint32_t e) const {
     const std::uint32_t h = edges_[e].halfedge;
@@ -310,8 +308,25 @@ class CollapseMesh {
   // Given a fan's ring vertex ids (entries 0..count), its positions and old
   // cross products.
   void fill_fan_geometry(std::uint32_t v, FanCache::Entry* entries, std::uint32_t count) const;
-  // Both constructors; vertex_order may be null (input order).
+  // Both constructors; vertex_order may be null (input order). The steps, in
+  // order (collapse_table.cpp); each throws Error(Topology) on what it finds.
   void build(const PolygonMesh& mesh, const std::uint32_t* vertex_order);
+  void build_vertices(const PolygonMesh& mesh, const std::uint32_t* vertex_order);
+  void build_corners(const PolygonMesh& mesh, const std::uint32_t* vertex_order,
+                     const std::vector<std::uint32_t>& new_index);
+  void pair_corners();  // opposites, vertex half-edges, valences, boundary flags
+  void number_edges();
+  void find_boundary_loops();
+  // Link condition on two gathered fans (evaluate()): the number of
+  // neighbours v_i and v_j share.
+  static int common_neighbours(const FanCache::Fan& fan_i, const FanCache::Entry* ring_i, bool boundary_i,
+                               const FanCache::Fan& fan_j, const FanCache::Entry* ring_j, bool boundary_j);
+  // How far moving endpoint `from` (fan `ring` of `corners` triangles, other
+  // endpoint `other`) to `p` moves the boundary curve within the surface:
+  // |(p - from) . m|, m the unit in-surface normal of the endpoint's other
+  // boundary edge (SimplifyOptions::boundary_curve_error).
+  static double boundary_curve_move(const FanCache::Entry* ring, std::uint32_t corners, std::uint32_t other,
+                                    const Vec3& from, const Vec3& p);
   // Makes vertices_[v].halfedge a live outgoing half-edge, the boundary one if v
   // is on the boundary, starting from the live outgoing half-edge `start`.
   void reset_vertex_halfedge(std::uint32_t v, std::uint32_t start);

@@ -57,73 +57,54 @@
 namespace isowave::simplify {
 
 struct SimplifyOptions {
-  // Stop collapsing when the mesh has at most this many vertices; 0 means as
-  // far as the rules allow. A target at or above the input vertex count
-  // performs no collapse (the report says so); edge removal still runs.
+  // Stop collapsing at this many vertices or fewer; 0: as far as the rules
+  // allow. At or above the input count no collapse happens (edge removal runs).
   std::size_t target_vertices = 0;
-  bool edge_removal = true;
+  bool edge_removal = true;  // merge triangles into quads and pentagons afterwards
   // Edge removal needs dot(n_0, n_1) >= this (paper: "for example .5"); in [-1, 1].
   double edge_removal_min_normal_dot = 0.5;
   // Collapse face-flip test: every surviving ring triangle needs
   // dot(n_old, n_new) >= this; in [-1, 1).
   double collapse_min_normal_dot = 0.0;
-  // A boundary-edge collapse also counts how far it moves the boundary curve
-  // within the surface: (4.1) measures moves along the face normals only, so
-  // on a flat stretch of surface (an isosurface grazing a box face) it sees
-  // no cost in shrinking a boundary loop to a sliver, which the fit cannot
-  // open again. The move is max over the endpoints' other boundary edges of
-  // |(p - v) . m|, m the edge's unit normal within its triangle; (4.2)'s
-  // weight then applies to max(delta_e1, that move). Not in the paper; false
-  // reproduces it.
+  // Not in the paper (false reproduces it): a boundary-edge collapse also
+  // pays for moving the boundary curve within the surface, max over the
+  // endpoints' other boundary edges of |(p - v) . m| (m the edge's unit
+  // normal within its triangle); (4.2)'s weight applies to max(delta_e1, that).
+  // (4.1) alone sees no cost in shrinking a loop on a flat stretch (an
+  // isosurface grazing a box face) to a sliver the fit cannot open again.
   bool boundary_curve_error = true;
-  // When the paper's rules stall (typically at mean valence ~7 on high-genus
-  // surfaces, where most edges would make a new vertex of valence > 8), go on:
-  // an edge blocked only by its new vertex's valence first flips up to 4 edges
-  // at its endpoints (each in a nearly flat quad, see flip_min_normal_dot),
-  // moving valence to neighbours that have room; the flips are undone when the
+  // Not in the paper (false reproduces it exactly): when the paper's rules
+  // stall (typically at mean valence ~7 on high-genus surfaces), an edge
+  // blocked only by its new vertex's valence first flips up to 4 edges at its
+  // endpoints (nearly flat quads, flip_min_normal_dot), undone if the
   // collapse is still illegal. Input vertices above max_valence are flipped
-  // down first. Not in the paper; off reproduces it exactly.
+  // down first.
   bool valence_flips = true;
   // A flip needs all pairs of the old and new triangles' unit normals to have
   // a dot product >= this; in [-1, 1].
   double flip_min_normal_dot = 0.7;
-  // Flip rounds: each queues every edge the relaxed valence rule admits; they
-  // stop early when one gains under 1% of the vertices. On miranda the first
-  // round removed 6.6% of the vertices left and a second 0.65% more in 0.7 s
-  // of serial time, hence one by default; >= 0.
+  // Flip rounds, >= 0: each queues every edge the relaxed valence rule
+  // admits; they stop early when one gains under 1% of the vertices.
   int max_flip_rounds = 1;
-  int max_valence = 8;                  // 3..32
-  // How a collapse updates its Fig. 8 stencil. The paper re-evaluates every
-  // stencil edge at once (false). Lazy (true): the edges at the new vertex,
-  // whose E_acc and ring changed, are re-evaluated at once; the stencil's
-  // other edges keep their queued priority until popped (a popped edge is
-  // evaluated anyway and goes back if its priority dropped), and one that had
-  // left the queue comes back at its last priority when the rules on vertex
-  // valences admit it. Not in the paper. Miranda (2.09 M vertices to ~90,000):
-  // two-thread collapse phase 11.0 -> 7.4 s; base mesh distance RMS 1.668 ->
-  // 1.685 cells; fitted Table 1 rows 20/10/5% unchanged, base row 78.6 ->
-  // 80.1% of a cell.
+  int max_valence = 8;  // 3..32
+  // How a collapse updates its Fig. 8 stencil. false (the paper): every
+  // stencil edge is re-evaluated at once. true (not in the paper): the edges
+  // at the new vertex at once, the others keep their queued priority until
+  // popped (and are evaluated then); one that had left the queue comes back
+  // at its last priority when the valence rules admit it. Faster, slightly
+  // different base mesh.
   bool lazy_stencil = true;
-  // Collapse order in the two-thread phase (see parallel) and the flip
-  // rounds. The paper pops one edge at a time in priority order (1). Batched
-  // (> 1): the loop takes every queued edge whose error is within this
-  // factor of the best queued one and collapses them in memory order (Morton
-  // order of the vertices, so consecutive collapses are neighbours and share
-  // cache lines); each is evaluated anyway and goes back if its priority fell
-  // below the batch. Not in the paper. The serial loop of the paper's rules
-  // between them, with the last and costliest plain collapses, keeps the
-  // paper's order (batched too, the miranda base mesh was 5% farther from the
-  // input). Miranda, full (2.33 M vertices): two-thread phase 9.0 -> 6.5 s;
-  // with components under 50 vertices removed: flip round 1.5 -> 1.2 s, base
-  // mesh distance RMS 1.685 -> 1.701 cells, fitted Table 1 rows within 0.12%
-  // of a cell (12.47 / 24.61 / 42.92 / 78.51 -> 12.53 / 24.73 / 42.99 /
-  // 78.60%). In [1, 1e20].
+  // Collapse order in the two-thread phase and the flip rounds, in
+  // [1, 1e20]. 1 (the paper): one edge at a time in priority order. > 1
+  // (not in the paper): every queued edge whose error is within this factor
+  // of the best one, in memory (Morton) order, each re-evaluated and requeued
+  // if its priority fell below the batch. The serial loop of the paper's
+  // rules always keeps the paper's order.
   double batch_error_factor = 10;
-  // Collapse on two threads first, each inside one half of the mesh (see
-  // collapse_in_parallel in simplify.cpp), then finish serially: about 1.6x
-  // faster on large meshes; same rules, a slightly different order. The flip
-  // round too (miranda: 1.2 -> 0.9 s). Used from parallel_min_vertices input
-  // vertices on.
+  // Collapse on two threads first, each inside one half of the mesh
+  // (collapse_loops.cpp), then finish serially; the flip rounds too. Same
+  // rules, a slightly different order, deterministic. Used from
+  // parallel_min_vertices input vertices on.
   bool parallel = true;
   std::size_t parallel_min_vertices = 200000;
   // Called once, on the calling thread, when the rest of the run is serial
@@ -193,9 +174,8 @@ struct SimplifyResult {
 // normal in (4.1)-(4.2) and no flip test, and no collapse creates a new one.
 // Time O(n log n) for the Morton sort, O(n) for the rest (the manifold checks
 // are part of the parallel corner-table build); peak memory about 380 bytes
-// per input vertex including the input (miranda isosurface, 2.3 M vertices:
-// 870 MB in a fresh process; every bucket queue keeps its links in the edge
-// records). A process that keeps freed memory for reuse shows more resident.
+// per input vertex including the input (every bucket queue keeps its links
+// in the edge records).
 SimplifyResult simplify(const PolygonMesh& triangles, const SimplifyOptions& options = {},
                         ProgressSink& progress = no_progress());
 
