@@ -296,12 +296,13 @@ int convert(const Args& raw) {
                     k ? ", " : "", row.percent, row.kept, rmse_percent(r, row.rms), rmse_percent(r, row.max),
                     static_cast<unsigned long long>(row.bytes), row.is_base ? "true" : "false");
       }
-      std::printf("]}");
+      std::printf("], \"quantization_rmse_percent_cell\": %.6g, \"quantization_max_percent_cell\": %.6g}",
+                  rmse_percent(r, r.quantization.rms), rmse_percent(r, r.quantization.max));
     }
     std::printf("]}\n");
   } else if (!quiet) {
     std::printf("\n%-28s %10s %9s %9s %10s %3s %8s  %s\n", "output", "bytes", "isosurf.", "base", "fine", "L",
-                "seconds", "RMSE [% cell] at percent of coefficients (base last)");
+                "seconds", "RMSE [% cell] against the full decode at percent kept (base last)");
     for (std::size_t j = 0; j < jobs.size(); ++j) {
       const JobOutcome& o = outcomes[j];
       if (!o.ok) {
@@ -333,6 +334,7 @@ int convert(const Args& raw) {
                   "fine faces are folded against the field gradient\n",
                   "", r.fit_isosurface.rms, r.fit_isosurface.max, r.fit_isosurface.far, 100.0 * r.uncovered_share,
                   kUncoveredCells, 100.0 * r.tangled_share());
+      std::printf("%-28s %s\n", "", describe_quantization_error(r.quantization, r.cell_size).c_str());
       if (r.base_attempts > 1)
         std::printf("%-28s the base mesh grew from %zu to %zu vertices (%d tries) to cover the isosurface\n", "",
                     r.first_base_vertices, r.base_vertices, r.base_attempts);

@@ -83,8 +83,10 @@ int stats(const Args& raw) {
       "IN.isw [--percents 100,20,10,5] [--csv | --json] [--plot FILE.svg]",
       "Prints the paper's Table 1 for IN.isw: coefficients kept (base vertices included), percent of full\n"
       "resolution, RMSE and maximum error in percent of the volume cell edge (over the fine control points,\n"
-      "against the full-resolution decode), bytes a progressive reader needs, bits per fine vertex and per\n"
-      "vertex of the extracted isosurface; the base-mesh row last. The cell edge is the grid spacing (the\n"
+      "against the full-resolution decode, so 100% is 0), bytes a progressive reader needs, bits per fine\n"
+      "vertex and per vertex of the extracted isosurface; the base-mesh row last. Then the quantization\n"
+      "error: the full-resolution decode against the fitted surface, as convert measured it (not in the\n"
+      "rows; in --json too). convert prints the same figures. The cell edge is the grid spacing (the\n"
       "geometric mean on anisotropic grids).",
       {{"percents", true, "percentages of full resolution to tabulate", "LIST"},
        {"csv", false, "print CSV", ""},
@@ -101,13 +103,19 @@ int stats(const Args& raw) {
   const std::string& input = args.positional()[0];
   const IswDecoded decoded = read_isw(input);
   if (decoded.truncated) throw Error(ErrorKind::Format, input + ": " + decoded.truncation_note + "; stats need the whole file");
-  const std::vector<RateDistortionRow> rows = rate_distortion(decoded, percents);
+  const ErrorTable errors = error_table(decoded, percents);
+  const std::vector<RateDistortionRow>& rows = errors.rows;
 
   const double cell = decoded.metadata.number("cell_size", 1.0);
   const bool cell_known = decoded.metadata.values.count("cell_size") != 0;
   const double fine = static_cast<double>(decoded.hierarchy->fine_vertex_count());
   const double extracted = decoded.metadata.number("extracted_vertices", 0);
   const auto pct = [&](double world) { return 100.0 * world / cell; };
+  const auto json_percent = [&](bool known, double world) {
+    char text[32] = "null";
+    if (known && std::isfinite(world)) std::snprintf(text, sizeof text, "%.6g", pct(world));
+    return std::string(text);
+  };
 
   if (args.has("json")) {
     const std::string note = decoded.metadata.text("cell_size_note");
@@ -124,7 +132,9 @@ int stats(const Args& raw) {
                   8.0 * static_cast<double>(r.bytes) / fine,
                   extracted > 0 ? 8.0 * static_cast<double>(r.bytes) / extracted : 0.0, r.is_base ? "true" : "false");
     }
-    std::printf("]}\n");
+    std::printf("], \"quantization_rmse_percent_cell\": %s, \"quantization_max_percent_cell\": %s}\n",
+                json_percent(errors.quantization.recorded, errors.quantization.rms).c_str(),
+                json_percent(errors.quantization.recorded, errors.quantization.max).c_str());
   } else if (args.has("csv")) {
     std::printf("coefficients,percent,rmse_percent_cell,max_percent_cell,bytes,bits_per_fine_vertex,bits_per_isosurface_vertex,base\n");
     for (const auto& r : rows)
@@ -162,10 +172,11 @@ int stats(const Args& raw) {
       else if (below_base.empty()) std::printf("  (base mesh)\n");
       else std::printf("  (base mesh, also for %s: at or below its share)\n", below_base.c_str());
     }
+    std::printf("\n%s\n", describe_quantization_error(errors.quantization, cell).c_str());
   }
   if (args.has("plot")) {
     std::vector<double> plot_percents = {2, 3, 5, 7.5, 10, 15, 20, 30, 50, 75, 100};
-    const std::vector<RateDistortionRow> curve = rate_distortion(decoded, plot_percents);
+    const std::vector<RateDistortionRow> curve = error_table(decoded, plot_percents).rows;
     AtomicFileWriter file(args.get("plot"));
     file.write(svg_plot(curve, cell, "RMSE against coefficients kept: " + decoded.metadata.text("source", input)));
     file.commit();
