@@ -84,10 +84,10 @@ int stats(const Args& raw) {
       "Prints the paper's Table 1 for IN.isw: coefficients kept (base vertices included), percent of full\n"
       "resolution, RMSE and maximum error in percent of the volume cell edge (over the fine control points,\n"
       "against the full-resolution decode, so 100% is 0), bytes a progressive reader needs, bits per fine\n"
-      "vertex and per vertex of the extracted isosurface; the base-mesh row last. Then the quantization\n"
-      "error: the full-resolution decode against the fitted surface, as convert measured it (not in the\n"
-      "rows; in --json too). convert prints the same figures. The cell edge is the grid spacing (the\n"
-      "geometric mean on anisotropic grids).",
+      "vertex and per vertex of the extracted isosurface; the base-mesh row last. Above the table, the\n"
+      "quantization error: the full-resolution decode against the fitted surface, as convert measured it\n"
+      "(--json has it too). convert prints the same figures (docs/FORMAT.md, \"Errors\"). The cell edge is\n"
+      "the grid spacing (the geometric mean on anisotropic grids).",
       {{"percents", true, "percentages of full resolution to tabulate", "LIST"},
        {"csv", false, "print CSV", ""},
        {"json", false, "print one JSON object", ""},
@@ -145,9 +145,10 @@ int stats(const Args& raw) {
     std::printf("%s: %s, isovalue %s, %d levels, %zu base vertices, %.0f fine control points\n", input.c_str(),
                 decoded.metadata.text("source", "unknown source").c_str(), decoded.metadata.text("isovalue", "?").c_str(),
                 decoded.levels, decoded.hierarchy->vertex_count(0), fine);
-    std::printf("cell edge %.6g%s\n\n", cell,
+    std::printf("cell edge %.6g%s\n", cell,
                 cell_known ? (decoded.metadata.text("cell_size_note").empty() ? "" : (" (" + decoded.metadata.text("cell_size_note") + ")").c_str())
                            : " (not recorded in the file: errors are in world units x 100)");
+    std::printf("%s\n\n", describe_quantization_error(errors.quantization, cell).c_str());
     std::printf("%12s %8s %14s %13s %12s %10s %12s\n", "coefficients", "percent", "RMSE [% cell]", "max [% cell]", "bytes",
                 "bits/fine", "bits/isovtx");
     // A percentage at or below the base mesh's share gives the base mesh:
@@ -172,7 +173,6 @@ int stats(const Args& raw) {
       else if (below_base.empty()) std::printf("  (base mesh)\n");
       else std::printf("  (base mesh, also for %s: at or below its share)\n", below_base.c_str());
     }
-    std::printf("\n%s\n", describe_quantization_error(errors.quantization, cell).c_str());
   }
   if (args.has("plot")) {
     std::vector<double> plot_percents = {2, 3, 5, 7.5, 10, 15, 20, 30, 50, 75, 100};
