@@ -101,8 +101,8 @@ std::vector<RateDistortionRow> rate_distortion(const IswDecoded& decoded, const 
     row.kept = h.vertex_count(0) + wavelets;
     row.percent = 100.0 * static_cast<double>(row.kept) / static_cast<double>(fine);
     PointErrors e;
-    if (reference && all_decoded_errors && wavelets >= decoded.ranked.size()) {
-      e = *all_decoded_errors;
+    if (wavelets >= decoded.ranked.size() && (!reference || all_decoded_errors)) {
+      if (reference) e = *all_decoded_errors;  // else: the full decode itself, zero
     } else {
       reconstruct_into(decoded, wavelets, -1, reconstruction);
       e = point_errors(reconstruction, compare_to, fine);

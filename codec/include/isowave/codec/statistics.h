@@ -41,14 +41,15 @@ struct ErrorTable {
   QuantizationError quantization;
 };
 
-// `decoded` must be a complete decode (all chunks). Rows for each percent (in
-// the given order), then the base mesh alone. Errors are measured against
-// `reference` (fine control points, e.g. the unquantized fitted ones) if
-// given, else against the full-resolution decode. Cost: one synthesis per row,
-// except that with `reference` and `all_decoded_errors` (the errors of the
-// synthesis of every decoded coefficient against it, which the caller
-// measured already, e.g. before encoding them) rows keeping every decoded
-// coefficient take those errors instead.
+// `decoded` must be a complete decode (all chunks; else Error(InvalidArgument)).
+// Rows for each percent in [0, 100] (in the given order), then the base mesh
+// alone. Errors are measured against `reference` (fine control points, at
+// least as many as the fine level has) if given, else against the
+// full-resolution decode. Cost: one synthesis per row, but rows keeping every
+// decoded coefficient need none without `reference` (they are zero) or with
+// `all_decoded_errors` (the errors of the synthesis of every decoded
+// coefficient against `reference`, which the caller measured already); plus
+// the full decode without `reference`.
 std::vector<RateDistortionRow> rate_distortion(const IswDecoded& decoded, const std::vector<double>& percents,
                                                const std::vector<Vec3>* reference = nullptr,
                                                const PointErrors* all_decoded_errors = nullptr);
@@ -57,7 +58,7 @@ std::vector<RateDistortionRow> rate_distortion(const IswDecoded& decoded, const 
 // the base-mesh row last. `full_decode`, if given, must be the synthesis of
 // every decoded coefficient (the caller has it already): it saves one
 // synthesis. Throws Error(InvalidArgument) for a truncated decode. Cost: one
-// synthesis per row below 100%.
+// synthesis per row below 100%, and the full decode unless given.
 ErrorTable error_table(const IswDecoded& decoded, const std::vector<double>& percents,
                        const std::vector<Vec3>* full_decode = nullptr);
 
@@ -71,8 +72,11 @@ QuantizationError recorded_quantization_error(const IswMetadata& metadata);
 // that the file does not record it.
 std::string describe_quantization_error(const QuantizationError& error, double cell_size);
 
-// Control points of the finest level from the `keep` most important decoded
-// coefficients (base always kept).
+// Control points of level `level` (-1: the finest; else 0..levels) from the
+// `keep` most important decoded coefficients (base always kept; a `keep`
+// beyond the decoded ones keeps them all), world units. Throws
+// Error(InvalidArgument) for a decode without a hierarchy (headers only).
+// Cost: one synthesis, O(fine vertices).
 std::vector<Vec3> reconstruct(const IswDecoded& decoded, std::size_t keep, int level = -1);
 // The same, synthesizing in the decoded coefficient array itself, which it
 // takes out of `decoded` (left empty; the other members stay valid): spares
