@@ -325,7 +325,8 @@ void print_json_result(const JobOutcome& o) {
                 k ? ", " : "", row.percent, row.kept, rmse_percent(r, row.rms), rmse_percent(r, row.max),
                 static_cast<unsigned long long>(row.bytes), row.is_base ? "true" : "false");
   }
-  std::printf("]}");
+  std::printf("], \"quantization_rmse_percent_cell\": %.6g, \"quantization_max_percent_cell\": %.6g}",
+              rmse_percent(r, r.quantization.rms), rmse_percent(r, r.quantization.max));
 }
 
 void print_json(const std::vector<Job>& jobs, const std::vector<JobOutcome>& outcomes, const Totals& totals) {
@@ -371,6 +372,7 @@ void print_table_row(const std::string& output, const JobOutcome& o) {
               "fine faces are folded against the field gradient\n",
               "", r.fit_isosurface.rms, r.fit_isosurface.max, r.fit_isosurface.far, 100.0 * r.uncovered_share,
               kUncoveredCells, 100.0 * r.folded_share());
+  std::printf("%-28s %s\n", "", describe_quantization_error(r.quantization, r.cell_size).c_str());
   if (r.base_attempts > 1)
     std::printf("%-28s the base mesh grew from %zu to %zu vertices (%d tries) to cover the isosurface\n", "",
                 r.first_base_vertices, r.base_vertices, r.base_attempts);
@@ -379,7 +381,7 @@ void print_table_row(const std::string& output, const JobOutcome& o) {
 // The summary table; a failed input's error was printed as it happened.
 void print_table(const std::vector<Job>& jobs, const std::vector<JobOutcome>& outcomes, const Totals& totals) {
   std::printf("\n%-28s %10s %9s %9s %10s %3s %8s  %s\n", "output", "bytes", "isosurf.", "base", "fine", "L",
-              "seconds", "RMSE [% cell] at percent of coefficients (base last)");
+              "seconds", "RMSE [% cell] against the full decode at percent kept (base last)");
   for (std::size_t j = 0; j < jobs.size(); ++j) {
     if (outcomes[j].ok) print_table_row(jobs[j].output, outcomes[j]);
     else std::printf("%-28s FAILED (the error is above)\n", (jobs[j].problem.empty() ? jobs[j].output : jobs[j].input).c_str());

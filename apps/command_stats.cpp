@@ -20,9 +20,11 @@ int stats(const Args& raw) {
       "IN.isw [--percents 100,20,10,5] [--csv | --json] [--plot FILE.svg]",
       "Prints the paper's Table 1 for IN.isw: coefficients kept (base vertices included), percent of full\n"
       "resolution, RMSE and maximum error in percent of the volume cell edge (over the fine control points,\n"
-      "against the full-resolution decode), bytes a progressive reader needs, bits per fine vertex and per\n"
-      "vertex of the extracted isosurface; the base-mesh row last. The cell edge is the grid spacing (the\n"
-      "geometric mean on anisotropic grids).",
+      "against the full-resolution decode, so 100% is 0), bytes a progressive reader needs, bits per fine\n"
+      "vertex and per vertex of the extracted isosurface; the base-mesh row last. Above the table, the\n"
+      "quantization error: the full-resolution decode against the fitted surface, as convert measured it\n"
+      "(--json has it too). convert prints the same figures (docs/FORMAT.md, \"Errors\"). The cell edge is\n"
+      "the grid spacing (the geometric mean on anisotropic grids).",
       {{"percents", true, "percentages of full resolution to tabulate", "LIST"},
        {"csv", false, "print CSV", ""},
        {"json", false, "print one JSON object", ""},
@@ -43,13 +45,19 @@ int stats(const Args& raw) {
   const std::string& input = args.positional()[0];
   const IswDecoded decoded = read_isw(input);
   if (decoded.truncated) throw Error(ErrorKind::Format, input + ": " + decoded.truncation_note + "; stats need the whole file");
-  const std::vector<RateDistortionRow> rows = rate_distortion(decoded, percents);
+  const ErrorTable errors = error_table(decoded, percents);
+  const std::vector<RateDistortionRow>& rows = errors.rows;
 
   const double cell = decoded.metadata.number("cell_size", 1.0);
   const bool cell_known = decoded.metadata.values.count("cell_size") != 0;
   const double fine = static_cast<double>(decoded.hierarchy->fine_vertex_count());
   const double extracted = decoded.metadata.number("extracted_vertices", 0);
   const auto pct = [&](double world) { return 100.0 * world / cell; };
+  const auto json_percent = [&](bool known, double world) {
+    char text[32] = "null";
+    if (known && std::isfinite(world)) std::snprintf(text, sizeof text, "%.6g", pct(world));
+    return std::string(text);
+  };
 
   if (args.has("json")) {
     const std::string note = decoded.metadata.text("cell_size_note");
@@ -66,7 +74,9 @@ int stats(const Args& raw) {
                   8.0 * static_cast<double>(r.bytes) / fine,
                   extracted > 0 ? 8.0 * static_cast<double>(r.bytes) / extracted : 0.0, r.is_base ? "true" : "false");
     }
-    std::printf("]}\n");
+    std::printf("], \"quantization_rmse_percent_cell\": %s, \"quantization_max_percent_cell\": %s}\n",
+                json_percent(errors.quantization.recorded, errors.quantization.rms).c_str(),
+                json_percent(errors.quantization.recorded, errors.quantization.max).c_str());
   } else if (args.has("csv")) {
     std::printf("coefficients,percent,rmse_percent_cell,max_percent_cell,bytes,bits_per_fine_vertex,bits_per_isosurface_vertex,base\n");
     for (const auto& r : rows)
@@ -77,9 +87,10 @@ int stats(const Args& raw) {
     std::printf("%s: %s, isovalue %s, %d levels, %zu base vertices, %.0f fine control points\n", input.c_str(),
                 decoded.metadata.text("source", "unknown source").c_str(), decoded.metadata.text("isovalue", "?").c_str(),
                 decoded.levels, decoded.hierarchy->vertex_count(0), fine);
-    std::printf("cell edge %.6g%s\n\n", cell,
+    std::printf("cell edge %.6g%s\n", cell,
                 cell_known ? (decoded.metadata.text("cell_size_note").empty() ? "" : (" (" + decoded.metadata.text("cell_size_note") + ")").c_str())
                            : " (not recorded in the file: errors are in world units x 100)");
+    std::printf("%s\n\n", describe_quantization_error(errors.quantization, cell).c_str());
     std::printf("%12s %8s %14s %13s %12s %10s %12s\n", "coefficients", "percent", "RMSE [% cell]", "max [% cell]", "bytes",
                 "bits/fine", "bits/isovtx");
     // A percentage at or below the base mesh's share gives the base mesh:
@@ -107,7 +118,7 @@ int stats(const Args& raw) {
   }
   if (args.has("plot")) {
     std::vector<double> plot_percents = {2, 3, 5, 7.5, 10, 15, 20, 30, 50, 75, 100};
-    const std::vector<RateDistortionRow> curve = rate_distortion(decoded, plot_percents);
+    const std::vector<RateDistortionRow> curve = error_table(decoded, plot_percents).rows;
     AtomicFileWriter file(args.get("plot"));
     const std::string name = std::filesystem::path(decoded.metadata.text("source", input)).filename().string();
     file.write(cli::rate_distortion_svg(curve, cell, "RMSE against coefficients kept: " + name));

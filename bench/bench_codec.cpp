@@ -256,14 +256,12 @@ void run_coding_stages(const std::string& path) {
     t.push_back(seconds_since(start));
     start = Clock::now();
     std::vector<Vec3> stored = quantize_coefficients(h, coefficients, options.step, options.class_weights);
-    std::vector<Vec3> synthesized = stored;
-    synthesize(h, synthesized);
-    const PointErrors quantization_errors = point_errors(synthesized, fitted, synthesized.size());
-    std::vector<Vec3>().swap(synthesized);
+    std::vector<Vec3> full_decode = stored;
+    synthesize(h, full_decode);
+    IswMetadata metadata;
+    record_quantization_error(point_errors(full_decode, fitted, full_decode.size()), metadata);
     t.push_back(seconds_since(start));
     start = Clock::now();
-    IswMetadata metadata;
-    metadata.values["quantization_rmse"] = std::to_string(quantization_errors.rms);
     std::vector<std::uint32_t> ranked;
     const std::string bytes = encode_isw(h, coefficients, metadata, options, &ranked);
     t.push_back(seconds_since(start));
@@ -271,7 +269,7 @@ void run_coding_stages(const std::string& path) {
     const IswDecoded expected = expected_decode(file.hierarchy, std::move(stored), std::move(ranked), bytes, "memory");
     t.push_back(seconds_since(start));
     start = Clock::now();
-    const std::vector<RateDistortionRow> rows = rate_distortion(expected, {100, 20, 10, 5}, &fitted, &quantization_errors);
+    const std::vector<RateDistortionRow> rows = error_table(expected, {100, 20, 10, 5}, &full_decode).rows;
     t.push_back(seconds_since(start));
     // What convert --verify adds: a full decode of the file.
     start = Clock::now();
@@ -289,7 +287,7 @@ void run_coding_stages(const std::string& path) {
     for (const RateDistortionRow& row : rows) last_rms.push_back(row.rms);
   }
   std::printf("best of %d: weights %.3f, quantization error %.3f, encode_isw %.3f (encode stage %.3f); expected "
-              "decode %.3f, rate_distortion %.3f (evaluate stage %.3f) s; a full decode (--verify) %.3f s\nrow RMS:",
+              "decode %.3f, error_table %.3f (evaluate stage %.3f) s; a full decode (--verify) %.3f s\nrow RMS:",
               kRuns, best[0], best[1], best[2], best[6], best[3], best[4], best[7], best[5]);
   for (double rms : last_rms) std::printf(" %.10g", rms);
   std::printf("\ndecode phases: headers %.3f, chunks %.3f, rank %.3f, dequantize %.3f s\n", phases.headers,

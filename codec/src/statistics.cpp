@@ -1,6 +1,8 @@
 #include "isowave/codec/statistics.h"
 
 #include <algorithm>
+#include <cmath>
+#include <cstdio>
 #include <utility>
 
 #include <tbb/blocked_range.h>
@@ -99,8 +101,8 @@ std::vector<RateDistortionRow> rate_distortion(const IswDecoded& decoded, const 
     row.kept = h.vertex_count(0) + wavelets;
     row.percent = 100.0 * static_cast<double>(row.kept) / static_cast<double>(fine);
     PointErrors e;
-    if (reference && all_decoded_errors && wavelets >= decoded.ranked.size()) {
-      e = *all_decoded_errors;
+    if (wavelets >= decoded.ranked.size() && (!reference || all_decoded_errors)) {
+      if (reference) e = *all_decoded_errors;  // else: the full decode itself, zero
     } else {
       reconstruct_into(decoded, wavelets, -1, reconstruction);
       e = point_errors(reconstruction, compare_to, fine);
@@ -114,6 +116,51 @@ std::vector<RateDistortionRow> rate_distortion(const IswDecoded& decoded, const 
   for (double percent : percents) add_row(coefficients_for_percent(h, percent), false);
   add_row(0, true);
   return rows;
+}
+
+ErrorTable error_table(const IswDecoded& decoded, const std::vector<double>& percents, const std::vector<Vec3>* full_decode) {
+  // Rows keeping every decoded coefficient are the full decode itself.
+  const PointErrors none;
+  ErrorTable table;
+  table.rows = rate_distortion(decoded, percents, full_decode, full_decode ? &none : nullptr);
+  table.quantization = recorded_quantization_error(decoded.metadata);
+  return table;
+}
+
+namespace {
+constexpr const char* kQuantizationRmseKey = "quantization_rmse";
+constexpr const char* kQuantizationMaxKey = "quantization_max";
+
+std::string ten_digits(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.10g", value);
+  return text;
+}
+}  // namespace
+
+void record_quantization_error(const PointErrors& errors, IswMetadata& metadata) {
+  metadata.values[kQuantizationRmseKey] = ten_digits(errors.rms);
+  metadata.values[kQuantizationMaxKey] = ten_digits(errors.max);
+}
+
+QuantizationError recorded_quantization_error(const IswMetadata& metadata) {
+  QuantizationError error;
+  error.rms = metadata.number(kQuantizationRmseKey, NAN);
+  error.max = metadata.number(kQuantizationMaxKey, NAN);
+  error.recorded = std::isfinite(error.rms) && error.rms >= 0;
+  if (!error.recorded) error = QuantizationError{};
+  return error;
+}
+
+std::string describe_quantization_error(const QuantizationError& error, double cell_size) {
+  if (!error.recorded) return "quantization error: not recorded in the file";
+  char max[48] = "not recorded";
+  if (std::isfinite(error.max)) std::snprintf(max, sizeof max, "%.3g%%", 100 * error.max / cell_size);
+  char text[160];
+  std::snprintf(text, sizeof text,
+                "quantization error (full decode against the fitted surface): RMSE %.3g%% of a cell, max %s",
+                100 * error.rms / cell_size, max);
+  return text;
 }
 
 }  // namespace isowave

@@ -304,12 +304,12 @@ IswMetadata metadata_of(const Volume& volume, const std::string& source, const C
 struct Coded {
   std::vector<Vec3> stored;            // the coefficients as quantized
   std::vector<std::uint32_t> ranked;   // the order the file sends them
-  PointErrors quantization_errors;     // of all stored coefficients against the fit
+  std::vector<Vec3> full_decode;       // the stored coefficients synthesized: what a 100% decode gives
 };
 
-// Analysis (Sec. 3) and coding: records the error quantization adds,
-// measured on the coefficients exactly as stored; the evaluation's row of
-// every coefficient is the same synthesis.
+// Analysis (Sec. 3) and coding: records the error quantization adds, the
+// full decode of the coefficients exactly as stored against the fitted
+// points (the summary's rows are measured against that full decode).
 Coded analyze_and_encode(const SubdivisionHierarchy& hierarchy, IswMetadata metadata, const ConvertOptions& options,
                          ConvertResult& result, ProgressSink& progress) {
   auto start = Clock::now();
@@ -326,19 +326,16 @@ Coded analyze_and_encode(const SubdivisionHierarchy& hierarchy, IswMetadata meta
   encode_options.class_weights = wavelet_norms(hierarchy);
   Coded coded;
   coded.stored = quantize_coefficients(hierarchy, coefficients, encode_options.step, encode_options.class_weights);
-  {
-    std::vector<Vec3> synthesized = coded.stored;
-    synthesize(hierarchy, synthesized);
-    coded.quantization_errors = point_errors(synthesized, result.fit.positions, synthesized.size());
-    metadata.values["quantization_rmse"] = number(coded.quantization_errors.rms);
-  }
+  coded.full_decode = coded.stored;
+  synthesize(hierarchy, coded.full_decode);
+  record_quantization_error(point_errors(coded.full_decode, result.fit.positions, coded.full_decode.size()), metadata);
   result.bytes = encode_isw(hierarchy, coefficients, metadata, encode_options, &coded.ranked);
   progress.end_stage();
   result.seconds.encode = seconds_since(start);
   return coded;
 }
 
-// Error summary against the fitted control points, from what the file holds
+// Error summary (error_table, as stats makes it), from what the file holds
 // as the encoder stored it (decoding the file again took half of this
 // stage's time on miranda; FileCheck::DecodeAgain still does).
 void evaluate(const std::shared_ptr<const SubdivisionHierarchy>& hierarchy, Coded coded, const std::string& source,
@@ -355,7 +352,9 @@ void evaluate(const std::shared_ptr<const SubdivisionHierarchy>& hierarchy, Code
       const IswDecoded decoded = decode_isw(result.bytes, source, decode_options);
       return decoded.ranked == expected.ranked && decoded.coefficients == expected.coefficients;
     });
-  result.summary = rate_distortion(expected, options.summary_percents, &result.fit.positions, &coded.quantization_errors);
+  ErrorTable errors = error_table(expected, options.summary_percents, &coded.full_decode);
+  result.summary = std::move(errors.rows);
+  result.quantization = errors.quantization;
   if (decodes_as_expected.valid() && !decodes_as_expected.get())
     throw std::logic_error(source + ": the file written does not decode to the coefficients it was coded from");
   progress.end_stage();

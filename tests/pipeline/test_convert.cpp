@@ -1,5 +1,5 @@
 // convert_volume(): the fit check that the error rows cannot make (they are
-// measured against the fit itself).
+// measured against the full decode of the file).
 #include <gtest/gtest.h>
 
 #include <algorithm>

@@ -57,14 +57,14 @@ std::pair<std::size_t, std::size_t> coefficient_class_range(const SubdivisionHie
 // random seed). Cost: 1 + 2 L syntheses.
 std::vector<double> wavelet_norms(const SubdivisionHierarchy& hierarchy);
 
-// Importance of every entry: weight of its class times its magnitude.
-// Base control points get +infinity (always kept).
+// Importance of every entry: weight of its class times its magnitude (world
+// units). Base control points get +infinity (always kept). Cost: O(entries).
 std::vector<double> importance(const SubdivisionHierarchy& hierarchy, const std::vector<Vec3>& coefficients,
                                const std::vector<double>& class_weights);
 
 // Zeroes every wavelet coefficient except the `keep` most important (ties by
 // index); base control points are never dropped. With unit weights this is
-// selection by raw magnitude.
+// selection by raw magnitude. Cost: O(entries) (a selection, not a sort).
 void keep_most_important(const SubdivisionHierarchy& hierarchy, std::vector<Vec3>& coefficients,
                          const std::vector<double>& class_weights, std::size_t keep);
 
@@ -75,7 +75,9 @@ std::size_t coefficients_for_percent(const SubdivisionHierarchy& hierarchy, doub
 // The same from the fine and base control point counts alone.
 std::size_t coefficients_for_percent(std::size_t fine_vertices, std::size_t base_vertices, double percent);
 
-// RMS and maximum of the distances between corresponding points.
+// RMS and maximum of the distances between corresponding points (the
+// points' units), over the first `count` of each; precondition: both hold at
+// least `count`. Cost: O(count).
 struct PointErrors {
   double rms = 0;
   double max = 0;

@@ -3,7 +3,9 @@
 // percentage of full resolution, the coefficients kept (base vertices
 // included), the RMS and maximum distance over the fine control points
 // between the reconstruction and the full-resolution decode, and the bytes a
-// progressive reader needs to reach it.
+// progressive reader needs to reach it. error_table() is the one definition
+// convert and stats report (docs/FORMAT.md, "Errors").
+#include <string>
 #include <vector>
 
 #include "isowave/codec/importance.h"
@@ -12,29 +14,69 @@
 namespace isowave {
 
 struct RateDistortionRow {
-  double percent = 0;                // of the fine control points
+  double percent = 0;                // of the fine control points, in (0, 100]
   std::size_t kept = 0;              // base vertices + kept wavelet coefficients
   std::size_t wavelet_coefficients = 0;
-  double rms = 0;                    // world units
-  double max = 0;                    // world units
+  double rms = 0;                    // world units, >= 0
+  double max = 0;                    // world units, >= 0
   std::uint64_t bytes = 0;           // file prefix a reader needs (headers, base, chunks up to this rank)
-  bool is_base = false;
+  bool is_base = false;              // the row of the base mesh alone (the last)
 };
 
-// `decoded` must be a complete decode (all chunks). Rows for each percent (in
-// the given order), then the base mesh alone. Errors are measured against
-// `reference` (fine control points, e.g. the unquantized fitted ones) if
-// given, else against the full-resolution decode. Cost: one synthesis per row,
-// except that with `reference` and `all_decoded_errors` (the errors of the
-// synthesis of every decoded coefficient against it, which the caller
-// measured already, e.g. before encoding them) rows keeping every decoded
-// coefficient take those errors instead.
+// How far the full-resolution decode lies from the fitted fine control points
+// (world units, over the fine control points): the error the quantization
+// step adds, which no row shows. The encoder measures it (it alone has the
+// fitted points) and records it in the file's metadata.
+struct QuantizationError {
+  double rms = 0;
+  double max = 0;         // NaN when the file records the RMS alone (files of older encoders)
+  bool recorded = false;  // false for files written without it: unknown, not zero
+};
+
+// What convert and stats report for a file: rows against the full-resolution
+// decode (what a reader gets at 100%, so that row is zero) and, separately,
+// the quantization error recorded in the metadata.
+struct ErrorTable {
+  std::vector<RateDistortionRow> rows;
+  QuantizationError quantization;
+};
+
+// `decoded` must be a complete decode (all chunks; else Error(InvalidArgument)).
+// Rows for each percent in [0, 100] (in the given order), then the base mesh
+// alone. Errors are measured against `reference` (fine control points, at
+// least as many as the fine level has) if given, else against the
+// full-resolution decode. Cost: one synthesis per row, but rows keeping every
+// decoded coefficient need none without `reference` (they are zero) or with
+// `all_decoded_errors` (the errors of the synthesis of every decoded
+// coefficient against `reference`, which the caller measured already); plus
+// the full decode without `reference`.
 std::vector<RateDistortionRow> rate_distortion(const IswDecoded& decoded, const std::vector<double>& percents,
                                                const std::vector<Vec3>* reference = nullptr,
                                                const PointErrors* all_decoded_errors = nullptr);
 
-// Control points of the finest level from the `keep` most important decoded
-// coefficients (base always kept).
+// The error table of a complete decode (see rate_distortion) for `percents`,
+// the base-mesh row last. `full_decode`, if given, must be the synthesis of
+// every decoded coefficient (the caller has it already): it saves one
+// synthesis. Throws Error(InvalidArgument) for a truncated decode. Cost: one
+// synthesis per row below 100%, and the full decode unless given.
+ErrorTable error_table(const IswDecoded& decoded, const std::vector<double>& percents,
+                       const std::vector<Vec3>* full_decode = nullptr);
+
+// Writes `errors` (the full decode against the fitted points, world units)
+// into the metadata keys quantization_rmse and quantization_max; the
+// quantization error error_table() reads back.
+void record_quantization_error(const PointErrors& errors, IswMetadata& metadata);
+QuantizationError recorded_quantization_error(const IswMetadata& metadata);
+
+// One line for users: the quantization error in percent of `cell_size`, or
+// that the file does not record it.
+std::string describe_quantization_error(const QuantizationError& error, double cell_size);
+
+// Control points of level `level` (-1: the finest; else 0..levels) from the
+// `keep` most important decoded coefficients (base always kept; a `keep`
+// beyond the decoded ones keeps them all), world units. Throws
+// Error(InvalidArgument) for a decode without a hierarchy (headers only).
+// Cost: one synthesis, O(fine vertices).
 std::vector<Vec3> reconstruct(const IswDecoded& decoded, std::size_t keep, int level = -1);
 // The same, synthesizing in the decoded coefficient array itself, which it
 // takes out of `decoded` (left empty; the other members stay valid): spares

@@ -137,8 +137,10 @@ struct ConvertResult {
   // vertex count; base_vertices is the last one's.
   int base_attempts = 1;
   std::size_t first_base_vertices = 0;
-  // Against the fitted (unquantized) fine control points; see rate_distortion().
+  // error_table() of the file written, as `isowave stats` reports it: rows
+  // against the full-resolution decode; the quantization error separately.
   std::vector<RateDistortionRow> summary;
+  QuantizationError quantization;
   std::vector<std::string> warnings;  // one line each, e.g. a base mesh kept large by the topology
 };
 

@@ -1,0 +1,531 @@
+// The .isw decoder: one function per section (docs/FORMAT.md), and a driver
+// that reads them in order. Every count is checked against the bytes present
+// before anything is allocated, and every loop is bounded by the bytes it
+// reads, so hostile files cost time linear in their size.
+#include <algorithm>
+#include <cassert>
+#include <chrono>
+#include <cmath>
+#include <exception>
+#include <optional>
+#include <string>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_group.h>
+
+#include "isowave/codec/importance.h"
+#include "isowave/codec/isw_format.h"
+#include "isowave/core/error.h"
+#include "isowave/core/huge_page_vector.h"
+#include "isowave/core/mesh_io.h"
+#include "isowave/core/mesh_topology.h"
+#include "isowave/transform/hierarchy.h"
+#include "isw_models.h"
+#include "isw_sections.h"
+
+namespace isowave {
+
+using namespace detail;
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
+
+// The coefficient classes of the hierarchy a file's base mesh and level
+// count make, from the counts alone (see CoefficientClasses). Above 2^53 the
+// counts are inexact (hostile files); the caller rejects such sizes.
+CoefficientClasses classes_from_counts(const PolygonMesh& base, std::size_t base_edges, int levels) {
+  const std::vector<LevelCounts> counts = refinement_counts(level_counts(base, base_edges), levels);
+  const auto exact = [](double v) { return v < 9e15 ? static_cast<std::size_t>(v) : std::size_t{1} << 53; };
+  std::array<std::size_t, SubdivisionHierarchy::kMaxLevels + 1> vertex_counts{};
+  std::array<std::size_t, SubdivisionHierarchy::kMaxLevels> parent_faces{};
+  for (int l = 0; l <= levels; ++l) vertex_counts[static_cast<std::size_t>(l)] = exact(counts[static_cast<std::size_t>(l)].vertices);
+  for (int l = 1; l <= levels; ++l) parent_faces[static_cast<std::size_t>(l - 1)] = exact(counts[static_cast<std::size_t>(l - 1)].faces);
+  return CoefficientClasses(vertex_counts.data(), parent_faces.data(), levels);
+}
+
+// Builds the subdivision hierarchy on a TBB thread while the caller decodes
+// the coefficient chunks; get() waits for it and rethrows its error, as a
+// format error of the file (`context` names it) when the base mesh is one the
+// hierarchy cannot take.
+class HierarchyBuild {
+ public:
+  HierarchyBuild() = default;
+  HierarchyBuild(const HierarchyBuild&) = delete;
+  HierarchyBuild& operator=(const HierarchyBuild&) = delete;
+  ~HierarchyBuild() { wait(); }
+
+  void start(const PolygonMesh& base, int levels, const std::string& context) {
+    // Its own copy of the topology: the caller goes on writing base positions.
+    PolygonMesh topology;
+    topology.face_offsets = base.face_offsets;
+    topology.face_vertices = base.face_vertices;
+    topology.sharp = base.sharp;
+    topology.positions.resize(base.vertex_count());
+    started_ = true;
+    group_.run([this, topology = std::move(topology), levels, context] {
+      const auto start = Clock::now();
+      try {
+        hierarchy_ = std::make_shared<const SubdivisionHierarchy>(topology, levels);
+      } catch (const Error& error) {
+        error_ = std::make_exception_ptr(Error(ErrorKind::Format, context + error.what()));
+      } catch (...) {
+        error_ = std::current_exception();
+      }
+      seconds_ = seconds_since(start);
+    });
+  }
+  bool started() const { return started_; }
+  double seconds() const { return seconds_; }  // the build's own duration, once waited for
+  std::shared_ptr<const SubdivisionHierarchy> get() {
+    rethrow_error();
+    return hierarchy_;
+  }
+  // Rethrows the build's error, if any: it takes precedence over errors found
+  // meanwhile in later sections, as when the build came first.
+  void rethrow_error() {
+    wait();
+    if (error_) std::rethrow_exception(error_);
+  }
+
+ private:
+  void wait() {
+    if (!started_ || waited_) return;
+    waited_ = true;
+    group_.wait();  // the task catches everything, so this does not throw
+  }
+
+  tbb::task_group group_;
+  bool started_ = false, waited_ = false;
+  std::shared_ptr<const SubdivisionHierarchy> hierarchy_;
+  std::exception_ptr error_;
+  double seconds_ = 0;
+};
+
+// What the sections hand on to later ones.
+struct DecodeState {
+  DecodeState(const std::string& file_bytes, const std::string& file_name, const IswDecodeOptions& decode_options)
+      : bytes(file_bytes), name(file_name), options(decode_options), limit(decode_options.max_coefficients) {}
+
+  const std::string& bytes;
+  const std::string& name;
+  const IswDecodeOptions& options;
+  const Clock::time_point start = Clock::now();
+  IswDecoded result;
+  // The hierarchy is built during the chunk decoding, which needs only its
+  // counts (the layout).
+  HierarchyBuild build;
+  std::shared_ptr<const SubdivisionHierarchy> hierarchy;
+  std::optional<CoefficientClasses> layout;
+  std::uint64_t limit;  // ranked coefficients wanted
+  std::vector<std::uint64_t> chunk_ends;
+  // Quantized base control points (the prediction reads them), then the
+  // decoded wavelet coefficients' values in rank order, parallel to
+  // result.ranked: at a few percent only a few of the fine entries.
+  std::vector<QuantizedVector> base_q;
+  std::vector<QuantizedVector> ranked_q;
+  std::vector<std::uint8_t> significant;  // per fine entry: sent by an earlier chunk
+  bool saw_end = false;
+};
+
+// ------------------------------------------------------------ META
+
+void decode_meta(std::string_view payload, IswMetadata& metadata) {
+  std::size_t start = 0;
+  while (start < payload.size()) {
+    std::size_t end = payload.find('\n', start);
+    if (end == std::string::npos) end = payload.size();
+    const std::string line(payload.substr(start, end - start));
+    const std::size_t eq = line.find('=');
+    if (eq != std::string::npos) metadata.values[line.substr(0, eq)] = line.substr(eq + 1);
+    start = end + 1;
+  }
+}
+
+// ------------------------------------------------------------ BASE
+
+void decode_base(PayloadReader& reader, PolygonMesh& base) {
+  const auto vertices = reader.read<std::uint32_t>();
+  const auto faces = reader.read<std::uint32_t>();
+  const auto corners = reader.read<std::uint32_t>();
+  const auto sharp_count = reader.read<std::uint32_t>();
+  const auto coded_size = reader.read<std::uint64_t>();
+  if (coded_size != reader.remaining()) reader.fail("has an inconsistent size");
+  const std::uint64_t integer_budget = kMaxIntegersPerCodedByte * (coded_size + 16);
+  if (faces == 0 || corners < 3ull * faces || vertices > corners || sharp_count > vertices ||
+      std::uint64_t{corners} + faces + sharp_count > integer_budget)
+    reader.fail("has impossible counts");
+  const std::string_view coded = reader.bytes(coded_size);
+  RangeDecoder rc(reinterpret_cast<const std::uint8_t*>(coded.data()), coded.size());
+  BaseModels m;
+  base.positions.assign(vertices, Vec3{});
+  base.face_offsets.reserve(std::size_t{faces} + 1);
+  base.face_vertices.reserve(corners);
+  std::int64_t previous_first = 0;
+  std::vector<std::uint32_t> face;
+  for (std::uint32_t f = 0; f < faces; ++f) {
+    const std::int64_t size_code = decode_integer(rc, m.face_size);
+    if (size_code < 0 || base.face_vertices.size() + 3 + static_cast<std::uint64_t>(size_code) > corners)
+      reader.fail("has an invalid face size");
+    face.assign(static_cast<std::size_t>(size_code + 3), 0);
+    const std::int64_t first = previous_first + decode_integer(rc, m.first_index);
+    for (std::size_t k = 0; k < face.size(); ++k) {
+      const std::int64_t index = k == 0 ? first : first + decode_integer(rc, m.other_index);
+      if (index < 0 || index >= vertices) reader.fail("has a vertex index out of range");
+      face[k] = static_cast<std::uint32_t>(index);
+    }
+    previous_first = first;
+    base.add_face(face.data(), face.size());
+  }
+  if (base.face_vertices.size() != corners) reader.fail("has an inconsistent corner count");
+  if (sharp_count > 0) base.sharp.assign(vertices, 0);
+  std::int64_t previous_sharp = -1;
+  for (std::uint32_t s = 0; s < sharp_count; ++s) {
+    const std::int64_t v = previous_sharp + decode_integer(rc, m.sharp_gap);
+    if (v <= previous_sharp || v >= vertices) reader.fail("has an invalid sharp vertex");
+    base.sharp[static_cast<std::size_t>(v)] = 1;
+    previous_sharp = v;
+  }
+  if (rc.overran()) reader.fail("is corrupt (coded data ends early)");
+  try {
+    require_manifold(base, "base mesh");
+  } catch (const Error& error) {
+    reader.fail(std::string("holds an invalid base mesh: ") + error.what());
+  }
+}
+
+// ------------------------------------------------------------ QUAN
+
+void decode_quantization(PayloadReader& reader, DecodeState& state) {
+  IswDecoded& result = state.result;
+  result.step = reader.read<double>();
+  const auto levels = reader.read<std::uint32_t>();
+  const auto classes = reader.read<std::uint32_t>();
+  if (!(result.step > 0) || !std::isfinite(result.step)) reader.fail("has an invalid quantization step");
+  if (levels > kMaxLevels || classes != 1 + 2 * levels) reader.fail("has an invalid level count");
+  result.levels = static_cast<int>(levels);
+  for (std::uint32_t c = 0; c < classes; ++c) {
+    const double w = reader.read<double>();
+    if (!(w > 0) || !std::isfinite(w)) reader.fail("has an invalid class weight");
+    result.class_weights.push_back(w);
+  }
+  result.coefficients_total = reader.read<std::uint64_t>();
+  const auto chunks = reader.read<std::uint32_t>();
+  if (chunks > reader.remaining() / 8) reader.fail("has an impossible chunk count");
+  std::uint64_t previous = 0;
+  for (std::uint32_t c = 0; c < chunks; ++c) {
+    const auto end = reader.read<std::uint64_t>();
+    if (end <= previous || end > result.coefficients_total) reader.fail("has invalid chunk boundaries");
+    state.chunk_ends.push_back(end);
+    previous = end;
+  }
+  if (!state.chunk_ends.empty() && state.chunk_ends.back() != result.coefficients_total)
+    reader.fail("has invalid chunk boundaries");
+  result.chunks_total = chunks;
+}
+
+// After QUAN: lays out the coefficient classes, bounds the hierarchy by the
+// file size and starts building it (or takes options.hierarchy when it is the
+// file's), and sets the coefficient limit.
+void plan_hierarchy(PayloadReader& reader, DecodeState& state) {
+  IswDecoded& result = state.result;
+  const auto justified = [&](const CoefficientClasses& counts) {
+    const double estimate = static_cast<double>(counts.fine());
+    return estimate <= static_cast<double>(kMaxFineVertices) &&
+           estimate <= static_cast<double>(kFineVerticesPerFileByte * state.bytes.size() + (1u << 20));
+  };
+  const SubdivisionHierarchy* known = state.options.hierarchy.get();
+  const bool reuse = known && known->levels() == result.levels &&
+                     known->base().face_offsets == result.base.face_offsets &&
+                     known->base().face_vertices == result.base.face_vertices &&
+                     known->base().sharp_count() == result.base.sharp_count() &&
+                     (result.base.sharp_count() == 0 || known->base().sharp == result.base.sharp);
+  result.seconds.headers = seconds_since(state.start);
+  // With every corner counted as an edge the estimate can only grow: if
+  // even that is justified, the build starts before the exact edge count.
+  const bool early =
+      !reuse && justified(classes_from_counts(result.base, result.base.face_vertices.size(), result.levels));
+  const std::string build_context = state.name + ": section BASE holds a base mesh the subdivision hierarchy cannot take: ";
+  if (early) state.build.start(result.base, result.levels, build_context);
+  state.layout.emplace(classes_from_counts(result.base, summarize_topology(result.base).edges, result.levels));
+  if (!justified(*state.layout)) reader.fail("describes a hierarchy larger than the file can justify");
+  if (reuse) state.hierarchy = state.options.hierarchy;
+  else if (!early) state.build.start(result.base, result.levels, build_context);
+  const std::size_t base_count = state.layout->base();
+  state.limit = std::min<std::uint64_t>(
+      state.limit, coefficients_for_percent(state.layout->fine(), base_count, state.options.max_percent));
+  if (result.coefficients_total > state.layout->fine() - base_count)
+    reader.fail("claims more coefficients than the hierarchy has");
+}
+
+// ------------------------------------------------------------ BPTS
+
+void decode_base_points(PayloadReader& reader, DecodeState& state) {
+  PolygonMesh& base = state.result.base;
+  const auto coded_size = reader.read<std::uint64_t>();
+  if (coded_size != reader.remaining()) reader.fail("has an inconsistent size");
+  if (3ull * base.vertex_count() > kMaxIntegersPerCodedByte * (coded_size + 16)) reader.fail("is too short");
+  const std::string_view coded = reader.bytes(coded_size);
+  RangeDecoder rc(reinterpret_cast<const std::uint8_t*>(coded.data()), coded.size());
+  std::vector<QuantizedVector>& q = state.base_q;
+  q.assign(base.vertex_count(), QuantizedVector{0, 0, 0});
+  std::array<IntegerModel, 3> models;
+  const auto neighbours = earlier_neighbours(base);
+  const double s = class_step(state.result.step, state.result.class_weights, 0);
+  for (std::size_t v = 0; v < base.vertex_count(); ++v) {
+    const QuantizedVector prediction = predict_base(q, neighbours[v], v);
+    for (int axis = 0; axis < 3; ++axis) {
+      q[v][axis] = prediction[axis] + decode_integer(rc, models[static_cast<std::size_t>(axis)]);
+      if (std::abs(q[v][axis]) > (1ll << 40)) reader.fail("holds an impossible value");
+    }
+    base.positions[v] = {q[v][0] * s, q[v][1] * s, q[v][2] * s};
+  }
+  if (rc.overran()) reader.fail("is corrupt (coded data ends early)");
+}
+
+// ------------------------------------------------------------ CHNK
+
+struct ChunkCoefficients {
+  std::vector<std::uint32_t> indices;   // in index order
+  std::vector<QuantizedVector> values;  // parallel to indices
+};
+
+// The significance flags and components of one chunk's `count` coefficients,
+// from the `coded_size` bytes left in `reader`.
+ChunkCoefficients decode_chunk_coefficients(PayloadReader& reader, DecodeState& state, std::uint64_t coded_size,
+                                            std::uint64_t count) {
+  if (coded_size != reader.remaining()) reader.fail("has an inconsistent size");
+  const std::string_view coded = reader.bytes(coded_size);
+  RangeDecoder rc(reinterpret_cast<const std::uint8_t*>(coded.data()), coded.size());
+  const int classes = state.layout->count();
+  ChunkModels models(classes);
+  ChunkCoefficients fresh;
+  std::uint64_t found = 0;
+  for (int c = 1; c < classes; ++c) {
+    const auto [first, last] = state.layout->range(c);
+    int previous_flag = 0;
+    std::array<int, 3> previous_bucket{0, 0, 0};
+    // The two flag contexts as locals, so that they stay in registers
+    // through the millions of flags (the same arithmetic as in memory).
+    Probability flag_after_zero = models.flags[static_cast<std::size_t>(c)][0];
+    Probability flag_after_one = models.flags[static_cast<std::size_t>(c)][1];
+    for (std::size_t i = first; i < last; ++i) {
+      if (state.significant[i]) continue;
+      // A flag costs at least 0.02 bits (the models saturate), so a
+      // stream that ran out is found within a bounded amount of work:
+      // a hostile chunk cannot make the scan outlast its bytes.
+      if ((i & 0xFFFF) == 0 && rc.overran()) reader.fail("is corrupt (coded data ends early)");
+      const int flag = previous_flag ? rc.decode_bit(flag_after_one) : rc.decode_bit(flag_after_zero);
+      previous_flag = flag;
+      if (!flag) continue;
+      if (++found > count) reader.fail("holds more coefficients than it declares");
+      state.significant[i] = 1;
+      QuantizedVector value;
+      for (int axis = 0; axis < 3; ++axis) {
+        value[axis] = decode_integer(rc, models.component(c, axis, previous_bucket[static_cast<std::size_t>(axis)]));
+        previous_bucket[static_cast<std::size_t>(axis)] = magnitude_bucket(value[axis]);
+      }
+      if (value[0] == 0 && value[1] == 0 && value[2] == 0) reader.fail("holds a zero coefficient");
+      fresh.indices.push_back(static_cast<std::uint32_t>(i));
+      fresh.values.push_back(value);
+    }
+    models.flags[static_cast<std::size_t>(c)] = {flag_after_zero, flag_after_one};
+  }
+  if (found != count) reader.fail("holds fewer coefficients than it declares");
+  if (rc.overran()) reader.fail("is corrupt (coded data ends early)");
+  return fresh;
+}
+
+// Appends a chunk's coefficients to the ranked lists in the encoder's order.
+void rank_chunk(const ChunkCoefficients& fresh, DecodeState& state) {
+  IswDecoded& result = state.result;
+  std::vector<RankedEntry> keyed(fresh.indices.size());
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, keyed.size(), kParallelGrain),
+                    [&](const tbb::blocked_range<std::size_t>& r) {
+                      for (std::size_t k = r.begin(); k < r.end(); ++k)
+                        keyed[k] = {importance_key(state.layout->of(fresh.indices[k]), fresh.values[k], result.step,
+                                                   result.class_weights),
+                                    fresh.indices[k], static_cast<std::uint32_t>(k)};
+                    });
+  sort_by_importance(keyed);
+  for (const RankedEntry& entry : keyed) {
+    result.ranked.push_back(entry.index);
+    state.ranked_q.push_back(fresh.values[entry.position]);
+  }
+}
+
+// Returns the number of coefficients the chunk held.
+std::uint64_t decode_chunk(PayloadReader& reader, DecodeState& state) {
+  IswDecoded& result = state.result;
+  const auto chunk_start = Clock::now();
+  const auto chunk = reader.read<std::uint32_t>();
+  const auto begin = reader.read<std::uint64_t>();
+  const auto end = reader.read<std::uint64_t>();
+  const auto coded_size = reader.read<std::uint64_t>();
+  const std::vector<std::uint64_t>& ends = state.chunk_ends;
+  if (chunk != result.chunks_decoded || chunk >= ends.size() || end != ends[chunk] ||
+      begin != (chunk == 0 ? 0 : ends[chunk - 1]))
+    reader.fail("is out of order or inconsistent with QUAN");
+  const ChunkCoefficients fresh = decode_chunk_coefficients(reader, state, coded_size, end - begin);
+  result.seconds.chunks += seconds_since(chunk_start);
+  const auto rank_start = Clock::now();
+  rank_chunk(fresh, state);
+  result.seconds.rank += seconds_since(rank_start);
+  ++result.chunks_decoded;
+  return end - begin;
+}
+
+// ------------------------------------------------------------ driver steps
+
+enum class Next { Continue, Stop, HeadersOnly };
+
+// Decodes one known section into `state`; says whether to read on.
+Next decode_section(const Section& section, DecodeState& state) {
+  PayloadReader reader = section.reader();
+  IswSectionInfo info = section.info;
+  Next next = Next::Continue;
+  if (section.tag == "META") {
+    decode_meta(section.payload, state.result.metadata);
+  } else if (section.tag == "BASE") {
+    decode_base(reader, state.result.base);
+  } else if (section.tag == "QUAN") {
+    decode_quantization(reader, state);
+    plan_hierarchy(reader, state);
+  } else if (section.tag == "BPTS") {
+    decode_base_points(reader, state);
+    if (state.options.headers_only) {
+      next = Next::HeadersOnly;
+    } else {
+      reserve_fresh_on_huge_pages(state.significant, state.layout->fine());
+      state.significant.assign(state.layout->fine(), 0);
+    }
+  } else if (section.tag == "CHNK") {
+    info.coefficients = decode_chunk(reader, state);
+    // Stop at the limit, but read END after the last chunk.
+    const IswDecoded& result = state.result;
+    if (result.ranked.size() >= state.limit && result.chunks_decoded < result.chunks_total) next = Next::Stop;
+  } else {  // END
+    if (state.result.chunks_decoded != state.result.chunks_total)
+      throw Error(ErrorKind::Format, section.where + ": chunks are missing");
+    state.saw_end = true;
+    next = Next::Stop;
+  }
+  state.result.sections.push_back(info);
+  return next;
+}
+
+// options.headers_only: the section table after BPTS, without decoding it.
+IswDecoded finish_headers_only(DecodeState& state, SectionWalker& sections) {
+  IswDecoded& result = state.result;
+  if (state.build.started()) state.hierarchy = state.build.get();
+  result.hierarchy = state.hierarchy;
+  result.truncated = sections.list_rest(result.sections);
+  if (result.truncated)
+    result.truncation_note = "file is truncated after byte " + std::to_string(sections.position()) + " of " +
+                             std::to_string(state.bytes.size()) + " (not checked further: headers only)";
+  return std::move(result);
+}
+
+void await_hierarchy(DecodeState& state) {
+  IswDecoded& result = state.result;
+  if (state.build.started()) {
+    const auto wait_start = Clock::now();
+    state.hierarchy = state.build.get();
+    result.seconds.hierarchy_wait = seconds_since(wait_start);
+    result.seconds.hierarchy = state.build.seconds();
+  }
+  assert(*state.layout == CoefficientClasses(*state.hierarchy));
+  result.hierarchy = state.hierarchy;
+}
+
+// A file is truncated when it ends before END unless the limit stopped the
+// decode first; the note says what was decoded.
+void note_truncation(DecodeState& state, bool cut) {
+  IswDecoded& result = state.result;
+  const bool stopped_early = result.ranked.size() >= state.limit && result.chunks_decoded < result.chunks_total;
+  result.truncated = cut || (!state.saw_end && !stopped_early);
+  if (!result.truncated) return;
+  result.truncation_note = result.chunks_decoded < result.chunks_total
+                               ? "file is truncated inside the coefficient stream: decoded " +
+                                     std::to_string(result.chunks_decoded) + " of " +
+                                     std::to_string(result.chunks_total) + " chunks (" +
+                                     std::to_string(result.ranked.size()) + " of " +
+                                     std::to_string(result.coefficients_total) + " coefficients)"
+                               : "file ends before its END section (all coefficient chunks were decoded)";
+}
+
+// The coarse-to-fine array: zero except the base control points and the
+// coefficients kept (at most `limit`).
+void dequantize_kept(DecodeState& state) {
+  IswDecoded& result = state.result;
+  const auto dequantize_start = Clock::now();
+  if (result.ranked.size() > state.limit) result.ranked.resize(static_cast<std::size_t>(state.limit));
+  const std::size_t fine = state.layout->fine();
+  reserve_fresh_on_huge_pages(result.coefficients, fine);
+  result.coefficients.resize(fine);
+  std::copy(result.base.positions.begin(), result.base.positions.end(), result.coefficients.begin());
+  for (std::size_t r = 0; r < result.ranked.size(); ++r) {
+    const std::uint32_t i = result.ranked[r];
+    const double s = class_step(result.step, result.class_weights, state.layout->of(i));
+    const QuantizedVector& q = state.ranked_q[r];
+    result.coefficients[i] = {q[0] * s, q[1] * s, q[2] * s};
+  }
+  result.seconds.dequantize = seconds_since(dequantize_start);
+}
+
+}  // namespace
+
+IswDecoded decode_isw(const std::string& bytes, const std::string& name, const IswDecodeOptions& options) {
+  DecodeState state(bytes, name, options);
+  read_file_header(bytes, name, state.result);
+  SectionWalker sections(bytes, name);
+  try {
+    while (const std::optional<Section> section = sections.next()) {
+      if (!section->known) {
+        state.result.sections.push_back(section->info);
+        continue;
+      }
+      const Next next = decode_section(*section, state);
+      if (next == Next::HeadersOnly) return finish_headers_only(state, sections);
+      if (next == Next::Stop) break;
+    }
+    sections.require_headers();
+  } catch (...) {
+    state.build.rethrow_error();
+    throw;
+  }
+  await_hierarchy(state);
+  note_truncation(state, sections.truncated());
+  dequantize_kept(state);
+  return std::move(state.result);
+}
+
+IswDecoded expected_decode(const std::shared_ptr<const SubdivisionHierarchy>& hierarchy, std::vector<Vec3> stored,
+                           std::vector<std::uint32_t> ranked, const std::string& bytes, const std::string& name) {
+  assert(hierarchy);
+  IswDecodeOptions headers;
+  headers.headers_only = true;
+  headers.hierarchy = hierarchy;  // reused: the header decode builds none
+  IswDecoded result = decode_isw(bytes, name, headers);
+  if (result.hierarchy != hierarchy || stored.size() != hierarchy->fine_vertex_count() ||
+      ranked.size() != result.coefficients_total)
+    throw Error(ErrorKind::InvalidArgument, name + ": the file was not written from these coefficients");
+  result.coefficients = std::move(stored);
+  result.ranked = std::move(ranked);
+  result.chunks_decoded = result.chunks_total;
+  return result;
+}
+
+IswDecoded read_isw(const std::string& path, const IswDecodeOptions& options) {
+  const auto start = Clock::now();
+  const std::string bytes = read_file_bytes(path);
+  const double read_seconds = seconds_since(start);
+  IswDecoded result = decode_isw(bytes, path, options);
+  result.seconds.read = read_seconds;
+  return result;
+}
+
+}  // namespace isowave
