@@ -219,18 +219,14 @@ struct RunSettings {
 };
 
 // Loads, converts and writes one job; throws what goes wrong.
-void run_job(const Job& job, const RunSettings& settings, JobOutcome& outcome, cli::ConsoleProgress& progress,
-             std::mutex& print_mutex) {
+void run_job(const Job& job, const RunSettings& settings, JobOutcome& outcome, cli::ConsoleProgress& progress) {
   if (!job.problem.empty()) throw Error(ErrorKind::InvalidArgument, job.input + ": " + job.problem);
   if (!settings.force && fs::exists(job.output))
     throw Error(ErrorKind::Io, job.output + ": already exists (use --force to overwrite)");
   const auto start = std::chrono::steady_clock::now();
   Volume volume = load_volume(job.input, settings.read, progress);
   outcome.load_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  {
-    std::lock_guard<std::mutex> lock(print_mutex);
-    cli::report_loaded_volume("convert", job.input, volume, settings.load_report);
-  }
+  cli::report_loaded_volume("convert", job.input, volume, settings.load_report, &progress);
   outcome.volume_bytes = volume.sample_count() * scalar_type_size(volume.source_type);
   ConvertOptions options = settings.convert;
   options.prepare.extract.iso = job.iso;
@@ -253,7 +249,7 @@ std::vector<JobOutcome> run_jobs(const std::vector<Job>& jobs, const RunSettings
                                 stem_of(job.input) + (settings.label_iso ? " @" + iso_text(job.iso) : "");
       cli::ConsoleProgress progress(label, settings.mode);
       try {
-        run_job(job, settings, outcome, progress, print_mutex);
+        run_job(job, settings, outcome, progress);
         char done[64];
         std::snprintf(done, sizeof done, " (%zu bytes, %.1f s)", outcome.result.bytes.size(),
                       outcome.load_seconds + outcome.result.seconds.total());

@@ -55,6 +55,34 @@ void ConsoleProgress::finish(const std::string& outcome) {
   std::fflush(stderr);
 }
 
+void ConsoleProgress::note(const std::string& text) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  switch (mode_) {
+    case ProgressMode::Quiet:
+      return;
+    case ProgressMode::Line:
+      std::fprintf(stderr, "%s%s", line_open_ ? ", " : (label_ + ": ").c_str(), text.c_str());
+      line_open_ = true;
+      break;
+    case ProgressMode::BufferedLine:
+      line_ += (line_.empty() ? "" : ", ") + text;
+      return;
+    case ProgressMode::LiveBar:
+      std::fprintf(stderr, "\r\033[K%s: %s\n", label_.c_str(), text.c_str());
+      line_open_ = false;
+      break;
+  }
+  std::fflush(stderr);
+}
+
+void ConsoleProgress::message(const std::string& line) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  const char* start = mode_ == ProgressMode::LiveBar ? "\r\033[K" : (line_open_ ? "\n" : "");
+  std::fprintf(stderr, "%s%s\n", start, line.c_str());
+  line_open_ = false;
+  std::fflush(stderr);
+}
+
 void ConsoleProgress::draw(double fraction, bool final_line) {
   last_draw_ = Clock::now();
   const double elapsed = std::chrono::duration<double>(last_draw_ - stage_start_).count();

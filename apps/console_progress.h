@@ -38,6 +38,13 @@ class ConsoleProgress : public ProgressSink {
   // Ends the run's line with `outcome` (one line, no newline); on a terminal
   // "LABEL: OUTCOME" on a line of its own. Nothing when quiet.
   void finish(const std::string& outcome);
+  // Adds `text` to the run's report: within its line in the line modes
+  // ("LABEL: load 0.60 s, TEXT, contour ..."), a line of its own on a
+  // terminal; nothing when quiet.
+  void note(const std::string& text);
+  // `line` on a line of its own on stderr in every mode (a warning); an open
+  // line is ended first.
+  void message(const std::string& line);
 
  private:
   using Clock = std::chrono::steady_clock;

@@ -84,15 +84,22 @@ VolumeReadOptions volume_read_options(const Arguments& args) {
 }
 
 ValueSummary report_loaded_volume(const std::string& command, const std::string& input, const Volume& volume,
-                                  LoadReport report) {
+                                  LoadReport report, ConsoleProgress* progress) {
   if (report == LoadReport::Nothing) return {};
   const ValueSummary summary = summarize_values(volume);
   if (report == LoadReport::RangeAndWarnings) {
-    std::printf("%s: %s\n", input.c_str(), value_range_text(summary).c_str());
-    std::fflush(stdout);  // before the warnings on stderr and the progress lines
+    if (progress) {
+      progress->note(value_range_text(summary));
+    } else {
+      std::printf("%s: %s\n", input.c_str(), value_range_text(summary).c_str());
+      std::fflush(stdout);  // before the warnings on stderr and the progress lines
+    }
   }
-  for (const std::string& warning : value_warnings(summary))
-    std::fprintf(stderr, "isowave %s: warning: %s: %s\n", command.c_str(), input.c_str(), warning.c_str());
+  for (const std::string& warning : value_warnings(summary)) {
+    const std::string line = "isowave " + command + ": warning: " + input + ": " + warning;
+    if (progress) progress->message(line);
+    else std::fprintf(stderr, "%s\n", line.c_str());
+  }
   return summary;
 }
 

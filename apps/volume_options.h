@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "cli.h"
+#include "console_progress.h"
 #include "isowave/extract/isosurface.h"
 #include "isowave/extract/volume_io.h"
 #include "isowave/extract/volume_summary.h"
@@ -42,9 +43,12 @@ enum class LoadReport { RangeAndWarnings, WarningsOnly, Nothing };
 // Prints "INPUT: values LOW .. HIGH, N NaN, M Inf" on stdout (RangeAndWarnings)
 // and each of value_warnings() on stderr as "isowave COMMAND: warning: INPUT:
 // ..." (unless Nothing), so that a misread file is caught before the work.
-// Returns the summary (O(samples)); an empty one for Nothing, which skips it.
+// With `progress`, the range goes into the run's progress report and the
+// warnings through it (ConsoleProgress::note, message), so that they do not
+// break into its line. Returns the summary (O(samples)); an empty one for
+// Nothing, which skips it.
 ValueSummary report_loaded_volume(const std::string& command, const std::string& input, const Volume& volume,
-                                  LoadReport report);
+                                  LoadReport report, ConsoleProgress* progress = nullptr);
 
 // True for generated inputs (builtin:NAME[:N]), whose surface is at 0.
 bool is_builtin_volume(const std::string& input);
