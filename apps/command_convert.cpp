@@ -36,6 +36,7 @@ struct Job {
 struct JobOutcome {
   bool ok = false;
   std::string error;
+  bool usage_error = false;  // failed with ErrorKind::InvalidArgument (what exit code 2 means)
   double load_seconds = 0;
   std::size_t volume_bytes = 0;  // the samples as the input stores them
   ConvertResult result;
@@ -260,6 +261,8 @@ std::vector<JobOutcome> run_jobs(const std::vector<Job>& jobs, const RunSettings
             std::fprintf(stderr, "isowave convert: warning: %s: %s\n", job.input.c_str(), warning.c_str());
       } catch (const std::exception& error) {
         outcome.error = error.what();
+        const auto* isowave_error = dynamic_cast<const Error*>(&error);
+        outcome.usage_error = isowave_error && isowave_error->kind() == ErrorKind::InvalidArgument;
         // Most errors from reading name the input already.
         if (outcome.error.rfind(job.input + ":", 0) != 0) outcome.error = job.input + ": " + outcome.error;
         std::lock_guard<std::mutex> lock(print_mutex);
@@ -389,6 +392,17 @@ void print_table(const std::vector<Job>& jobs, const std::vector<JobOutcome>& ou
   std::printf("; %.1f s\n", totals.seconds);
 }
 
+// 0 when every job succeeded; 2 when every failure was a usage error (as the
+// other commands exit for the same input), else 1.
+int exit_code(const std::vector<JobOutcome>& outcomes) {
+  bool failed = false, other_failure = false;
+  for (const JobOutcome& o : outcomes) {
+    failed |= !o.ok;
+    other_failure |= !o.ok && !o.usage_error;
+  }
+  return !failed ? 0 : other_failure ? 1 : 2;
+}
+
 }  // namespace
 
 int convert(const Args& raw) {
@@ -423,7 +437,7 @@ int convert(const Args& raw) {
       totals_of(outcomes, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
   if (json) print_json(jobs, outcomes, totals);
   else if (!quiet) print_table(jobs, outcomes, totals);
-  return totals.failed ? 1 : 0;
+  return exit_code(outcomes);
 }
 
 }  // namespace isowave::commands

@@ -196,6 +196,17 @@ TEST_F(CliTest, TheSameFailureGivesTheSameExitCodeInEveryCommand) {
       EXPECT_EQ(r.exit_code, 1) << arguments[0] << " " << input << ": " << r.err;
     }
   }
+  // A usage error about the one input (an unknown generated field, raw samples without --type): 2 everywhere.
+  std::ofstream(path("samples.bin")) << std::string(64, '\0');
+  for (const std::string& input : {std::string("builtin:nonsense"), path("samples.bin")}) {
+    auto cases = with_input(input, "0");
+    cases.push_back({"info", input});
+    for (auto arguments : cases) {
+      if (input == path("samples.bin")) arguments.insert(arguments.end(), {"--dims", "4,4,4"});
+      const RunResult r = run(arguments, dir_);
+      EXPECT_EQ(r.exit_code, 2) << arguments[0] << " " << input << ": " << r.err;
+    }
+  }
   EXPECT_FALSE(std::filesystem::exists(path("x.ply")));
   EXPECT_FALSE(std::filesystem::exists(path("x.isw")));
 }
