@@ -221,7 +221,7 @@ struct RunSettings {
 
 // Loads, converts and writes one job; throws what goes wrong.
 void run_job(const Job& job, const RunSettings& settings, JobOutcome& outcome, cli::ConsoleProgress& progress) {
-  if (!job.problem.empty()) throw Error(ErrorKind::InvalidArgument, job.input + ": " + job.problem);
+  if (!job.problem.empty()) throw Error(ErrorKind::Io, job.input + ": " + job.problem);
   if (!settings.force && fs::exists(job.output))
     throw Error(ErrorKind::Io, job.output + ": already exists (use --force to overwrite)");
   const auto start = std::chrono::steady_clock::now();
