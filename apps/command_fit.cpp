@@ -46,9 +46,8 @@ void print_quality(const FitQuality& q) {
               q.area_ratio_deviation);
 }
 
-}  // namespace
 
-int fit(const Args& raw) {
+cli::CommandSpec fit_spec() {
   cli::CommandSpec spec{
       "fit",
       "INPUT --iso V --base BASE.ply --levels L [reader and extraction options] -o FINE.ply",
@@ -82,89 +81,118 @@ int fit(const Args& raw) {
   spec.options.push_back({"quiet", false, "print nothing on success", ""});
   spec.options.push_back(cli::force_option());
   spec.options.push_back({"output", true, "output mesh (.ply, .obj or .off)", "FINE"});
-  const cli::Arguments args(spec, raw);
-  if (cli::print_help_if_requested(spec, args)) return 0;
-  const std::string& input = args.positional()[0];
-  const std::string output = args.require("output");
-  cli::check_outputs(args, {output});
-  mesh_format_from_path(output);  // reject a bad extension before any work
-  const std::string base_path = args.require("base");
-  const int levels = args.get_int("levels", -1, 0, 8);
-  if (levels < 0) throw Error(ErrorKind::InvalidArgument, "missing required option --levels");
-  if (!args.has("iso") && !cli::is_builtin_volume(input))
+  return spec;
+}
+
+struct FitOptions {
+  std::string input, output, base_path;
+  int levels = 0;  // 0..8
+  PrepareOptions prepare;
+  ShrinkWrapOptions wrap;  // surface is set once the isosurface exists
+  VolumeReadOptions read;
+  bool quiet = false;
+  bool report = false;  // the quality report per level (not with --quiet)
+  bool ascii = false;
+};
+
+// Checks the arguments before any work: the output's name and extension,
+// --base, --levels, --iso, --band. Throws Error(InvalidArgument).
+FitOptions fit_options(const cli::Arguments& args) {
+  FitOptions o;
+  o.input = args.positional()[0];
+  o.output = args.require("output");
+  cli::check_outputs(args, {o.output});
+  mesh_format_from_path(o.output);  // reject a bad extension before any work
+  o.base_path = args.require("base");
+  o.levels = args.get_int("levels", -1, 0, 8);
+  if (o.levels < 0) throw Error(ErrorKind::InvalidArgument, "missing required option --levels");
+  if (!args.has("iso") && !cli::is_builtin_volume(o.input))
     throw Error(ErrorKind::InvalidArgument, "missing required option --iso (only builtin: inputs default to 0)");
-  PrepareOptions prepare_options;
-  prepare_options.extract = cli::extraction_options(args);
-  prepare_options.extract.iso = args.get_double("iso", 0.0);
-  const IsosurfaceOptions& extract_options = prepare_options.extract;
-  const double smooth = extract_options.smooth_sigma;
-  ShrinkWrapOptions wrap_options;
-  wrap_options.iterations = args.get_int("iterations", wrap_options.iterations, 0, 100);
-  wrap_options.final_level_iterations = args.get_int("final-iterations", wrap_options.final_level_iterations, 0, 100);
-  wrap_options.attraction.reach_edges = args.get_double("reach", wrap_options.attraction.reach_edges);
-  wrap_options.droplet_vertices = static_cast<std::size_t>(
-      args.get_int("droplet-vertices", static_cast<int>(wrap_options.droplet_vertices), 0, 1000000));
-  wrap_options.final_correction = !args.has("no-correction");
-  cli::set_unfold_limit(args, wrap_options);
-  const bool report = !args.has("no-report") && !args.has("quiet");
-  wrap_options.keep_levels = report;
-  prepare_options.distance_band_cells = args.get_double("band", prepare_options.distance_band_cells);
-  const double band = prepare_options.distance_band_cells;
+  o.prepare.extract = cli::extraction_options(args);
+  o.prepare.extract.iso = args.get_double("iso", 0.0);
+  ShrinkWrapOptions& wrap = o.wrap;
+  wrap.iterations = args.get_int("iterations", wrap.iterations, 0, 100);
+  wrap.final_level_iterations = args.get_int("final-iterations", wrap.final_level_iterations, 0, 100);
+  wrap.attraction.reach_edges = args.get_double("reach", wrap.attraction.reach_edges);
+  wrap.droplet_vertices = static_cast<std::size_t>(
+      args.get_int("droplet-vertices", static_cast<int>(wrap.droplet_vertices), 0, 1000000));
+  wrap.final_correction = !args.has("no-correction");
+  cli::set_unfold_limit(args, wrap);
+  o.quiet = args.has("quiet");
+  o.report = !args.has("no-report") && !o.quiet;
+  wrap.keep_levels = o.report;
+  wrap.coverage_pull = !args.has("no-coverage-pull");
+  o.prepare.distance_band_cells = args.get_double("band", o.prepare.distance_band_cells);
+  const double band = o.prepare.distance_band_cells;
   if (!(band >= 0 && band <= 1e6)) throw Error(ErrorKind::InvalidArgument, "--band must be in 0..1e6 cells");
-  const VolumeReadOptions read_options = cli::volume_read_options(args);
+  o.read = cli::volume_read_options(args);
+  o.ascii = args.has("ascii");
+  return o;
+}
 
-  // The base mesh first: cheap to read, and its errors are the likeliest.
-  PolygonMesh base = read_mesh(base_path);
-  const std::size_t unreferenced = remove_unreferenced_vertices(base);
-  check_memory(static_cast<double>(fine_vertex_count(base, levels)), kFitBytesPerFineVertex,
-               "--levels " + std::to_string(levels));
-  const SubdivisionHierarchy hierarchy(base, levels);
+struct BaseMesh {
+  PolygonMesh mesh;
+  std::size_t unreferenced = 0;  // vertices no face used, dropped
+};
 
-  // A live line per stage on a terminal (miranda: the shrink-wrap and the
-  // quality report take 10 and 20 s); nothing otherwise, as the report below
-  // has the times.
-  const bool live = cli::default_progress_mode(args.has("quiet")) == cli::ProgressMode::LiveBar;
-  cli::ConsoleProgress progress(input, live ? cli::ProgressMode::LiveBar : cli::ProgressMode::Quiet);
+// Reads the base mesh and checks the fit's memory for its levels; first, as
+// it is cheap to read and its errors are the likeliest.
+BaseMesh read_base(const FitOptions& o) {
+  BaseMesh base{read_mesh(o.base_path)};
+  base.unreferenced = remove_unreferenced_vertices(base.mesh);
+  check_memory(static_cast<double>(fine_vertex_count(base.mesh, o.levels)), kFitBytesPerFineVertex,
+               "--levels " + std::to_string(o.levels));
+  return base;
+}
+
+struct StageSeconds {
+  double extract = 0, distance = 0, wrap = 0;
+};
+
+// Loads the volume, extracts the isosurface and builds its signed-distance field.
+PreparedSurface prepare_surface(const FitOptions& o, cli::ConsoleProgress& progress, StageSeconds& seconds) {
   auto start = Clock::now();
-  Volume loaded = load_volume(input, read_options, progress);
-  cli::report_loaded_volume("fit", input, loaded,
-                            args.has("quiet") ? cli::LoadReport::Nothing : cli::LoadReport::RangeAndWarnings);
-  PreparedSurface prepared = extract_surface(std::move(loaded), prepare_options, input, progress);
-  const Volume& field = prepared.field;
-  const Isosurface& surface = prepared.isosurface;
-  const double extract_seconds = seconds_since(start);
-
+  Volume loaded = load_volume(o.input, o.read, progress);
+  cli::report_loaded_volume("fit", o.input, loaded, o.quiet ? cli::LoadReport::Nothing : cli::LoadReport::RangeAndWarnings);
+  PreparedSurface prepared = extract_surface(std::move(loaded), o.prepare, o.input, progress);
+  seconds.extract = seconds_since(start);
   start = Clock::now();
-  prepared.distance = surface_distance_field(prepared, prepare_options, progress);
-  const SignedDistanceField& distance = prepared.distance;
-  const double distance_seconds = seconds_since(start);
+  prepared.distance = surface_distance_field(prepared, o.prepare, progress);
+  seconds.distance = seconds_since(start);
+  return prepared;
+}
 
-  start = Clock::now();
-  wrap_options.surface = &surface.mesh;
-  wrap_options.coverage_pull = !args.has("no-coverage-pull");
-  const ShrinkWrapResult result = shrink_wrap(hierarchy, base.positions, distance, field, wrap_options, progress);
-  const double wrap_seconds = seconds_since(start);
-
-  const PolygonMesh fine = hierarchy.control_mesh(levels, result.positions);
+void write_fine(const FitOptions& o, const PolygonMesh& fine, cli::ConsoleProgress& progress) {
   MeshWriteOptions write_options;
-  write_options.ascii = args.has("ascii");
+  write_options.ascii = o.ascii;
   progress.begin_stage("write");
-  write_mesh(output, fine, write_options);
+  write_mesh(o.output, fine, write_options);
   progress.end_stage();
-  if (args.has("quiet")) return 0;
+}
 
-  std::printf("%s: %zu vertices, %zu faces, %zu sharp%s\n", base_path.c_str(), base.vertex_count(), base.face_count(),
-              base.sharp_count(),
-              unreferenced ? (" (" + std::to_string(unreferenced) + " unreferenced vertices dropped)").c_str() : "");
-  std::printf("%s: isosurface %zu vertices, %zu triangles (%.2f s)\n", input.c_str(), surface.mesh.vertex_count(),
-              surface.mesh.face_count(), extract_seconds);
+// The inputs' sizes and each stage's time.
+void print_stages(const FitOptions& o, const BaseMesh& base, const PreparedSurface& prepared,
+                  const SubdivisionHierarchy& hierarchy, const StageSeconds& seconds) {
+  const PolygonMesh& mesh = base.mesh;
+  std::printf("%s: %zu vertices, %zu faces, %zu sharp%s\n", o.base_path.c_str(), mesh.vertex_count(), mesh.face_count(),
+              mesh.sharp_count(),
+              base.unreferenced ? (" (" + std::to_string(base.unreferenced) + " unreferenced vertices dropped)").c_str()
+                                : "");
+  std::printf("%s: isosurface %zu vertices, %zu triangles (%.2f s)\n", o.input.c_str(),
+              prepared.isosurface.mesh.vertex_count(), prepared.isosurface.mesh.face_count(), seconds.extract);
+  const SignedDistanceStatistics& ds = prepared.distance.statistics;
+  const double band = o.prepare.distance_band_cells;
   if (band > 0)
-    std::printf("signed distance: %zu nodes, %zu seeds, band %g cells (%.2f s)\n", distance.statistics.nodes,
-                distance.statistics.seed_nodes, band, distance_seconds);
+    std::printf("signed distance: %zu nodes, %zu seeds, band %g cells (%.2f s)\n", ds.nodes, ds.seed_nodes, band,
+                seconds.distance);
   else
-    std::printf("signed distance: %zu nodes, %zu seeds, no band (%.2f s)\n", distance.statistics.nodes,
-                distance.statistics.seed_nodes, distance_seconds);
-  std::printf("shrink-wrap: %zu fine vertices (%.2f s)\n", hierarchy.fine_vertex_count(), wrap_seconds);
+    std::printf("signed distance: %zu nodes, %zu seeds, no band (%.2f s)\n", ds.nodes, ds.seed_nodes, seconds.distance);
+  std::printf("shrink-wrap: %zu fine vertices (%.2f s)\n", hierarchy.fine_vertex_count(), seconds.wrap);
+}
+
+// Per level, the last attraction and the coverage pull; then the final
+// correction, untangle and unfold.
+void print_wrap_statistics(const FitOptions& o, const ShrinkWrapResult& result) {
   for (const WrapLevelStatistics& s : result.levels) {
     std::printf("  level %d: %zu vertices, last attraction %zu attracted, %zu out of reach", s.level, s.vertices,
                 s.last_attraction.attracted, s.last_attraction.out_of_reach);
@@ -173,57 +201,101 @@ int fit(const Args& raw) {
     if (s.pulled_back > 0) std::printf(" (%zu of them returned: no root on the isosurface, or folding)", s.pulled_back);
     std::printf("\n");
   }
-  if (wrap_options.final_correction)
+  const auto& c = result.correction;
+  if (o.wrap.final_correction)
     std::printf("  correction: %zu vertices onto the isosurface (mean %.4f, max %.4f cell; %zu from the nearest zero "
                 "of the distance field, %zu along a box face, %zu from their neighbours' centroid, %zu by the "
                 "wide search, %zu stranded ones from the extracted surface), %zu left in place\n",
-                result.correction.corrected, result.correction.mean_move_cells, result.correction.max_move_cells,
-                result.correction.from_nearest_point, result.correction.along_box_face,
-                result.correction.from_neighbours, result.correction.from_wide_search,
-                result.correction.from_extracted_surface, result.correction.failed);
+                c.corrected, c.mean_move_cells, c.max_move_cells, c.from_nearest_point, c.along_box_face,
+                c.from_neighbours, c.from_wide_search, c.from_extracted_surface, c.failed);
   if (result.untangle.folded_before > 0)
     std::printf("  untangle: %zu folded faces on level %d before, %zu after %d rounds\n", result.untangle.folded_before,
-                levels, result.untangle.folded_after, result.untangle.rounds);
+                o.levels, result.untangle.folded_after, result.untangle.rounds);
   if (result.unfold.skipped)
     std::printf("  unfold: skipped, over %.2f%% of the faces folded (--unfold-limit 100 forces it)\n",
-                100.0 * wrap_options.unfold_max_folded_fraction);
+                100.0 * o.wrap.unfold_max_folded_fraction);
   else if (result.unfold.folded_before > 0)
     std::printf("  unfold: %zu folded faces before, %zu after %d rounds\n", result.unfold.folded_before,
                 result.unfold.folded_after, result.unfold.rounds);
-  const bool coarse = fine_mesh_too_coarse(fine.vertex_count(), surface.mesh.vertex_count());
-  const std::size_t suggested = std::max<std::size_t>(4, surface.mesh.vertex_count() >> (2 * levels));
+}
+
+// A note when the fine mesh is too coarse for the isosurface, or else when
+// many of its faces stay folded without a pre-filter.
+void print_notes(const FitOptions& o, const PolygonMesh& fine, const PolygonMesh& isosurface,
+                 const ShrinkWrapResult& result) {
+  const bool coarse = fine_mesh_too_coarse(fine.vertex_count(), isosurface.vertex_count());
+  const std::size_t suggested = std::max<std::size_t>(4, isosurface.vertex_count() >> (2 * o.levels));
   if (coarse)
     std::printf("  note: %zu fine vertices for an isosurface of %zu: %d levels of this base are too coarse to follow it "
                 "(a base of about %zu vertices, or more levels, would)\n",
-                fine.vertex_count(), surface.mesh.vertex_count(), levels, suggested);
-  else if (smooth == 0 && result.folded_faces > fine.face_count() / 1000)
+                fine.vertex_count(), isosurface.vertex_count(), o.levels, suggested);
+  else if (o.prepare.extract.smooth_sigma == 0 && result.folded_faces > fine.face_count() / 1000)
     std::printf("  note: %.2f%% of the fine faces stay folded; folds sit mostly on necks and tunnels thinner than a "
                 "cell, which a one-voxel pre-filter (--smooth 1) removes\n",
                 100.0 * double(result.folded_faces) / double(fine.face_count()));
-  if (report) {
-    std::fflush(stdout);  // the report so far before the live line of the measurement
-    progress.begin_stage("quality");
-    const BinnedSurfaceDistance reference(surface.mesh);
-    std::vector<FitQuality> qualities;
-    const SurfaceDeviation deviation = extracted_surface_deviation(surface.mesh, field, extract_options.iso);
-    double work = 0, total = 0;  // each level's measurement takes about as long as its vertices
-    for (int level = 0; level <= levels; ++level) total += double(hierarchy.vertex_count(level));
-    for (int level = 0; level <= levels; ++level) {
-      qualities.push_back(measure_fit_quality(
-          hierarchy, level, level < levels ? result.level_positions[static_cast<std::size_t>(level)] : result.positions,
-          surface.mesh, reference, field, extract_options.iso, orientation_from_flip(extract_options.flip)));
-      work += double(hierarchy.vertex_count(level));
-      progress.update(work / total);
-    }
-    progress.end_stage();
-    std::printf("quality:\n");
-    std::printf("  the extracted triangles themselves lie rms %.4f, max %.4f cell off the isosurface (a fit on the "
-                "isosurface lies about as far from them)\n",
-                deviation.rms, deviation.max);
-    for (const FitQuality& quality : qualities) print_quality(quality);
+}
+
+// Measures and prints the fit's quality on every level.
+void report_quality(const FitOptions& o, const SubdivisionHierarchy& hierarchy, const ShrinkWrapResult& result,
+                    const PreparedSurface& prepared, cli::ConsoleProgress& progress) {
+  const IsosurfaceOptions& extract_options = o.prepare.extract;
+  const PolygonMesh& isosurface = prepared.isosurface.mesh;
+  std::fflush(stdout);  // the report so far before the live line of the measurement
+  progress.begin_stage("quality");
+  const BinnedSurfaceDistance reference(isosurface);
+  std::vector<FitQuality> qualities;
+  const SurfaceDeviation deviation = extracted_surface_deviation(isosurface, prepared.field, extract_options.iso);
+  double work = 0, total = 0;  // each level's measurement takes about as long as its vertices
+  for (int level = 0; level <= o.levels; ++level) total += double(hierarchy.vertex_count(level));
+  for (int level = 0; level <= o.levels; ++level) {
+    qualities.push_back(measure_fit_quality(
+        hierarchy, level, level < o.levels ? result.level_positions[static_cast<std::size_t>(level)] : result.positions,
+        isosurface, reference, prepared.field, extract_options.iso, orientation_from_flip(extract_options.flip)));
+    work += double(hierarchy.vertex_count(level));
+    progress.update(work / total);
   }
-  std::printf("%s: level %d, %zu vertices, %zu %s\n", output.c_str(), levels, fine.vertex_count(), fine.face_count(),
-              levels > 0 ? "quads" : "faces (the base's polygons)");
+  progress.end_stage();
+  std::printf("quality:\n");
+  std::printf("  the extracted triangles themselves lie rms %.4f, max %.4f cell off the isosurface (a fit on the "
+              "isosurface lies about as far from them)\n",
+              deviation.rms, deviation.max);
+  for (const FitQuality& quality : qualities) print_quality(quality);
+}
+
+}  // namespace
+
+int fit(const Args& raw) {
+  const cli::CommandSpec spec = fit_spec();
+  const cli::Arguments args(spec, raw);
+  if (cli::print_help_if_requested(spec, args)) return 0;
+  FitOptions options = fit_options(args);
+  const BaseMesh base = read_base(options);
+  const SubdivisionHierarchy hierarchy(base.mesh, options.levels);
+
+  // A live line per stage on a terminal (the shrink-wrap and the quality
+  // report take seconds on large volumes); nothing otherwise, as the report
+  // below has the times.
+  const bool live = cli::default_progress_mode(options.quiet) == cli::ProgressMode::LiveBar;
+  cli::ConsoleProgress progress(options.input, live ? cli::ProgressMode::LiveBar : cli::ProgressMode::Quiet);
+  StageSeconds seconds;
+  const PreparedSurface prepared = prepare_surface(options, progress, seconds);
+
+  const auto start = Clock::now();
+  options.wrap.surface = &prepared.isosurface.mesh;
+  const ShrinkWrapResult result =
+      shrink_wrap(hierarchy, base.mesh.positions, prepared.distance, prepared.field, options.wrap, progress);
+  seconds.wrap = seconds_since(start);
+
+  const PolygonMesh fine = hierarchy.control_mesh(options.levels, result.positions);
+  write_fine(options, fine, progress);
+  if (options.quiet) return 0;
+
+  print_stages(options, base, prepared, hierarchy, seconds);
+  print_wrap_statistics(options, result);
+  print_notes(options, fine, prepared.isosurface.mesh, result);
+  if (options.report) report_quality(options, hierarchy, result, prepared, progress);
+  std::printf("%s: level %d, %zu vertices, %zu %s\n", options.output.c_str(), options.levels, fine.vertex_count(),
+              fine.face_count(), options.levels > 0 ? "quads" : "faces (the base's polygons)");
   return 0;
 }
 
