@@ -86,9 +86,13 @@ std::size_t CoveragePull::bin_of(const Vec3& p, std::int64_t bin[3]) const {
 
 CoveragePullStatistics CoveragePull::apply(const WrapLevelMesh& mesh, std::vector<Vec3>& positions, double reach,
                                            std::vector<PulledPoint>* pulled) {
-  const std::size_t n = mesh.vertex_count;
-  assert(positions.size() >= n && reach * reach >= covered_squared_);
-  CoveragePullStatistics stats;
+  assert(positions.size() >= mesh.vertex_count && reach * reach >= covered_squared_);
+  sort_by_bin(positions, mesh.vertex_count);
+  const std::vector<std::uint32_t> nearest = find_uncovered(mesh, positions, reach);
+  return move_to_means(mesh, nearest, positions, pulled);
+}
+
+void CoveragePull::sort_by_bin(const std::vector<Vec3>& positions, std::size_t n) {
   // Counting sort of the control points by bin (serial, so the order in a
   // bin, and with it every tie, does not depend on the threads).
   const std::size_t bin_count = static_cast<std::size_t>(bins_[0] * bins_[1] * bins_[2]);
@@ -110,8 +114,8 @@ CoveragePullStatistics CoveragePull::apply(const WrapLevelMesh& mesh, std::vecto
   order_.resize(n);
   for (std::size_t v = 0; v < n; ++v) order_[first_[vertex_bin_[v]]++] = static_cast<std::uint32_t>(v);
   // Their positions in that order, relative to the grid's origin in single
-  // precision: the scans below then read each bin's points from one place
-  // instead of from n random ones.
+  // precision: the scans then read each bin's points from one place instead
+  // of from n random ones.
   sorted_.resize(n);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
     for (std::size_t i = r.begin(); i < r.end(); ++i) {
@@ -120,99 +124,112 @@ CoveragePullStatistics CoveragePull::apply(const WrapLevelMesh& mesh, std::vecto
   });
   for (std::size_t c = bin_count; c > 0; --c) first_[c] = first_[c - 1];
   first_[0] = 0;
+}
 
-  // Each sample's nearest control point when the sample is uncovered. The
-  // bins of one row (fixed y and z) are consecutive in bin order, so the
-  // control points of any run of bins along x are one contiguous range of
-  // sorted_: the scans below go row by row, with no per-bin work.
+std::vector<std::uint32_t> CoveragePull::find_uncovered(const WrapLevelMesh& mesh, const std::vector<Vec3>& positions,
+                                                        double reach) {
+  const std::size_t n = mesh.vertex_count;
   const double covered_distance = std::sqrt(covered_squared_);
   const std::int64_t max_ring = static_cast<std::int64_t>(std::ceil(reach / min_spacing_));
   std::vector<std::uint32_t> nearest(samples_.size(), kNone);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, samples_.size(), 1024), [&](const tbb::blocked_range<std::size_t>& r) {
     for (std::size_t s = r.begin(); s < r.end(); ++s) {
       const Vec3& p = samples_[s];
-      const Vec3 local = p - origin_;
-      const auto squared_distance_to = [&](const FloatPoint& q) {
-        const double dx = q.x - local.x, dy = q.y - local.y, dz = q.z - local.z;
-        return dx * dx + dy * dy + dz * dz;
-      };
-      const auto squared_distance = [&](std::uint32_t i) { return squared_distance_to(sorted_[i]); };
       // The control point that covered the sample, or was its nearest, on
       // the last call (a coarser level's vertex keeps its index on the finer
       // ones): tried first, it often settles the covered test at once and
       // otherwise bounds the search.
       const std::uint32_t hint = hint_[s] < n ? hint_[s] : kNone;
-      const double hint_distance = hint != kNone ? squared_distance_to(to_local(positions[hint])) : 0.0;
+      const double hint_distance = hint != kNone ? squared_distance(to_local(positions[hint]), p - origin_) : 0.0;
       if (hint != kNone && hint_distance <= covered_squared_) continue;
-      // The control points of bins x0 .. x1 of row (y, z).
-      const auto row = [&](std::int64_t y, std::int64_t z, std::int64_t x0, std::int64_t x1) {
-        const std::size_t start = static_cast<std::size_t>(bins_[0] * (y + bins_[1] * z));
-        return std::pair<std::uint32_t, std::uint32_t>{first_[start + static_cast<std::size_t>(x0)],
-                                                       first_[start + static_cast<std::size_t>(x1) + 1]};
-      };
-      // Covered: a control point within `covered`, in the (at most 2 x 2)
-      // rows of bins that the ball around p overlaps.
-      std::int64_t low[3], high[3], centre[3];
-      bin_of(p - Vec3{covered_distance, covered_distance, covered_distance}, low);
-      bin_of(p + Vec3{covered_distance, covered_distance, covered_distance}, high);
-      std::uint32_t covering = kNone;
-      for (std::int64_t z = low[2]; z <= high[2] && covering == kNone; ++z)
-        for (std::int64_t y = low[1]; y <= high[1] && covering == kNone; ++y) {
-          const auto [begin, end] = row(y, z, low[0], high[0]);
-          for (std::uint32_t i = begin; i < end; ++i)
-            if (squared_distance(i) <= covered_squared_) {
-              covering = order_[i];
-              break;
-            }
-        }
-      if (covering != kNone) {
+      if (const std::uint32_t covering = covering_point(p, covered_distance); covering != kNone) {
         hint_[s] = covering;
         continue;
       }
-      // Uncovered: the nearest control point within reach (ties to the
-      // lower index, so the result does not depend on the scan's order).
-      // Rows ring by ring around p's (ring k: rows k bins away in y or z),
-      // each scanned only where it overlaps the ball of the best distance
-      // so far.
-      bin_of(p, centre);
-      double best = reach * reach;
-      std::uint32_t best_vertex = kNone;
-      if (hint != kNone && hint_distance < best) best = hint_distance, best_vertex = hint;
-      const auto gap = [&](int axis, std::int64_t bin) {
-        const double lo = origin_[axis] + double(bin) * spacing_[axis];
-        return std::max({0.0, lo - p[axis], p[axis] - lo - spacing_[axis]});
-      };
-      const auto scan_row = [&](std::int64_t y, std::int64_t z) {
-        if (y < 0 || y >= bins_[1]) return;
-        const double gy = gap(1, y), gz = gap(2, z), across = gy * gy + gz * gz;
-        if (across > best) return;
-        const double half = std::sqrt(best - across);
-        const auto [begin, end] = row(y, z, bin_along(0, p.x - half), bin_along(0, p.x + half));
-        for (std::uint32_t i = begin; i < end; ++i) {
-          const double d = squared_distance(i);
-          if (d < best || (d == best && best_vertex != kNone && order_[i] < best_vertex)) best = d, best_vertex = order_[i];
-        }
-      };
-      for (std::int64_t k = 0; k <= max_ring; ++k) {
-        for (std::int64_t z = std::max<std::int64_t>(0, centre[2] - k); z <= std::min(bins_[2] - 1, centre[2] + k); ++z) {
-          if (std::abs(z - centre[2]) == k) {
-            for (std::int64_t y = centre[1] - k; y <= centre[1] + k; ++y) scan_row(y, z);
-          } else {
-            scan_row(centre[1] - k, z);
-            scan_row(centre[1] + k, z);
-          }
-        }
-        // A control point in a farther ring lies at least k bins away.
-        const double bound = double(k) * std::min(spacing_.y, spacing_.z);
-        if (best < bound * bound) break;
-      }
+      Candidate best{reach * reach, kNone};
+      if (hint != kNone && hint_distance < best.squared_distance) best = {hint_distance, hint};
+      const std::uint32_t best_vertex = nearest_point(p, max_ring, best);
       hint_[s] = best_vertex;
       if (best_vertex != kNone && !near_faces(mesh, positions, best_vertex, p, covered_squared_))
         nearest[s] = best_vertex;
     }
   });
+  return nearest;
+}
 
+double CoveragePull::squared_distance(const FloatPoint& q, const Vec3& local) {
+  const double dx = q.x - local.x, dy = q.y - local.y, dz = q.z - local.z;
+  return dx * dx + dy * dy + dz * dz;
+}
+
+std::pair<std::uint32_t, std::uint32_t> CoveragePull::row(std::int64_t y, std::int64_t z, std::int64_t x0,
+                                                          std::int64_t x1) const {
+  const std::size_t start = static_cast<std::size_t>(bins_[0] * (y + bins_[1] * z));
+  return {first_[start + static_cast<std::size_t>(x0)], first_[start + static_cast<std::size_t>(x1) + 1]};
+}
+
+std::uint32_t CoveragePull::covering_point(const Vec3& p, double covered_distance) const {
+  // The bins of one row (fixed y and z) are consecutive in bin order, so the
+  // control points of any run of bins along x are one contiguous range of
+  // sorted_: the scans go row by row, with no per-bin work. Here the (at
+  // most 2 x 2) rows of bins that the ball around p overlaps.
+  const Vec3 local = p - origin_;
+  std::int64_t low[3], high[3];
+  bin_of(p - Vec3{covered_distance, covered_distance, covered_distance}, low);
+  bin_of(p + Vec3{covered_distance, covered_distance, covered_distance}, high);
+  for (std::int64_t z = low[2]; z <= high[2]; ++z)
+    for (std::int64_t y = low[1]; y <= high[1]; ++y) {
+      const auto [begin, end] = row(y, z, low[0], high[0]);
+      for (std::uint32_t i = begin; i < end; ++i)
+        if (squared_distance(sorted_[i], local) <= covered_squared_) return order_[i];
+    }
+  return kNone;
+}
+
+std::uint32_t CoveragePull::nearest_point(const Vec3& p, std::int64_t max_ring, Candidate start) const {
+  // Ties to the lower index, so the result does not depend on the scan's
+  // order. Rows ring by ring around p's (ring k: rows k bins away in y or z),
+  // each scanned only where it overlaps the ball of the best distance so far.
+  const Vec3 local = p - origin_;
+  double best = start.squared_distance;
+  std::uint32_t best_vertex = start.vertex;
+  std::int64_t centre[3];
+  bin_of(p, centre);
+  const auto gap = [&](int axis, std::int64_t bin) {
+    const double lo = origin_[axis] + double(bin) * spacing_[axis];
+    return std::max({0.0, lo - p[axis], p[axis] - lo - spacing_[axis]});
+  };
+  const auto scan_row = [&](std::int64_t y, std::int64_t z) {
+    if (y < 0 || y >= bins_[1]) return;
+    const double gy = gap(1, y), gz = gap(2, z), across = gy * gy + gz * gz;
+    if (across > best) return;
+    const double half = std::sqrt(best - across);
+    const auto [begin, end] = row(y, z, bin_along(0, p.x - half), bin_along(0, p.x + half));
+    for (std::uint32_t i = begin; i < end; ++i) {
+      const double d = squared_distance(sorted_[i], local);
+      if (d < best || (d == best && best_vertex != kNone && order_[i] < best_vertex)) best = d, best_vertex = order_[i];
+    }
+  };
+  for (std::int64_t k = 0; k <= max_ring; ++k) {
+    for (std::int64_t z = std::max<std::int64_t>(0, centre[2] - k); z <= std::min(bins_[2] - 1, centre[2] + k); ++z) {
+      if (std::abs(z - centre[2]) == k) {
+        for (std::int64_t y = centre[1] - k; y <= centre[1] + k; ++y) scan_row(y, z);
+      } else {
+        scan_row(centre[1] - k, z);
+        scan_row(centre[1] + k, z);
+      }
+    }
+    // A control point in a farther ring lies at least k bins away.
+    const double bound = double(k) * std::min(spacing_.y, spacing_.z);
+    if (best < bound * bound) break;
+  }
+  return best_vertex;
+}
+
+CoveragePullStatistics CoveragePull::move_to_means(const WrapLevelMesh& mesh, const std::vector<std::uint32_t>& nearest,
+                                                   std::vector<Vec3>& positions, std::vector<PulledPoint>* pulled) const {
   // Each picked control point moves to the mean of its samples.
+  CoveragePullStatistics stats;
   std::vector<std::pair<std::uint32_t, std::uint32_t>> picks;
   for (std::size_t s = 0; s < samples_.size(); ++s)
     if (nearest[s] != kNone) picks.emplace_back(nearest[s], static_cast<std::uint32_t>(s));

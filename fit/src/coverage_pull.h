@@ -22,6 +22,7 @@
 // is picked (nearest within reach, ties to the lower index).
 #include <cstddef>
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 #include "isowave/core/vec3.h"
@@ -66,6 +67,34 @@ class CoveragePull {
   // The bin coordinate along one axis (clamped into the grid).
   std::int64_t bin_along(int axis, double coordinate) const;
 
+  struct FloatPoint {
+    float x, y, z;
+  };
+  // A control point (kNone for none) and its squared distance to a sample.
+  struct Candidate {
+    double squared_distance;
+    std::uint32_t vertex;
+  };
+  // The steps of apply: the counting sort of the first n control points by
+  // bin into first_, order_ and sorted_; per sample, the control point it
+  // picks (kNone where covered or with none within reach), updating hint_;
+  // each picked point moved to the mean of its samples.
+  void sort_by_bin(const std::vector<Vec3>& positions, std::size_t n);
+  std::vector<std::uint32_t> find_uncovered(const WrapLevelMesh& mesh, const std::vector<Vec3>& positions, double reach);
+  CoveragePullStatistics move_to_means(const WrapLevelMesh& mesh, const std::vector<std::uint32_t>& nearest,
+                                       std::vector<Vec3>& positions, std::vector<PulledPoint>* pulled) const;
+  // A control point within sqrt(covered_squared_) of p (= covered_distance),
+  // or kNone; the first in bin order.
+  std::uint32_t covering_point(const Vec3& p, double covered_distance) const;
+  // The control point nearest to p within start's distance (ties to the
+  // lower index), else start.vertex; searches at most max_ring rings of rows
+  // of bins around p's.
+  std::uint32_t nearest_point(const Vec3& p, std::int64_t max_ring, Candidate start) const;
+  // The control points of bins x0 .. x1 of row (y, z): order_[first .. second).
+  std::pair<std::uint32_t, std::uint32_t> row(std::int64_t y, std::int64_t z, std::int64_t x0, std::int64_t x1) const;
+  // |q - local|^2, q converted to double.
+  static double squared_distance(const FloatPoint& q, const Vec3& local);
+
   const std::vector<Vec3>& samples_;
   Vec3 origin_, spacing_;
   std::int64_t bins_[3];
@@ -73,9 +102,6 @@ class CoveragePull {
   // Control points by bin (2 x 2 x 2 volume cells): those
   // of bin c are order_[first_[c] .. first_[c + 1]).
   std::vector<std::uint32_t> first_, order_, vertex_bin_;
-  struct FloatPoint {
-    float x, y, z;
-  };
   std::vector<FloatPoint> sorted_;  // to_local(positions[order_[i]])
   // Per sample, the control point that covered it or was its nearest on
   // the last call (kNone before the first).
