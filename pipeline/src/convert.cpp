@@ -77,9 +77,8 @@ std::size_t base_target(const BaseMeshOptions& base, std::size_t extracted_verti
 
 // The signed-distance field needs only the field and the extracted mesh: it
 // is computed alongside the base mesh, started when the simplification turns
-// serial and leaves a core idle (on miranda 1.2 s sooner than when both
-// competed for the cores from the start), on one thread (two would take the
-// core the simplification runs on). No progress from it: the sink shows one
+// serial and leaves a core idle, on one thread (two would take the core the
+// simplification runs on). No progress from it: the sink shows one
 // stage at a time.
 class BackgroundDistance {
  public:
@@ -206,8 +205,8 @@ std::shared_ptr<const SubdivisionHierarchy> fit_surface(PreparedSurface& prepare
 //   the folds of the next case worse.
 // - Otherwise the folds sit on necks, tunnels and specks under a cell across
 //   (noisy scans and fine-grained fields, also where thin features are left
-//   out: the stent CT at 300 leaves 1.2% out and folds 5.1%, 7.2% at one
-//   level more, 0.29% with smooth_sigma = 1): a one-voxel pre-filter.
+//   out; more levels fold more there): a one-voxel pre-filter
+//   (docs/MEASUREMENTS.md has the figures).
 std::string fold_cause(const ConvertResult& result, const ConvertOptions& options) {
   if (fine_mesh_too_coarse(result.fine_vertices, result.extracted_vertices))
     return "where the base mesh is too coarse for the surface at " + std::to_string(result.levels) +
@@ -336,8 +335,8 @@ Coded analyze_and_encode(const SubdivisionHierarchy& hierarchy, IswMetadata meta
 }
 
 // Error summary (error_table, as stats makes it), from what the file holds
-// as the encoder stored it (decoding the file again took half of this
-// stage's time on miranda; FileCheck::DecodeAgain still does).
+// as the encoder stored it, without decoding the file again
+// (FileCheck::DecodeAgain does).
 void evaluate(const std::shared_ptr<const SubdivisionHierarchy>& hierarchy, Coded coded, const std::string& source,
               const ConvertOptions& options, ConvertResult& result, ProgressSink& progress) {
   const auto start = Clock::now();

@@ -56,7 +56,7 @@ enum class FileCheck {
   None,
   // Decode the encoded bytes again and require exactly the coded
   // coefficients in the coded order (a self-check; the round-trip tests
-  // check the coder; serial, about 1.5 s on miranda). The summary never
+  // check the coder; serial, linear in the file's size). The summary never
   // needs it: it is made from what the encoder stored.
   DecodeAgain,
 };

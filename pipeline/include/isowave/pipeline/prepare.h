@@ -62,8 +62,8 @@ PreparedSurface prepare_surface(Volume volume, const PrepareOptions& options, co
 std::size_t fine_vertex_count(const PolygonMesh& base, int levels);
 
 // About the peak bytes per fine control point of a fit or a conversion, with
-// the volume, the distance field and the extracted mesh (miranda: 1.85 GB at
-// 6.7 M fine points).
+// the volume, the distance field and the extracted mesh (an upper bound of
+// the peaks in docs/MEASUREMENTS.md).
 inline constexpr double kFitBytesPerFineVertex = 300;
 
 // Refuses, with Error(InvalidArgument) naming `what` (e.g. "--levels 6"), a
