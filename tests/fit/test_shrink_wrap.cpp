@@ -202,15 +202,14 @@ TEST(ShrinkWrap, SmallComponentInsideAThinDiscStaysNearItsBase) {
   // away; the search along them used to reach three times the current
   // radius, so a vertex that went farther let the next round go farther
   // still, and the fit ended on the rim (miranda: vertices flung 167 cells).
-  Volume disc = test::sampled_volume({48, 48, 17}, [](double x, double y, double z) {
-    return std::min(1.5 - std::abs(z - 8.0), 12.0 - std::hypot(x - 24.0, y - 24.0));
-  });
-  IsosurfaceOptions extraction;
-  const PolygonMesh extracted = extract_isosurface(disc, extraction).mesh;
-  SignedDistanceOptions distance_options;
-  distance_options.surface = &extracted;
-  distance_options.band_cells = 3;
-  const SignedDistanceField distance = compute_signed_distance(disc, distance_options);
+  const PreparedSurface prepared = prepare_surface(
+      test::sampled_volume({48, 48, 17},
+                           [](double x, double y, double z) {
+                             return std::min(1.5 - std::abs(z - 8.0), 12.0 - std::hypot(x - 24.0, y - 24.0));
+                           }),
+      PrepareOptions{}, "disc");  // a band of 3 cells
+  const Volume& disc = prepared.field;
+  const SignedDistanceField& distance = prepared.distance;
   const Vec3 centre{24, 24, 8};
   PolygonMesh tetrahedron;
   for (const Vec3& corner : {Vec3{1, 1, 1}, Vec3{1, -1, -1}, Vec3{-1, 1, -1}, Vec3{-1, -1, 1}})
@@ -320,17 +319,14 @@ TEST(ShrinkWrap, BoundaryCurvesLeaveABoxEdgeIntoTheFaceTheyLieIn) {
     const double s = (z - 7.5) / 4.0;
     return y - 15.0 + 0.7 * (1.0 - s * s);
   };
-  Pipeline p;
-  p.field = test::sampled_volume({16, 16, 16}, sheet);
-  IsosurfaceOptions extract_options;
-  p.extracted = extract_isosurface(p.field, extract_options).mesh;
+  PrepareOptions whole_grid;
+  whole_grid.distance_band_cells = 0;
+  PreparedSurface prepared = prepare_surface(test::sampled_volume({16, 16, 16}, sheet), whole_grid, "sheet");
+  Pipeline p{std::move(prepared.field), 0, std::move(prepared.isosurface.mesh), {}, std::move(prepared.distance)};
   p.base.positions = {{0, 15, 3.5}, {7.5, 15, 3.5}, {15, 15, 3.5}, {0, 15, 11.5}, {7.5, 15, 11.5}, {15, 15, 11.5}};
   p.base.sharp = {1, 0, 1, 1, 0, 1};
   p.base.add_face({0, 1, 4, 3});  // normal -y: outward, toward lower values
   p.base.add_face({1, 2, 5, 4});
-  SignedDistanceOptions distance_options;
-  distance_options.surface = &p.extracted;
-  p.distance = compute_signed_distance(p.field, distance_options);
   const SubdivisionHierarchy hierarchy(p.base, 3);
 
   // The rule itself: level 1's vertex on the edge x = 15, y = 15 is held on
