@@ -1,5 +1,6 @@
 // isowave stats: the paper's Table 1 for an .isw file, as text, CSV or JSON,
 // optionally plotted as SVG.
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <string>
@@ -48,8 +49,12 @@ int stats(const Args& raw) {
   const ErrorTable errors = error_table(decoded, percents);
   const std::vector<RateDistortionRow>& rows = errors.rows;
 
-  const double cell = decoded.metadata.number("cell_size", 1.0);
-  const bool cell_known = decoded.metadata.values.count("cell_size") != 0;
+  // A cell size that is not a positive finite number (a damaged or hostile
+  // file) counts as unknown: errors stay in world units.
+  const double stored_cell = decoded.metadata.number("cell_size", 1.0);
+  const bool cell_known = decoded.metadata.values.count("cell_size") != 0 && std::isfinite(stored_cell) &&
+                          stored_cell > 0 && std::isfinite(1.0 / stored_cell);
+  const double cell = cell_known ? stored_cell : 1.0;
   const double fine = static_cast<double>(decoded.hierarchy->fine_vertex_count());
   const double extracted = decoded.metadata.number("extracted_vertices", 0);
   const auto pct = [&](double world) { return 100.0 * world / cell; };

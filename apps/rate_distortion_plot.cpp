@@ -58,8 +58,8 @@ std::string rate_distortion_svg(const std::vector<RateDistortionRow>& rows, doub
   const auto error = [&](const RateDistortionRow& r) { return 100 * r.rms / cell; };
   double max_x = 0, max_y = 0;
   for (const RateDistortionRow& r : points) {
-    max_x = std::max(max_x, r.percent);
-    max_y = std::max(max_y, error(r));
+    if (std::isfinite(r.percent)) max_x = std::max(max_x, r.percent);
+    if (std::isfinite(error(r))) max_y = std::max(max_y, error(r));
   }
   const std::vector<double> x_ticks = nice_ticks(max_x > 0 ? max_x : 1, 5);
   const std::vector<double> y_ticks = nice_ticks(max_y > 0 ? max_y : 1, 5);

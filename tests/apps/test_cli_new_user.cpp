@@ -16,6 +16,7 @@
 #include <vector>
 
 #include <gtest/gtest.h>
+#include <zlib.h>
 
 #include "cli_test_support.h"
 #include "isowave/codec/isw_format.h"
@@ -294,6 +295,53 @@ TEST_F(CliTest, EveryHelpFitsIn100ColumnsAndGivesAnExample) {
     std::istringstream text(help.out);
     for (std::string line; std::getline(text, line);) EXPECT_LE(line.size(), 100u) << line;
   }
+}
+
+}  // namespace
+}  // namespace isowave
+
+namespace isowave {
+namespace {
+
+using cli_test::CliTest;
+using cli_test::run;
+using cli_test::RunResult;
+using cli_test::write_sphere_nrrd;
+
+// A damaged or hostile file whose metadata says the cell is 0 wide: stats
+// and its plot treat the cell size as unknown instead of dividing by it (the
+// plot's ticks were computed from infinities and it read past an empty
+// vector).
+TEST_F(CliTest, StatsSurvivesAZeroCellSizeInTheMetadata) {
+  write_sphere_nrrd(path("ball.nrrd"), 20, 6);
+  ASSERT_EQ(run({"convert", path("ball.nrrd"), "--iso", "0", "--levels", "1", "-o", path("b.isw"), "--quiet"}, dir_)
+                .exit_code,
+            0);
+  std::ifstream in(path("b.isw"), std::ios::binary);
+  std::string bytes((std::istreambuf_iterator<char>(in)), {});
+  // The first section is META: tag, u64 size, u32 header CRC, payload, u32 CRC of tag and payload.
+  ASSERT_EQ(bytes.compare(16, 4, "META"), 0);
+  std::uint64_t size = 0;
+  std::memcpy(&size, &bytes[20], 8);
+  const std::size_t payload = 32;
+  const std::size_t key = bytes.find("\ncell_size=", payload);
+  ASSERT_LT(key, payload + size);
+  // Every digit of the value to 0 (same length, so only the CRC changes).
+  for (std::size_t k = key + 11; k < payload + size && bytes[k] != '\n'; ++k)
+    if (bytes[k] >= '1' && bytes[k] <= '9') bytes[k] = '0';
+  std::string tagged = bytes.substr(16, 4) + bytes.substr(payload, size);
+  const std::uint32_t crc = static_cast<std::uint32_t>(
+      crc32(0, reinterpret_cast<const Bytef*>(tagged.data()), static_cast<uInt>(tagged.size())));
+  std::memcpy(&bytes[payload + size], &crc, 4);
+  std::ofstream(path("zero.isw"), std::ios::binary) << bytes;
+
+  const RunResult r = run({"stats", path("zero.isw"), "--plot", path("zero.svg")}, dir_);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  std::ifstream file(path("zero.svg"));
+  const std::string svg((std::istreambuf_iterator<char>(file)), {});
+  EXPECT_NE(svg.find("</svg>"), std::string::npos) << svg;
+  EXPECT_EQ(svg.find("nan"), std::string::npos) << svg;
+  EXPECT_EQ(svg.find("inf"), std::string::npos) << svg;
 }
 
 }  // namespace
