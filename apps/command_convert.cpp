@@ -43,9 +43,9 @@ struct JobOutcome {
 };
 
 bool is_volume_file(const fs::path& path) {
-  std::string ext = path.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
-  return ext == ".raw" || ext == ".nrrd" || ext == ".nhdr" || ext == ".vtk" || ext == ".vti" || ext == ".vdb";
+  for (const char* extension : {".raw", ".nrrd", ".nhdr", ".vtk", ".vti", ".vdb"})
+    if (cli::has_extension(path.string(), extension)) return true;
+  return false;
 }
 
 // An input argument's files. A directory or pattern that yields none is an

@@ -135,7 +135,9 @@ int extract(const Args& raw) {
   const auto extract_start = Clock::now();
   Isosurface result = extract_isosurface(volume, options);
   const double extract_seconds = seconds_since(extract_start);
-  if (result.mesh.face_count() == 0) throw empty_isosurface_error(input, options.iso, volume);
+  if (result.mesh.face_count() == 0)  // the range of the field the surface was extracted from
+    throw empty_isosurface_error(input, options.iso,
+                                 options.smooth_sigma > 0 ? gaussian_smoothed(volume, options.smooth_sigma) : volume);
   MeshWriteOptions write_options;
   write_options.ascii = args.has("ascii");
   write_mesh(output, result.mesh, write_options);

@@ -3,7 +3,6 @@
 // writes the fine control mesh and prints the quality report per level.
 #include <algorithm>
 #include <chrono>
-#include <climits>
 #include <cstdio>
 #include <string>
 #include <vector>
@@ -14,7 +13,6 @@
 #include "isowave/pipeline/prepare.h"
 #include "isowave/core/error.h"
 #include "isowave/core/mesh_io.h"
-#include "isowave/extract/volume_summary.h"
 #include "isowave/fit/fit_quality.h"
 #include "isowave/fit/shrink_wrap.h"
 #include "isowave/core/binned_surface_distance.h"
@@ -150,7 +148,7 @@ struct StageSeconds {
 };
 
 // Loads the volume, extracts the isosurface and builds its signed-distance field.
-PreparedSurface prepare_surface(const FitOptions& o, cli::ConsoleProgress& progress, StageSeconds& seconds) {
+PreparedSurface load_and_prepare(const FitOptions& o, cli::ConsoleProgress& progress, StageSeconds& seconds) {
   auto start = Clock::now();
   Volume loaded = load_volume(o.input, o.read, progress);
   cli::report_loaded_volume("fit", o.input, loaded, o.quiet ? cli::LoadReport::Nothing : cli::LoadReport::RangeAndWarnings);
@@ -278,7 +276,7 @@ int fit(const Args& raw) {
   const bool live = cli::default_progress_mode(options.quiet) == cli::ProgressMode::LiveBar;
   cli::ConsoleProgress progress(options.input, live ? cli::ProgressMode::LiveBar : cli::ProgressMode::Quiet);
   StageSeconds seconds;
-  const PreparedSurface prepared = prepare_surface(options, progress, seconds);
+  const PreparedSurface prepared = load_and_prepare(options, progress, seconds);
 
   const auto start = Clock::now();
   options.wrap.surface = &prepared.isosurface.mesh;

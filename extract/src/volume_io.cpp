@@ -430,8 +430,9 @@ Volume read_volume(const std::string& path, const VolumeReadOptions& options) {
     volume = read_builtin(path);
   } else {
     const std::string ext = extension_of(path);
-    // Given the raw geometry, any file is raw samples (.bin, .dat, .f32, ...).
-    if (ext == ".raw" || (options.dims && options.type)) {
+    // Given the raw geometry, a file of no other known format is raw samples (.bin, .dat, .f32, ...).
+    const bool known = ext == ".nrrd" || ext == ".nhdr" || ext == ".vtk" || ext == ".vti" || ext == ".vdb";
+    if (ext == ".raw" || (options.dims && options.type && !known)) {
       volume = detail::read_raw(path, options);
     } else if (ext == ".nrrd" || ext == ".nhdr") {
       volume = detail::read_nrrd(path, options);

@@ -1,7 +1,8 @@
 #pragma once
 // The shrink-wrap rooms' entry points for the driver (shrink_wrap.cpp) and
 // for one another: the public steps' forms that reuse the driver's buffers
-// and its prepared field (non-finite samples filled, see FittedField).
+// and its prepared field (prepared_field_values: non-finite samples filled,
+// samples enclosed by dropped components mirrored).
 // Private to fit/.
 #include <cstddef>
 #include <cstdint>

@@ -296,14 +296,6 @@ void relax(const WrapLevelMesh& mesh, const Volume& box_volume, double weight, c
   wrap::relax_with(mesh, box_volume, weight, in, out, nullptr);
 }
 
-std::vector<Vec3> vertex_normals(const WrapLevelMesh& mesh, const std::vector<Vec3>& positions) {
-  wrap::FaceNormals face_normals;
-  wrap::compute_face_normals(mesh, positions, face_normals);
-  std::vector<Vec3> normals(mesh.vertex_count);
-  wrap::for_vertices(mesh.vertex_count, [&](std::size_t v) { normals[v] = wrap::vertex_normal(mesh, face_normals, v); });
-  return normals;
-}
-
 AttractionStatistics attract(const WrapLevelMesh& mesh, const SignedDistanceField& distance,
                              const AttractionOptions& options, const std::vector<Vec3>& in, std::vector<Vec3>& out) {
   wrap::FaceNormals face_normals;

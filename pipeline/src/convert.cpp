@@ -193,20 +193,19 @@ std::shared_ptr<const SubdivisionHierarchy> fit_surface(PreparedSurface& prepare
 }
 
 // What the folds of a fit that folds more than kFoldedWarning of its fine
-// faces come from, and the remedy; empty where the options hold it already.
+// faces come from, and the remedy.
 // - A fine mesh too coarse for the surface (fine_mesh_too_coarse): a larger
 //   base mesh or more levels.
 // - Points left off the surface, or over kUncoveredCoarse of the surface
 //   left out: the base mesh spans whole parts of the surface and the folds
-//   are its own, which the pre-filter does not change (the torus at 160^3
-//   from 9 base vertices, 3 levels: 57% folded, 44% with --smooth 1); a
-//   larger base mesh. Not more levels: the automatic levels already give
+//   are its own, which the pre-filter does not change; a larger base mesh. Not more levels: the automatic levels already give
 //   about as many fine points as the isosurface has vertices, and more make
 //   the folds of the next case worse.
 // - Otherwise the folds sit on necks, tunnels and specks under a cell across
 //   (noisy scans and fine-grained fields, also where thin features are left
 //   out; more levels fold more there): a one-voxel pre-filter
-//   (docs/MEASUREMENTS.md has the figures).
+//   (docs/MEASUREMENTS.md has the figures), or with one already, a stronger
+//   clean-up.
 std::string fold_cause(const ConvertResult& result, const ConvertOptions& options) {
   if (fine_mesh_too_coarse(result.fine_vertices, result.extracted_vertices))
     return "where the base mesh is too coarse for the surface at " + std::to_string(result.levels) +
@@ -218,7 +217,8 @@ std::string fold_cause(const ConvertResult& result, const ConvertOptions& option
   if (options.prepare.extract.smooth_sigma == 0)
     return "mostly on necks, tunnels and specks under a cell across; a one-voxel pre-filter (--smooth 1) removes "
            "most of them";
-  return {};
+  return "mostly on necks, tunnels and specks under a cell across that the pre-filter left; a larger --smooth or "
+         "--min-component-vertices removes more of them";
 }
 
 // The warnings on the base mesh and the fit (one line each).
@@ -248,17 +248,15 @@ void add_fit_warnings(const ConvertOptions& options, std::size_t target, Convert
                "a larger base mesh (--base-ratio, --base-vertices) covers more";
     result.warnings.push_back(warning.str());
   }
-  const std::string cause = fold_cause(result, options);
-  if (result.folded_share() > kFoldedWarning && !cause.empty())
+  if (result.folded_share() > kFoldedWarning)
     result.warnings.push_back(percent(result.folded_share()) + " of the fine faces fold against the field gradient, " +
-                              cause);
+                              fold_cause(result, options));
 }
 
 // A fit whose faces mostly fold is a crumpled sheet: refused unless asked for.
 void refuse_unusable_fit(const std::string& source, const ConvertOptions& options, const ConvertResult& result) {
   if (result.folded_share() <= kUnusableFolded || options.folded_fit == FoldedFit::Keep) return;
-  std::string cause = fold_cause(result, options);
-  if (cause.empty()) cause = "where the fit did not follow the surface";
+  const std::string cause = fold_cause(result, options);
   throw Error(ErrorKind::Unsupported, source + ": " + percent(result.folded_share()) +
                                           " of the fine faces fold against the field gradient, " + cause +
                                           "; the file would be unusable and is not written (--allow-folded writes it)");

@@ -44,9 +44,6 @@ struct AttractionStatistics {
   double max_move_cells = 0;
 };
 
-// Unit average normal of the faces around each vertex (zero where undefined).
-std::vector<Vec3> vertex_normals(const WrapLevelMesh& mesh, const std::vector<Vec3>& positions);
-
 // One attraction round toward the zero set of `distance` (whose grid gives
 // the box). The search along the normal starts with one Newton step (taken
 // within 1e-3 cells of zero, or when it brackets the crossing), then steps by

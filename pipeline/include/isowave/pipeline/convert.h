@@ -146,9 +146,9 @@ struct ConvertResult {
 
 // Converts one isosurface of `volume` (moved in: the pre-filtered field
 // replaces it). `source` names the input in the file's metadata and in
-// errors. Throws Error(InvalidArgument) for invalid options, an empty
-// isosurface or a fine mesh larger than this machine's memory (checked before
-// it is built), Error(Unsupported) for an unusable fit (FoldedFit::Refuse),
+// errors. Throws Error(InvalidArgument) for invalid options or a fine mesh
+// larger than this machine's memory (checked before it is built),
+// Error(EmptyResult) for an empty isosurface, Error(Unsupported) for an unusable fit (FoldedFit::Refuse),
 // and what the stages throw. Memory: about kFitBytesPerFineVertex per fine
 // control point.
 ConvertResult convert_volume(Volume volume, const std::string& source, const ConvertOptions& options,

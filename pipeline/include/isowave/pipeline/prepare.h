@@ -43,8 +43,8 @@ Volume load_volume(const std::string& path, const VolumeReadOptions& options, Pr
 // Steps 1-2: the pre-filter (stage "smooth", O(samples * sigma)) and the
 // extraction (O(samples + output)); distance left empty. `source` names the
 // input in errors. Throws Error(InvalidArgument) for fewer than 2 samples
-// along an axis or an empty isosurface (the message gives the field's value
-// range), and what extract_isosurface() throws.
+// along an axis, Error(EmptyResult) for an empty isosurface (the message
+// gives the field's value range), and what extract_isosurface() throws.
 PreparedSurface extract_surface(Volume volume, const PrepareOptions& options, const std::string& source,
                                 ProgressSink& progress = no_progress());
 
@@ -66,7 +66,7 @@ std::size_t fine_vertex_count(const PolygonMesh& base, int levels);
 // the peaks in docs/MEASUREMENTS.md).
 inline constexpr double kFitBytesPerFineVertex = 300;
 
-// Refuses, with Error(InvalidArgument) naming `what` (e.g. "--levels 6"), a
+// Refuses, with Error(InvalidArgument) naming `what` (e.g. "6 levels"), a
 // job whose estimate (fine_vertices x bytes_per_vertex) exceeds this
 // machine's physical memory: one clear line at once rather than minutes of
 // swapping, the OOM killer or a bare std::bad_alloc.

@@ -123,7 +123,7 @@ struct Evaluation {
 class CollapseMesh {
  public:
   static constexpr std::uint32_t kNone = ~std::uint32_t{0};
-  // Lanes let threads collapse disjoint regions at once (see simplify.cpp):
+  // Lanes let threads collapse disjoint regions at once (see collapse_loops.cpp):
   // each has its own version, stamps and counts, so one lane never touches a
   // cache line the other writes. Lane l's collapses must stay inside its
   // region: collapse_inside() must hold for the edge.
