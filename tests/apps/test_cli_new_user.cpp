@@ -297,16 +297,6 @@ TEST_F(CliTest, EveryHelpFitsIn100ColumnsAndGivesAnExample) {
   }
 }
 
-}  // namespace
-}  // namespace isowave
-
-namespace isowave {
-namespace {
-
-using cli_test::CliTest;
-using cli_test::run;
-using cli_test::RunResult;
-using cli_test::write_sphere_nrrd;
 
 // A damaged or hostile file whose metadata says the cell is 0 wide: stats
 // and its plot treat the cell size as unknown instead of dividing by it (the
