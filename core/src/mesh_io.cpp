@@ -257,7 +257,7 @@ void read_ply_vertices(const std::string& path, const PlyElement& element, PlyBo
       const PlyProperty& property = element.properties[i];
       if (property.is_list) {
         const double n = body.read(property.count_type, "a vertex list");
-        if (n < 0 || n > 1e6) fail(path, "malformed list length in vertex " + std::to_string(v));
+        if (!(n >= 0 && n <= 1e6) || n != std::floor(n)) fail(path, "malformed list length in vertex " + std::to_string(v));
         for (int k = 0; k < static_cast<int>(n); ++k) body.read(property.type, "a vertex list");
         continue;
       }
@@ -290,13 +290,13 @@ void read_ply_faces(const std::string& path, const PlyElement& element, PlyBody&
         continue;
       }
       const double n = body.read(property.count_type, "a face's vertex count");
-      if (n < 0 || n != static_cast<double>(static_cast<std::int64_t>(n)) || n > body.remaining() + 1.0)
+      if (!(n >= 0 && n <= body.remaining() + 1.0) || n != std::floor(n))  // range first: no cast of NaN or 1e30
         fail(path, "malformed vertex count in face " + std::to_string(f));
       corners.clear();
       for (std::int64_t k = 0; k < static_cast<std::int64_t>(n); ++k) {
         const double index = body.read(property.type, "face indices");
         if (i != list) continue;
-        if (index < 0 || index != static_cast<double>(static_cast<std::int64_t>(index)) || index >= 4294967295.0)
+        if (!(index >= 0 && index < 4294967295.0) || index != std::floor(index))
           fail(path, "invalid vertex index in face " + std::to_string(f));
         corners.push_back(static_cast<std::uint32_t>(index));
       }
@@ -313,7 +313,7 @@ void skip_ply_element(const std::string& path, const PlyElement& element, PlyBod
         continue;
       }
       const double n = body.read(property.count_type, element.name.c_str());
-      if (n < 0 || n > body.remaining() + 1.0) fail(path, "malformed list length in element '" + element.name + "'");
+      if (!(n >= 0 && n <= body.remaining() + 1.0) || n != std::floor(n)) fail(path, "malformed list length in element '" + element.name + "'");
       for (std::int64_t k = 0; k < static_cast<std::int64_t>(n); ++k) body.read(property.type, element.name.c_str());
     }
 }

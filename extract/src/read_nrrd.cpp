@@ -6,6 +6,7 @@
 #include <cmath>
 #include <optional>
 #include <string>
+#include <unordered_set>
 #include <vector>
 
 #include "isowave/core/error.h"
@@ -139,7 +140,7 @@ NrrdHeader parse_header(InputFile& file) {
     format_error(path, "not a NRRD file (the first line must be NRRD0001 to NRRD0005)");
   if (line[7] < '1' || line[7] > '5') format_error(path, "unsupported NRRD version '" + line.substr(0, 8) + "'");
 
-  std::vector<std::string> seen;
+  std::unordered_set<std::string> seen;  // a hash set: a header of many unique fields stays linear
   while (read_line(file, line, header_bytes)) {
     if (line.empty()) {
       header.attached_data = true;
@@ -151,9 +152,7 @@ NrrdHeader parse_header(InputFile& file) {
     if (colon + 1 < line.size() && line[colon + 1] == '=') continue;  // key:=value pair
     const std::string field = to_lower(trim(std::string_view(line).substr(0, colon)));
     const std::string_view value = trim(std::string_view(line).substr(colon + 1));
-    if (std::find(seen.begin(), seen.end(), field) != seen.end())
-      format_error(path, "bad header: field '" + field + "' appears twice");
-    seen.push_back(field);
+    if (!seen.insert(field).second) format_error(path, "bad header: field '" + field + "' appears twice");
 
     if (field == "type") {
       bool unsupported = false;

@@ -48,21 +48,23 @@ std::string decode_entities(std::string_view text) {
       out.push_back(text[i]);
       continue;
     }
-    const auto semi = text.find(';', i);
-    if (semi == std::string_view::npos || semi - i > 10) {
+    // An entity is at most 10 characters: look no farther for its ';' (a
+    // search to the end at every '&' made long attributes quadratic).
+    const auto semi = text.substr(i, 11).find(';');
+    if (semi == std::string_view::npos) {
       out.push_back('&');
       continue;
     }
-    const std::string_view entity = text.substr(i + 1, semi - i - 1);
+    const std::string_view entity = text.substr(i + 1, semi - 1);
     if (entity == "lt") out.push_back('<');
     else if (entity == "gt") out.push_back('>');
     else if (entity == "amp") out.push_back('&');
     else if (entity == "quot") out.push_back('"');
     else if (entity == "apos") out.push_back('\'');
     else {
-      out.append(text.substr(i, semi - i + 1));
+      out.append(text.substr(i, semi + 1));
     }
-    i = semi;
+    i += semi;
   }
   return out;
 }

@@ -466,5 +466,53 @@ TEST(HugePages, FreshReserveGivesAnEmptyVectorWithRoom) {
   EXPECT_EQ(values.data(), data);
 }
 
+
+// List counts and indices stored as floats are range-checked before any
+// integer cast: NaN, 1e30 and fractions are malformed, never undefined
+// behaviour (UBSan's float-cast-overflow in the sanitizer build) nor, as a
+// NaN-long list in the vertex element was, silently accepted.
+TEST_F(MeshIoTest, FloatListCountsAndIndicesOutOfRangeAreMalformed) {
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const auto ply = [](const std::string& vertex_list, const std::string& face_list) {
+    return "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+           "property float z\n" + vertex_list + "element face 1\n" + face_list + "end_header\n";
+  };
+  const auto bytes = [](std::initializer_list<float> values) {
+    std::string out;
+    for (const float v : values) out.append(reinterpret_cast<const char*>(&v), sizeof v);
+    return out;
+  };
+  const std::string points = bytes({0, 0, 0}) + bytes({1, 0, 0}) + bytes({0, 1, 0});
+  const std::string float_faces = "property list float float vertex_indices\n";
+  // A face's count or index: NaN, huge, fractional.
+  for (const float count : {nan, 1e30f, 2.5f}) {
+    SCOPED_TRACE(count);
+    write_text("count.ply", ply("", float_faces) + points + bytes({count, 0, 1, 2}));
+    EXPECT_THROW(read_mesh(path("count.ply")), Error);
+  }
+  for (const float index : {nan, 1e30f, -1.0f, 0.5f}) {
+    SCOPED_TRACE(index);
+    write_text("index.ply", ply("", float_faces) + points + bytes({3, 0, 1, index}));
+    EXPECT_THROW(read_mesh(path("index.ply")), Error);
+  }
+  // A list in the vertex element, and one in another element, of NaN length.
+  std::string with_vertex_list = ply("property list float float extra\n", float_faces);
+  std::string body;
+  for (int v = 0; v < 3; ++v) body += bytes({float(v), 0, 0, nan});
+  write_text("vertex_list.ply", with_vertex_list + body + bytes({3, 0, 1, 2}));
+  EXPECT_THROW(read_mesh(path("vertex_list.ply")), Error);
+  const std::string other = "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\n"
+                            "property float y\nproperty float z\nelement face 1\n"
+                            "property list uchar int vertex_indices\nelement extra 1\n"
+                            "property list float float values\nend_header\n";
+  std::string face(1, char(3));
+  for (const std::int32_t i : {0, 1, 2}) face.append(reinterpret_cast<const char*>(&i), 4);
+  write_text("other.ply", other + points + face + bytes({nan}));
+  EXPECT_THROW(read_mesh(path("other.ply")), Error);
+  // The same files with valid numbers read (the test's own layout is right).
+  write_text("valid.ply", ply("", float_faces) + points + bytes({3, 0, 1, 2}));
+  EXPECT_EQ(read_mesh(path("valid.ply")).face_count(), 1u);
+}
+
 }  // namespace
 }  // namespace isowave
