@@ -42,12 +42,6 @@ struct JobOutcome {
   ConvertResult result;
 };
 
-bool is_volume_file(const fs::path& path) {
-  for (const char* extension : {".raw", ".nrrd", ".nhdr", ".vtk", ".vti", ".vdb"})
-    if (cli::has_extension(path.string(), extension)) return true;
-  return false;
-}
-
 // An input argument's files. A directory or pattern that yields none is an
 // input that failed (`problem`), reported in the summary like the others.
 struct Input {
@@ -65,7 +59,7 @@ std::vector<Input> expand_inputs(const std::vector<std::string>& arguments) {
     } else if (fs::is_directory(argument, error)) {
       std::vector<std::string> found;
       for (fs::directory_iterator it(argument, error), end; !error && it != end; it.increment(error))
-        if (it->is_regular_file() && is_volume_file(it->path())) found.push_back(it->path().string());
+        if (it->is_regular_file() && has_volume_extension(it->path().string())) found.push_back(it->path().string());
       std::sort(found.begin(), found.end());
       if (error) inputs.push_back({argument, "cannot list this directory (" + error.message() + ")"});
       else if (found.empty()) inputs.push_back({argument, "no volume files in this directory"});

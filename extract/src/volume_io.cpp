@@ -421,6 +421,11 @@ void check_option_vec(const Vec3& v, bool positive, const char* what) {
 
 }  // namespace
 
+bool has_volume_extension(const std::string& path) {
+  const std::string ext = extension_of(path);
+  return ext == ".raw" || ext == ".nrrd" || ext == ".nhdr" || ext == ".vtk" || ext == ".vti" || ext == ".vdb";
+}
+
 Volume read_volume(const std::string& path, const VolumeReadOptions& options) {
   if (options.spacing) check_option_vec(*options.spacing, true, "spacing");
   if (options.origin) check_option_vec(*options.origin, false, "origin");
@@ -431,8 +436,7 @@ Volume read_volume(const std::string& path, const VolumeReadOptions& options) {
   } else {
     const std::string ext = extension_of(path);
     // Given the raw geometry, a file of no other known format is raw samples (.bin, .dat, .f32, ...).
-    const bool known = ext == ".nrrd" || ext == ".nhdr" || ext == ".vtk" || ext == ".vti" || ext == ".vdb";
-    if (ext == ".raw" || (options.dims && options.type && !known)) {
+    if (ext == ".raw" || (options.dims && options.type && !has_volume_extension(path))) {
       volume = detail::read_raw(path, options);
     } else if (ext == ".nrrd" || ext == ".nhdr") {
       volume = detail::read_nrrd(path, options);

@@ -56,9 +56,14 @@ struct VolumeReadOptions {
   std::string grid;
 };
 
+// True if `path` ends (case-insensitively) in an extension with a reader of
+// its own: .raw, .nrrd, .nhdr, .vtk, .vti, .vdb.
+bool has_volume_extension(const std::string& path);
+
 // Reads a volume. builtin:NAME[:N] calls make_builtin_field(NAME, N), N
-// defaulting to 128; a file is raw when options.dims and options.type are both
-// set, else its reader is chosen by extension (case-insensitive). NaN/Inf
+// defaulting to 128; a .raw file, or any file without a volume extension when
+// options.dims and options.type are both set, is raw samples; otherwise the
+// reader is chosen by extension (case-insensitive). NaN/Inf
 // samples (including float64 samples beyond the float range) are kept and
 // counted in nonfinite_count.
 Volume read_volume(const std::string& path, const VolumeReadOptions& options = {});
