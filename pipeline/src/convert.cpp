@@ -51,6 +51,8 @@ void check_options(const ConvertOptions& options) {
     throw Error(ErrorKind::InvalidArgument, "the base ratio must be in (0, 1]");
   if (!(options.step_cells > 0) || !std::isfinite(options.step_cells))
     throw Error(ErrorKind::InvalidArgument, "the quantization step must be positive");
+  if (options.fit == FitMethod::Parametrization)
+    throw Error(ErrorKind::Unsupported, "the parametrization-based fit is not built yet");
 }
 
 // The level whose fine mesh has about as many vertices as the isosurface.
@@ -374,6 +376,7 @@ ConvertResult convert_volume(Volume volume, const std::string& source, const Con
 
   std::size_t target = 0;
   const std::shared_ptr<const SubdivisionHierarchy> hierarchy = fit_surface(prepared, options, result, target, progress);
+  result.hierarchy = hierarchy;
   add_fit_warnings(options, target, result);
   refuse_unusable_fit(source, options, result);
   IswMetadata metadata = metadata_of(prepared.field, source, options, result);

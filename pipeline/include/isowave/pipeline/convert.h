@@ -5,6 +5,7 @@
 // file, with the figures users need (sizes, stage timings, RMSE at several
 // coefficient percentages) and warnings where the fit did not follow the
 // surface.
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -61,6 +62,12 @@ enum class FileCheck {
   DecodeAgain,
 };
 
+// How the fine control points are fitted to the isosurface.
+enum class FitMethod {
+  ShrinkWrap,       // the paper's shrink-wrap (Sec. 4.2; fit/shrink_wrap.h)
+  Parametrization,  // surface points at the parameter positions of a MAPS map (fit/parametrized_fit.h)
+};
+
 struct ConvertOptions {
   // Isovalue, orientation, clean-up, pre-filter and the distance band.
   PrepareOptions prepare;
@@ -69,7 +76,8 @@ struct ConvertOptions {
   // many vertices as the extracted isosurface (the paper: 1.19 M fine control
   // points for a 0.98 M-vertex isosurface).
   int levels = 0;
-  // The fit (Sec. 4.2); convert_volume() sets `surface` to the extracted mesh.
+  FitMethod fit = FitMethod::ShrinkWrap;
+  // The shrink-wrap (Sec. 4.2); convert_volume() sets `surface` to the extracted mesh.
   ShrinkWrapOptions shrink_wrap;
   // Quantization step in cells (IswEncodeOptions::step / cell size, > 0);
   // the expected RMSE it adds is about half of it.
@@ -118,6 +126,8 @@ struct ConvertResult {
   IsosurfaceReport extraction;
   simplify::SimplifyReport simplification;
   ShrinkWrapResult fit;  // positions: the fitted fine control points
+  // The hierarchy over the base mesh: control_mesh(levels, fit.positions) is the fitted fine mesh.
+  std::shared_ptr<const SubdivisionHierarchy> hierarchy;
   int levels = 0;
   std::size_t extracted_vertices = 0, base_vertices = 0, fine_vertices = 0, fine_faces = 0;
   double cell_size = 1;
