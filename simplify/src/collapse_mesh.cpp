@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "collapse_mesh_internal.h"
+#include "surface_map_tracker.h"
 
 namespace isowave::simplify {
 
@@ -39,6 +40,7 @@ void CollapseMesh::reset_vertex_halfedge(std::uint32_t v, std::uint32_t start) {
 
 std::uint32_t CollapseMesh::collapse(std::uint32_t e, const Vec3& position, std::uint32_t removed_edges[3],
                                      std::uint32_t opposite_vertices[2], int lane) {
+  if (map_tracker_) map_tracker_->before_collapse(*this, e, position, lane);
   Lane& counts = lanes_[lane];
   ++counts.version;
   const std::uint32_t h = edges_[e].halfedge;
@@ -129,6 +131,7 @@ std::uint32_t CollapseMesh::collapse(std::uint32_t e, const Vec3& position, std:
     acc = std::max(acc, propagated);
   }
 
+  if (map_tracker_) map_tracker_->after_collapse(*this, vi, lane);
   removed_edges[0] = e;
   removed_edges[1] = dead0;
   removed_edges[2] = dead1;

@@ -281,9 +281,13 @@ void CollapseMesh::find_boundary_loops() {
   }
 }
 
-CollapseMesh build_table(const PolygonMesh& input, const CollapseRules& rules, const std::string& source) {
+CollapseMesh build_table(const PolygonMesh& input, const CollapseRules& rules, const std::string& source,
+                         std::vector<std::uint32_t>* vertex_order) {
   try {
-    return CollapseMesh(input, spatial_order(input), rules);
+    std::vector<std::uint32_t> order = spatial_order(input);
+    CollapseMesh mesh(input, order, rules);
+    if (vertex_order) *vertex_order = std::move(order);
+    return mesh;
   } catch (const Error& error) {
     if (error.kind() == ErrorKind::Topology) require_manifold(input, source);
     throw Error(error.kind(), source + ": " + error.what());

@@ -63,7 +63,8 @@ class EdgeRemoval {
   }
 
   // The faces as polygons, each walked along its sides from a kept edge.
-  void write(PolygonMesh& polygons) const {
+  void write(PolygonMesh& polygons, std::vector<std::uint32_t>* triangle_face) const {
+    if (triangle_face) triangle_face->assign(triangle_count_, kNone);
     polygons.face_offsets.assign(1, 0);
     polygons.face_vertices.clear();
     std::vector<std::uint32_t> corners;
@@ -78,6 +79,9 @@ class EdgeRemoval {
         h = CollapseMesh::next(h);
         while (removed_[mesh_.edge_of(h)]) h = CollapseMesh::next(mesh_.opposite(h));
       } while (h != start);
+      if (triangle_face)
+        for (std::uint32_t member : members_[t])
+          if (member != kNone) (*triangle_face)[member] = static_cast<std::uint32_t>(polygons.face_count());
       polygons.add_face(corners.data(), corners.size());
     }
   }
@@ -197,13 +201,13 @@ class EdgeRemoval {
 
 }  // namespace
 
-std::size_t remove_edges(PolygonMesh& polygons, double min_normal_dot) {
+std::size_t remove_edges(PolygonMesh& polygons, double min_normal_dot, std::vector<std::uint32_t>* triangle_face) {
   // The input is compact and its faces triangles: the table keeps their
   // order (triangle t holds corners 3t..3t+2) and vertex indices.
   const CollapseMesh mesh(polygons);
   EdgeRemoval removal(mesh, polygons.sharp, min_normal_dot);
   const std::size_t removed = removal.run();
-  removal.write(polygons);
+  removal.write(polygons, triangle_face);
   return removed;
 }
 

@@ -3,6 +3,8 @@
 // triangles (private). Rules and priority are documented in
 // isowave/simplify/simplify.h.
 #include <cstddef>
+#include <cstdint>
+#include <vector>
 
 #include "isowave/core/mesh.h"
 
@@ -13,6 +15,8 @@ namespace isowave::simplify {
 // removed. Vertex indices are unchanged; faces are renumbered. The paper's
 // bucket queue (kBucketCount buckets over the priority range, first in first
 // out inside one): O(1) per queue update, O(n) in all.
-std::size_t remove_edges(PolygonMesh& mesh, double min_normal_dot);
+// `triangle_face`, if given, receives per input triangle the output face it
+// became part of.
+std::size_t remove_edges(PolygonMesh& mesh, double min_normal_dot, std::vector<std::uint32_t>* triangle_face = nullptr);
 
 }  // namespace isowave::simplify

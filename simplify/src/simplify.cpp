@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -13,6 +14,7 @@
 #include "isowave/core/error.h"
 #include "isowave/core/mesh_topology.h"
 #include "simplify_steps.h"
+#include "surface_map_tracker.h"
 
 namespace isowave::simplify {
 
@@ -48,14 +50,22 @@ void check_input(const PolygonMesh& input, const std::string& source) {
 // The corner table, with the input vertices above the valence limit flipped
 // down when valence flips are on (marching cubes makes a few of valence
 // 9..12; no collapse may touch them otherwise).
+// With a surface map, its tracker is attached before the flips, and `vertex_order`
+// receives the table's order.
 CollapseMesh build_collapse_mesh(const PolygonMesh& input, const SimplifyOptions& options, const std::string& source,
-                                 SimplifyReport& report) {
+                                 SimplifyReport& report, std::unique_ptr<SurfaceMapTracker>& tracker,
+                                 std::vector<std::uint32_t>& vertex_order) {
   CollapseRules rules;
   rules.max_valence = options.max_valence;
   rules.min_normal_dot = options.collapse_min_normal_dot;
   rules.boundary_curve_error = options.boundary_curve_error;
   rules.flip_min_normal_dot = options.flip_min_normal_dot;
-  CollapseMesh mesh = build_table(input, rules, source);
+  const bool mapped = options.surface_map == SurfaceMapping::Build;
+  CollapseMesh mesh = build_table(input, rules, source, mapped ? &vertex_order : nullptr);
+  if (mapped) {
+    tracker = std::make_unique<SurfaceMapTracker>(mesh);
+    mesh.set_surface_map_tracker(tracker.get());
+  }
   if (options.valence_flips) {
     std::vector<std::uint32_t> flipped;
     for (std::uint32_t v = 0; v < mesh.vertex_slots(); ++v) {
@@ -96,20 +106,28 @@ SimplifyResult simplify(const PolygonMesh& input, const SimplifyOptions& options
   report.seconds_check = seconds_since(clock);
 
   progress.begin_stage("simplify: build");
-  CollapseMesh mesh = build_collapse_mesh(input, options, source, report);
+  std::unique_ptr<SurfaceMapTracker> tracker;
+  std::vector<std::uint32_t> vertex_order;
+  CollapseMesh mesh = build_collapse_mesh(input, options, source, report, tracker, vertex_order);
   progress.end_stage();
   report.seconds_build = seconds_since(clock);
 
   collapse_to_target(mesh, options, report, progress, clock);
 
-  result.base = mesh.to_polygon_mesh();
+  std::vector<std::uint32_t> vertex_map;
+  result.base = mesh.to_polygon_mesh(tracker ? &vertex_map : nullptr);
+  if (tracker) {
+    result.map = tracker->finish(mesh, vertex_map, vertex_order);
+    tracker.reset();
+  }
   {
     // Free the corner table before the polygon phase.
     CollapseMesh released = std::move(mesh);
   }
   if (options.edge_removal) {
     progress.begin_stage("simplify: edge removal");
-    report.edges_removed = remove_edges(result.base, options.edge_removal_min_normal_dot);
+    report.edges_removed = remove_edges(result.base, options.edge_removal_min_normal_dot,
+                                        options.surface_map == SurfaceMapping::Build ? &result.map.triangle_face : nullptr);
     progress.end_stage();
   }
   report.seconds_edge_removal = seconds_since(clock);

@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cstddef>
 #include <string>
+#include <vector>
 
 #include "isowave/core/mesh.h"
 #include "isowave/core/progress.h"
@@ -29,8 +30,10 @@ inline double seconds_since(Clock::time_point& start) {
 
 // The corner table of the input in spatial (Morton) order. Throws what the
 // CollapseMesh constructor throws, prefixed with `source`; for Error(Topology)
-// the message of require_manifold(), which names the problem.
-CollapseMesh build_table(const PolygonMesh& input, const CollapseRules& rules, const std::string& source);
+// the message of require_manifold(), which names the problem. `vertex_order`,
+// if given, receives the input index of each table vertex.
+CollapseMesh build_table(const PolygonMesh& input, const CollapseRules& rules, const std::string& source,
+                         std::vector<std::uint32_t>* vertex_order = nullptr);
 
 // The priority queue and the collapse phases (Sec. 4.1, and the valence
 // flips): fills the report's target, collapse counts, stop reason and the

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "collapse_mesh_internal.h"
+#include "surface_map_tracker.h"
 
 namespace isowave::simplify {
 
@@ -48,6 +49,7 @@ bool CollapseMesh::can_flip(std::uint32_t e) const {
 }
 
 void CollapseMesh::flip(std::uint32_t e, int lane) {
+  if (map_tracker_) map_tracker_->before_flip(*this, e, lane);
   ++lanes_[lane].version;
   // Triangle slots: t0 = (h, n0, p0) holds (v_i, v_j, a) and becomes
   // (v_i, b, a); t1 = (o, n1, p1) holds (v_j, v_i, b) and becomes (v_j, a, b).
@@ -75,6 +77,7 @@ void CollapseMesh::flip(std::uint32_t e, int lane) {
   --vertices_[vj].valence;
   ++vertices_[a].valence;
   ++vertices_[b].valence;
+  if (map_tracker_) map_tracker_->after_flip(*this, e, lane);
 }
 
 int CollapseMesh::lower_valence(std::uint32_t v, int count, const std::uint32_t* keep, int keep_count,

@@ -67,6 +67,7 @@ struct CollapseRules {
 };
 
 class CollapseMesh;
+class SurfaceMapTracker;
 
 // The fans of the vertices evaluate() has looked at: for each, its corners in
 // counter-clockwise order, its ring of neighbours with their positions, and the
@@ -141,6 +142,7 @@ class CollapseMesh {
 
   std::uint32_t vertex_slots() const { return static_cast<std::uint32_t>(vertices_.size()); }
   std::uint32_t edge_slots() const { return static_cast<std::uint32_t>(edges_.size()); }
+  std::uint32_t triangle_slots() const { return static_cast<std::uint32_t>(corners_.size() / 3); }
   std::size_t alive_vertices() const;
   std::size_t alive_triangles() const;
 
@@ -276,6 +278,10 @@ class CollapseMesh {
     if (const std::uint32_t o = corners_[h].opposite; o != kNone) __builtin_prefetch(&corners_[o]);
   }
 
+  // From now on, collapse() and flip() report to `tracker` (nullptr: none),
+  // which carries the surface map along (surface_map_tracker.h). Not owned.
+  void set_surface_map_tracker(SurfaceMapTracker* tracker) { map_tracker_ = tracker; }
+
   // Checks every invariant of the corner table (opposite symmetry, edge ids,
   // valences, boundary flags and loop sizes, manifold fans, vertex
   // half-edges); returns "" or the first problem found. O(n).
@@ -333,6 +339,7 @@ class CollapseMesh {
 
   CollapseRules rules_;
   bool input_had_sharp_ = false;
+  SurfaceMapTracker* map_tracker_ = nullptr;
   // Records rather than one array per field: collapses happen at random
   // places, so each element costs a cache miss per array it is spread over.
   // The fields one evaluation reads of a vertex, corner or edge sit together.

@@ -53,8 +53,11 @@
 
 #include "isowave/core/mesh.h"
 #include "isowave/core/progress.h"
+#include "isowave/simplify/surface_map.h"
 
 namespace isowave::simplify {
+
+enum class SurfaceMapping { None, Build };
 
 struct SimplifyOptions {
   // Stop collapsing at this many vertices or fewer; 0: as far as the rules
@@ -115,6 +118,10 @@ struct SimplifyOptions {
   std::uint32_t bucket_count = 100000;  // >= 1
   // Distance from every input vertex to the base mesh surface (BinnedSurfaceDistance).
   bool compute_distance = true;
+  // Whether simplify() also builds the map from the input onto the base mesh
+  // (SimplifyResult::map; MAPS, surface_map.h): about 30 bytes per input
+  // vertex and a relocation of the mapped points at every collapse and flip.
+  SurfaceMapping surface_map = SurfaceMapping::None;
   // Test hook: check every corner-table invariant after each collapse (O(n)
   // per collapse: small meshes only); a failure throws std::logic_error.
   bool validate_every_collapse = false;
@@ -162,6 +169,7 @@ struct SimplifyReport {
 
 struct SimplifyResult {
   PolygonMesh base;  // sharp flags set iff the input had them
+  SurfaceMap map;    // with SurfaceMapping::Build; empty otherwise
   SimplifyReport report;
 };
 
