@@ -436,4 +436,11 @@ UnfoldStatistics unfold(const WrapLevelMesh& mesh, const Volume& field, double i
                            max_move_cells, positions);
 }
 
+std::size_t count_folded_faces(const SubdivisionHierarchy& hierarchy, int level, const std::vector<Vec3>& positions,
+                               const Volume& field, Orientation orientation) {
+  const WrapLevelMesh mesh = make_wrap_level_mesh(hierarchy, level, positions, field);
+  HugePageVector<std::uint8_t> folded;
+  return find_folded_faces(mesh, TrilinearGrid(field), orientation, positions, folded);
+}
+
 }  // namespace isowave
