@@ -95,7 +95,18 @@ std::string iso_text(double iso) {
 cli::CommandSpec convert_spec() {
   std::vector<cli::OptionSpec> options = {
       {"iso", true, "isovalue(s), comma separated (default 0 for builtin: inputs)", "V[,V2,...]"},
-      {"levels", true, "subdivision levels 1..6, or 'auto' (default): the fine mesh as large as the isosurface", "L|auto"},
+      {"fit", true,
+       "how the fine mesh is fitted: 'shrink-wrap' (default; the paper's) or 'parametrization' (surface points of a "
+       "MAPS map: on the isosurface, without folds)",
+       "METHOD"},
+      {"levels", true,
+       "subdivision levels 1..6, or 'auto' (default): with the parametrization the fewest within --max-error, with "
+       "the shrink-wrap the fine mesh as large as the isosurface",
+       "L|auto"},
+      {"max-error", true,
+       "with --fit parametrization and --levels auto: the fitted surface's distance D from the isosurface, in cells "
+       "(default 0.75 of the marching-cubes mesh's own)",
+       "CELLS"},
       {"base-vertices", true, "base mesh vertex target", "N"},
       {"base-ratio", true,
        "base mesh vertex target as a fraction of the isosurface's vertices (default 0.0625; without --base-vertices "
@@ -139,6 +150,13 @@ ConvertOptions convert_options_from(const cli::Arguments& args) {
   options.prepare.extract = cli::extraction_options(args);
   const std::string levels_text = args.get("levels", "auto");
   options.levels = levels_text == "auto" ? 0 : args.get_int("levels", 0, 1, 6);
+  const std::string fit = args.get("fit", "shrink-wrap");
+  if (fit == "parametrization") options.fit = FitMethod::Parametrization;
+  else if (fit != "shrink-wrap")
+    throw Error(ErrorKind::InvalidArgument, "--fit must be 'shrink-wrap' or 'parametrization', not '" + fit + "'");
+  options.max_error_cells = args.get_double("max-error", 0.0);
+  if (!(options.max_error_cells > 0) && args.has("max-error"))
+    throw Error(ErrorKind::InvalidArgument, "--max-error must be a positive number of cells");
   options.base.vertices = static_cast<std::size_t>(args.get_int("base-vertices", 0, 4, 1 << 30));
   options.base.ratio = args.get_double("base-ratio", options.base.ratio);
   if (!(options.base.ratio > 0 && options.base.ratio <= 1))
@@ -308,6 +326,12 @@ void print_json_result(const JobOutcome& o) {
               r.levels, o.load_seconds, r.seconds.extract, r.seconds.simplify, r.seconds.distance, r.seconds.fit,
               r.seconds.analysis, r.seconds.encode, r.seconds.evaluate, r.fit_isosurface.rms, r.fit_isosurface.max,
               r.fit_isosurface.far, r.uncovered_share, r.folded_share(), r.base_attempts);
+  if (!r.level_errors_cells.empty()) {
+    std::printf("\"fit_d_percent_cell_by_level\": [");
+    for (std::size_t k = 0; k < r.level_errors_cells.size(); ++k)
+      std::printf("%s%.6g", k ? ", " : "", 100.0 * r.level_errors_cells[k]);
+    std::printf("], \"fit_fallback_points\": %zu, ", r.parametrization.fallback_points);
+  }
   for (std::size_t k = 0; k < r.warnings.size(); ++k)
     std::printf("%s%s", k ? ", " : "\"warnings\": [", cli::json_string(r.warnings[k]).c_str());
   std::printf("%s\"rows\": [", r.warnings.empty() ? "" : "], ");
@@ -369,6 +393,19 @@ void print_table_row(const std::string& output, const JobOutcome& o) {
   if (r.base_attempts > 1)
     std::printf("%-28s the base mesh grew from %zu to %zu vertices (%d tries) to cover the isosurface\n", "",
                 r.first_base_vertices, r.base_vertices, r.base_attempts);
+  if (!r.level_errors_cells.empty()) {
+    std::string levels;
+    for (std::size_t k = 0; k < r.level_errors_cells.size(); ++k) {
+      std::snprintf(cell, sizeof cell, "%s%zu: %.3g", k ? ", " : "", r.levels - r.level_errors_cells.size() + k + 1,
+                    100.0 * r.level_errors_cells[k]);
+      levels += cell;
+    }
+    std::printf("%-28s parametrization: D of the fitted surface from the isosurface [%% cell] at levels %s "
+                "(bound %.3g); fine face areas %.2g..%.2g of their mean (median %.2g); %zu points located by the "
+                "nearest input triangle\n",
+                "", levels.c_str(), 100.0 * r.max_error_cells, r.parametrization.stretch_min,
+                r.parametrization.stretch_max, r.parametrization.stretch_median, r.parametrization.fallback_points);
+  }
 }
 
 // The summary table; a failed input's error was printed as it happened.

@@ -6,6 +6,7 @@
 //                  [--target-vertices N] [--skip-cgal] [--compare-openmesh]
 //                  [--mesh PATH] [--save-mesh PATH] [--skip-distance]
 //                  [--no-edge-removal] [--serial] [--eager-stencil] [--batch-factor F]
+//                  [--surface-map]
 //
 // Prints the isowave report, peak memory during simplify() in bytes per input
 // vertex (Linux VmHWM, reset before the call), CGAL's time and the ratio.
@@ -18,6 +19,9 @@
 // --serial turns off the two-thread collapse phase (SimplifyOptions::parallel);
 // --eager-stencil re-evaluates whole stencils (SimplifyOptions::lazy_stencil);
 // --batch-factor sets SimplifyOptions::batch_error_factor (1: the paper's order).
+// --surface-map runs simplify() once more building the MAPS map
+// (SurfaceMapping::Build) and prints its time and peak against the plain run
+// (issue #33: the map may add at most the simplification's own time).
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -210,7 +214,8 @@ int main(int argc, char** argv) {
   std::string volume_path = std::string(ISOWAVE_SHARED_DATA_DIR) + "/volumes/miranda_256x256x256.nrrd";
   double iso = 1.5;
   std::size_t min_component_vertices = 0, target_vertices = 0;
-  bool run_cgal = true, openmesh = false, distance = true, edge_removal = true, parallel = true, lazy_stencil = true;
+  bool run_cgal = true, openmesh = false, distance = true, edge_removal = true, parallel = true, lazy_stencil = true,
+       surface_map = false;
   double batch_factor = isowave::simplify::SimplifyOptions{}.batch_error_factor;
   std::string mesh_path, save_path;
   for (int i = 1; i < argc; ++i) {
@@ -235,6 +240,7 @@ int main(int argc, char** argv) {
     else if (arg == "--mesh") mesh_path = value();
     else if (arg == "--save-mesh") save_path = value();
     else if (arg == "--compare-openmesh") openmesh = true;
+    else if (arg == "--surface-map") surface_map = true;
     else {
       std::fprintf(stderr, "unknown argument %s\n", arg.c_str());
       return 2;
@@ -288,6 +294,18 @@ int main(int argc, char** argv) {
                 "%.0f MB = %.0f bytes per input vertex (input mesh included; %.0f MB resident before the call)\n",
                 isowave_seconds, cpu, steal, peak / 1e6, peak / vertices, peak_before / 1e6);
     std::printf("base mesh fingerprint: %016llx\n", static_cast<unsigned long long>(fingerprint(result.base)));
+    if (surface_map) {
+      isowave::simplify::SimplifyOptions mapped = options;
+      mapped.surface_map = isowave::simplify::SurfaceMapping::Build;
+      reset_peak();
+      start = Clock::now();
+      const isowave::simplify::SimplifyResult with_map = isowave::simplify::simplify(triangles, mapped);
+      const double map_seconds = seconds(start);
+      std::printf("with the surface map: %.3f s (%.2fx the plain run; the map adds %.2fx its time), peak %.0f MB; "
+                  "same base mesh: %s\n",
+                  map_seconds, map_seconds / isowave_seconds, map_seconds / isowave_seconds - 1.0, peak_bytes() / 1e6,
+                  fingerprint(with_map.base) == fingerprint(result.base) ? "yes" : "NO");
+    }
     const isowave::TopologySummary before = isowave::summarize_topology(triangles);
     const isowave::TopologySummary after = isowave::summarize_topology(result.base);
     std::printf("topology preserved: genus %lld -> %lld, components %zu -> %zu, boundary loops %zu -> %zu\n",

@@ -16,6 +16,7 @@
 #include "isowave/codec/statistics.h"
 #include "isowave/core/error.h"
 #include "isowave/core/mesh_topology.h"
+#include "isowave/core/surface_error.h"
 #include "isowave/fit/signed_distance.h"
 #include "isowave/transform/wavelet_transform.h"
 
@@ -51,8 +52,8 @@ void check_options(const ConvertOptions& options) {
     throw Error(ErrorKind::InvalidArgument, "the base ratio must be in (0, 1]");
   if (!(options.step_cells > 0) || !std::isfinite(options.step_cells))
     throw Error(ErrorKind::InvalidArgument, "the quantization step must be positive");
-  if (options.fit == FitMethod::Parametrization)
-    throw Error(ErrorKind::Unsupported, "the parametrization-based fit is not built yet");
+  if (!(options.max_error_cells >= 0) || !std::isfinite(options.max_error_cells))
+    throw Error(ErrorKind::InvalidArgument, "the maximum error must be a non-negative number of cells");
 }
 
 // The level whose fine mesh has about as many vertices as the isosurface.
@@ -114,9 +115,23 @@ class BackgroundDistance {
   bool done_ = false;
 };
 
-// One base mesh of `target` vertices (simplify, Sec. 4.1) and its levels.
-PolygonMesh simplify_base(const PreparedSurface& prepared, const simplify::SimplifyOptions& simplify_options,
-                          const ConvertOptions& options, ConvertResult& result, ProgressSink& progress) {
+// The fitted fine control points against the isosurface (first order), and
+// the share of the isosurface no fine point comes near (every stride-th
+// isosurface vertex, at most 100,000).
+void check_fit(const PreparedSurface& prepared, const ConvertOptions& options, ConvertResult& result) {
+  result.fit_isosurface =
+      isosurface_distance(result.fit.positions, result.fine_vertices, prepared.field, options.prepare.extract.iso, 1.0);
+  const PolygonMesh& surface = prepared.isosurface.mesh;
+  const std::size_t stride = std::max<std::size_t>(1, surface.vertex_count() / 100000);
+  result.uncovered_share = share_farther_than(surface.positions, stride, result.fit.positions, result.fine_vertices,
+                                              kUncoveredCells * result.cell_size);
+}
+
+// One base mesh of `target` vertices (simplify, Sec. 4.1), with the map for
+// the parametrization, and the shrink-wrap's levels.
+simplify::SimplifyResult simplify_base(const PreparedSurface& prepared,
+                                       const simplify::SimplifyOptions& simplify_options,
+                                       const ConvertOptions& options, ConvertResult& result, ProgressSink& progress) {
   const auto start = Clock::now();
   simplify::SimplifyResult simplified = simplify::simplify(prepared.isosurface.mesh, simplify_options, progress);
   result.simplification = simplified.report;
@@ -124,7 +139,55 @@ PolygonMesh simplify_base(const PreparedSurface& prepared, const simplify::Simpl
   if (result.base_attempts == 1) result.first_base_vertices = result.base_vertices;
   result.levels = options.levels > 0 ? options.levels : automatic_levels(simplified.base, result.extracted_vertices);
   result.seconds.simplify += seconds_since(start);
-  return std::move(simplified.base);
+  return simplified;
+}
+
+// The automatic levels' bound on D, in cells.
+double level_error_bound(const PreparedSurface& prepared, const ConvertOptions& options) {
+  if (options.max_error_cells > 0) return options.max_error_cells;
+  const SurfaceDeviation deviation =
+      extracted_surface_deviation(prepared.isosurface.mesh, prepared.field, options.prepare.extract.iso);
+  return std::max(kLevelErrorFloorCells, kLevelErrorShare * deviation.rms);
+}
+
+// The parametrization-based fit (fit/parametrized_fit.h) of `simplified`:
+// with automatic levels, level after level until the fitted fine mesh lies
+// within the bound of the extracted isosurface (D), at most 6, and not past a
+// fine mesh of 16 times the isosurface's vertices.
+std::shared_ptr<const SubdivisionHierarchy> fit_parametrized(const simplify::SimplifyResult& simplified,
+                                                             const PreparedSurface& prepared,
+                                                             const ConvertOptions& options, ConvertResult& result,
+                                                             ProgressSink& progress) {
+  const auto start = Clock::now();
+  const PolygonMesh& surface = prepared.isosurface.mesh;
+  result.max_error_cells = level_error_bound(prepared, options);
+  result.level_errors_cells.clear();
+  std::shared_ptr<const SubdivisionHierarchy> hierarchy;
+  for (int levels = options.levels > 0 ? options.levels : 1;; ++levels) {
+    check_memory(double(fine_vertex_count(simplified.base, levels)), kFitBytesPerFineVertex,
+                 std::to_string(levels) + " levels of a " + std::to_string(simplified.base.vertex_count()) +
+                     "-vertex base mesh");
+    hierarchy = std::make_shared<const SubdivisionHierarchy>(simplified.base, levels);
+    result.fit = ShrinkWrapResult{};
+    ParametrizedFitResult fit = parametrized_fit(*hierarchy, simplified.base.positions, surface, simplified.map, progress);
+    result.fit.positions = std::move(fit.positions);
+    result.parametrization = fit.statistics;
+    result.levels = levels;
+    const double error =
+        surface_error(hierarchy->control_mesh(levels, result.fit.positions), surface).d() / result.cell_size;
+    result.level_errors_cells.push_back(error);
+    const double next_fine = fine_vertex_count(simplified.base, levels + 1);
+    if (options.levels > 0 || error <= result.max_error_cells || levels == 6 ||
+        next_fine > 16.0 * double(result.extracted_vertices))
+      break;
+  }
+  result.fine_vertices = hierarchy->fine_vertex_count();
+  result.fine_faces = hierarchy->step(result.levels).face_vertices.size();
+  result.fit.folded_faces = count_folded_faces(*hierarchy, result.levels, result.fit.positions, prepared.field,
+                                               orientation_from_flip(options.prepare.extract.flip));
+  check_fit(prepared, options, result);
+  result.seconds.fit += seconds_since(start);
+  return hierarchy;
 }
 
 // The shrink-wrap of `base` (Sec. 4.2) and the fit against the isosurface,
@@ -144,12 +207,7 @@ std::shared_ptr<const SubdivisionHierarchy> fit_base(const PolygonMesh& base, co
   ShrinkWrapOptions wrap_options = options.shrink_wrap;
   wrap_options.surface = &prepared.isosurface.mesh;
   result.fit = shrink_wrap(*hierarchy, base.positions, prepared.distance, prepared.field, wrap_options, progress);
-  result.fit_isosurface =
-      isosurface_distance(result.fit.positions, result.fine_vertices, prepared.field, options.prepare.extract.iso, 1.0);
-  const PolygonMesh& surface = prepared.isosurface.mesh;
-  const std::size_t stride = std::max<std::size_t>(1, surface.vertex_count() / 100000);
-  result.uncovered_share = share_farther_than(surface.positions, stride, result.fit.positions, result.fine_vertices,
-                                              kUncoveredCells * result.cell_size);
+  check_fit(prepared, options, result);
   result.seconds.fit += seconds_since(start);
   return hierarchy;
 }
@@ -161,10 +219,16 @@ std::shared_ptr<const SubdivisionHierarchy> fit_base(const PolygonMesh& base, co
 std::shared_ptr<const SubdivisionHierarchy> fit_surface(PreparedSurface& prepared, const ConvertOptions& options,
                                                         ConvertResult& result, std::size_t& target,
                                                         ProgressSink& progress) {
-  BackgroundDistance distance(prepared, options.prepare);
   simplify::SimplifyOptions simplify_options = options.base.simplify;
   simplify_options.target_vertices = target = base_target(options.base, result.extracted_vertices);
   simplify_options.compute_distance = false;
+  if (options.fit == FitMethod::Parametrization) {
+    // Every part of the surface is in the map: no distance field, no growth.
+    simplify_options.surface_map = simplify::SurfaceMapping::Build;
+    const simplify::SimplifyResult simplified = simplify_base(prepared, simplify_options, options, result, progress);
+    return fit_parametrized(simplified, prepared, options, result, progress);
+  }
+  BackgroundDistance distance(prepared, options.prepare);
   simplify_options.serial_phase_begins = [&distance] { distance.start(); };
   // Each level multiplies the vertices by about 4 (the first by about 6): a
   // lower bound of the fine mesh before the base mesh is made.
@@ -173,7 +237,7 @@ std::shared_ptr<const SubdivisionHierarchy> fit_surface(PreparedSurface& prepare
                  kFitBytesPerFineVertex, std::to_string(options.levels) + " levels");
   std::shared_ptr<const SubdivisionHierarchy> hierarchy;
   for (result.base_attempts = 1;; ++result.base_attempts) {
-    const PolygonMesh base = simplify_base(prepared, simplify_options, options, result, progress);
+    const PolygonMesh base = simplify_base(prepared, simplify_options, options, result, progress).base;
     simplify_options.serial_phase_begins = nullptr;  // the distance field is on its way
     check_memory(double(fine_vertex_count(base, result.levels)), kFitBytesPerFineVertex,
                  std::to_string(result.levels) + " levels of a " + std::to_string(base.vertex_count()) +

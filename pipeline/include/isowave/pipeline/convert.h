@@ -15,6 +15,7 @@
 #include "isowave/core/volume.h"
 #include "isowave/extract/isosurface.h"
 #include "isowave/fit/fit_quality.h"
+#include "isowave/fit/parametrized_fit.h"
 #include "isowave/fit/shrink_wrap.h"
 #include "isowave/pipeline/prepare.h"
 #include "isowave/simplify/simplify.h"
@@ -72,10 +73,16 @@ struct ConvertOptions {
   // Isovalue, orientation, clean-up, pre-filter and the distance band.
   PrepareOptions prepare;
   BaseMeshOptions base;
-  // Subdivision levels 1..6; 0 picks the level whose fine mesh has about as
-  // many vertices as the extracted isosurface (the paper: 1.19 M fine control
-  // points for a 0.98 M-vertex isosurface).
+  // Subdivision levels 1..6; 0 picks them: with the parametrization, the
+  // fewest levels whose fitted fine mesh lies within max_error_cells of the
+  // extracted isosurface (D, surface_error.h); with the shrink-wrap, the level
+  // whose fine mesh has about as many vertices as the extracted isosurface
+  // (the paper: 1.19 M fine control points for a 0.98 M-vertex isosurface).
   int levels = 0;
+  // The automatic levels' bound on D in cells (>= 0); 0: kLevelErrorShare
+  // of the marching-cubes mesh's own distance from the trilinear isosurface
+  // (extracted_surface_deviation), at least kLevelErrorFloorCells.
+  double max_error_cells = 0;
   FitMethod fit = FitMethod::ShrinkWrap;
   // The shrink-wrap (Sec. 4.2); convert_volume() sets `surface` to the extracted mesh.
   ShrinkWrapOptions shrink_wrap;
@@ -119,13 +126,23 @@ inline constexpr double kFoldedWarning = 0.01;
 // More than this share of folded fine faces makes the fit unusable (FoldedFit).
 inline constexpr double kUnusableFolded = 0.5;
 inline constexpr int kBaseAttempts = 3;
+// The automatic levels' default bound (ConvertOptions::max_error_cells): the
+// fit's own distance adds to the marching-cubes mesh's about in quadrature,
+// so 0.75 of it keeps the sum within 1.25 of it.
+inline constexpr double kLevelErrorShare = 0.75;
+inline constexpr double kLevelErrorFloorCells = 0.01;
 
 struct ConvertResult {
   std::string bytes;  // the .isw file
   PolygonMesh extracted_mesh;  // with keep_extracted_mesh
   IsosurfaceReport extraction;
   simplify::SimplifyReport simplification;
-  ShrinkWrapResult fit;  // positions: the fitted fine control points
+  ShrinkWrapResult fit;  // positions: the fitted fine control points (both fits)
+  // With FitMethod::Parametrization: the fit's figures, and D of the fitted
+  // fine mesh against the extracted isosurface (cells) for the levels tried.
+  ParametrizedFitStatistics parametrization;
+  std::vector<double> level_errors_cells;
+  double max_error_cells = 0;  // the bound the automatic levels used
   // The hierarchy over the base mesh: control_mesh(levels, fit.positions) is the fitted fine mesh.
   std::shared_ptr<const SubdivisionHierarchy> hierarchy;
   int levels = 0;
