@@ -60,10 +60,9 @@ double seconds_since(Clock::time_point start) { return std::chrono::duration<dou
 
 struct BenchOptions {
   std::string input;
-  double iso = 0;
+  IsosurfaceOptions extract;  // iso, min_component_vertices, smooth_sigma
   bool has_iso = false;
   int levels = 0;  // 0: automatic
-  IsosurfaceOptions extract;
   std::vector<FitMethod> fits{FitMethod::ShrinkWrap, FitMethod::Parametrization};
 };
 
@@ -87,7 +86,7 @@ BenchOptions parse_options(int argc, char** argv) {
     };
     try {
       if (arg == "--iso") {
-        o.iso = std::stod(next());
+        o.extract.iso = std::stod(next());
         o.has_iso = true;
       } else if (arg == "--levels") {
         o.levels = std::stoi(next());
@@ -110,7 +109,6 @@ BenchOptions parse_options(int argc, char** argv) {
     }
   }
   if (o.input.empty() || !o.has_iso) usage("a volume and --iso are required");
-  o.extract.iso = o.iso;
   return o;
 }
 
@@ -339,7 +337,7 @@ Surfaces extract_surfaces(const BenchOptions& o) {
   s.reference = contour_volume(fine, o.extract.iso, o.extract.flip);
   if (o.extract.min_component_vertices > 1)
     leave_out_dropped_cells(s.reference, prepared.field, o.extract.iso, o.extract.flip, o.extract.min_component_vertices);
-  std::printf("%s, iso %g: %zu x %zu x %zu samples, cell %g\n", o.input.c_str(), o.iso, prepared.field.dims[0],
+  std::printf("%s, iso %g: %zu x %zu x %zu samples, cell %g\n", o.input.c_str(), o.extract.iso, prepared.field.dims[0],
               prepared.field.dims[1], prepared.field.dims[2], s.cell);
   std::printf("marching cubes: %zu vertices; reference (%zu x %zu x %zu upsample): %zu vertices, in %.1f s\n",
               s.marching_cubes.vertex_count(), fine.dims[0], fine.dims[1], fine.dims[2], s.reference.vertex_count(),
