@@ -132,27 +132,25 @@ BaseFans build_fans(const std::vector<Triangle>& triangles, std::size_t vertex_c
   return fans;
 }
 
-// Calls visit(position) for the fan positions strictly between from and to,
-// the shorter way round a closed fan (forward on a tie).
+// Calls visit(position) for the fan positions strictly between from and to:
+// along an open fan, its one way; around a closed fan, both ways (which way
+// the input triangle goes, the orientation of its image decides: see
+// add_candidates).
 template <typename Visit>
 void between_in_fan(std::uint32_t from, std::uint32_t to, std::uint32_t length, bool closed, Visit visit) {
-  if (!closed) {
-    if (from < to)
-      for (std::uint32_t i = from + 1; i < to; ++i) visit(i);
-    else
-      for (std::uint32_t i = from; i-- > to + 1;) visit(i);
-    return;
+  if (closed) {
+    for (std::uint32_t i = 0; i < length; ++i)
+      if (i != from && i != to) visit(i);
+  } else if (from < to) {
+    for (std::uint32_t i = from + 1; i < to; ++i) visit(i);
+  } else {
+    for (std::uint32_t i = to + 1; i < from; ++i) visit(i);
   }
-  const std::uint32_t forward = (to + length - from) % length;
-  if (forward <= length - forward)
-    for (std::uint32_t s = 1; s < forward; ++s) visit((from + s) % length);
-  else
-    for (std::uint32_t s = 1; s < length - forward; ++s) visit((from + length - s) % length);
 }
 
 // The base triangles whose candidate input triangle t is: those of its
-// vertices, and those on the shorter way around a base vertex between two of
-// them sharing only that vertex. Sorted, distinct.
+// vertices, and those around a base vertex between two of them sharing only
+// that vertex. Sorted, distinct.
 void candidate_triangles(const simplify::SurfaceMap& map, const BaseFans& fans, const Triangle& input,
                          std::vector<std::uint32_t>& out) {
   out.clear();
@@ -310,8 +308,10 @@ void build_layouts(const Context& c, std::uint32_t t, Scratch& s) {
   }
 }
 
-// Adds the candidates of T's rows `rows` whose three vertices lie in laid-out
-// base triangles, in T's (u, v) frame.
+// Adds the input triangles [begin, end) whose three vertices lie in laid-out
+// base triangles, in T's (u, v) frame, unless their image there is not
+// positively oriented: the map preserves orientation, so such an image is
+// the triangle unfolded the wrong way round a base vertex (or the map folds).
 void add_candidates(const Context& c, const std::uint32_t* begin, const std::uint32_t* end, Scratch& s) {
   for (const std::uint32_t* it = begin; it != end; ++it) {
     Candidate candidate{*it, {}, {}, {}};
@@ -325,8 +325,8 @@ void add_candidates(const Context& c, const std::uint32_t* begin, const std::uin
       const Corners& l = layout->corners;
       candidate.corners[k] = l[0] + uv[0] * (l[1] - l[0]) + uv[1] * (l[2] - l[0]);
     }
-    if (!placed) continue;
     const Corners& p = candidate.corners;
+    if (!placed || !(cross(p[1] - p[0], p[2] - p[0]) > 0)) continue;
     candidate.lo = {std::min({p[0].x, p[1].x, p[2].x}), std::min({p[0].y, p[1].y, p[2].y})};
     candidate.hi = {std::max({p[0].x, p[1].x, p[2].x}), std::max({p[0].y, p[1].y, p[2].y})};
     s.candidates.push_back(candidate);

@@ -7,15 +7,18 @@
 // vertices, straight in the plane of the base triangles unfolded around them.
 // A base triangle T's candidates are the input triangles with a vertex mapped
 // into T, and those with vertices in two base triangles that share only a
-// base vertex w, T on the shorter way around w between them. Each candidate's
-// vertices are unfolded into T's (u, v) frame: across an edge of T, or around
-// a corner of T the shorter way (a boundary vertex's fan has one way), with
-// the base triangles' 3D edge lengths. A query point is located among them
-// (barycentric test, a uniform grid when there are more than 16); where none
-// contains it, the candidate whose smallest barycentric coordinate is the
-// largest gives it, clamped (a fallback). Where no candidate can be unfolded
-// into T, those of the triangles around T are tried; failing these too, the
-// point of the base triangle itself is returned (also a fallback).
+// base vertex w, T between them around w (either way round a closed fan).
+// Each candidate's vertices are unfolded into T's (u, v) frame: across an
+// edge of T, or around a corner of T the shorter way (a boundary vertex's fan
+// has one way), with the base triangles' 3D edge lengths; a candidate whose
+// image is not positively oriented there (unfolded the wrong way round, or a
+// map that folds) is dropped, since the map preserves orientation. A query
+// point is located among them (barycentric test, a uniform grid when there
+// are more than 16); where none contains it, the candidate whose smallest
+// barycentric coordinate is the largest gives it, clamped (a fallback). Where
+// no candidate can be unfolded into T, those of the triangles around T are
+// tried; failing these too, the point of the base triangle itself is
+// returned (also a fallback).
 //
 // Base triangles are processed in parallel (TBB), each with thread-local
 // scratch, and every result depends only on its base triangle: identical for

@@ -296,22 +296,44 @@ TEST(ParametrizedFit, TriangleAndPentagonGiveTheChartImages) {
 
 // The octahedron and a sphere: each octahedron face subdivided k times, its
 // vertices projected onto the unit sphere, mapped by their barycentric
-// coordinates in the flat face.
+// coordinates in the flat face. With a twist, each vertex p then moves to
+// normalized(p + twist (yz, zx, xy)), which keeps the octahedron's vertices,
+// and is mapped by its central projection onto the octahedron: the input
+// triangles straddle the base edges.
 struct SphereCase {
   PolygonMesh base, surface;
   simplify::SurfaceMap map;
 };
 
-SphereCase octahedron_sphere(int k) {
+// The first face of the octahedron holding the central projection of p, and
+// the barycentric (u, v) there.
+void map_centrally(const PolygonMesh& octahedron, const Vec3& p, simplify::SurfaceMap& map) {
+  const Vec3 q = (1 / (std::abs(p.x) + std::abs(p.y) + std::abs(p.z))) * p;
+  for (std::uint32_t f = 0; f < octahedron.face_count(); ++f) {
+    const std::uint32_t* v = octahedron.face_begin(f);
+    const Vec3 &a = octahedron.positions[v[0]], &b = octahedron.positions[v[1]], &c = octahedron.positions[v[2]];
+    const Vec3 n = cross(b - a, c - a);
+    const double u = dot(cross(q - a, c - a), n) / dot(n, n), w = dot(cross(b - a, q - a), n) / dot(n, n);
+    if (std::min({u, w, 1 - u - w}) < -1e-12 || std::abs(dot(q - a, n)) > 1e-12) continue;
+    map.vertex_triangle.push_back(f);
+    map.vertex_uv.push_back({std::max(0.0, u), std::max(0.0, w)});
+    return;
+  }
+  ADD_FAILURE() << "no face";
+}
+
+SphereCase octahedron_sphere(int k, double twist = 0) {
   SphereCase s;
   s.base.positions = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
   const std::vector<Triangle> faces = {{0, 2, 4}, {2, 1, 4}, {1, 3, 4}, {3, 0, 4},
                                        {2, 0, 5}, {1, 2, 5}, {3, 1, 5}, {0, 3, 5}};
-  std::map<std::array<long long, 3>, std::uint32_t> index;
   for (std::uint32_t f = 0; f < faces.size(); ++f) {
     s.base.add_face(faces[f].data(), 3);
     s.map.triangles.push_back(faces[f]);
     s.map.triangle_face.push_back(f);
+  }
+  std::map<std::array<long long, 3>, std::uint32_t> index;
+  for (std::uint32_t f = 0; f < faces.size(); ++f) {
     const Vec3 &a = s.base.positions[faces[f][0]], &b = s.base.positions[faces[f][1]], &c = s.base.positions[faces[f][2]];
     std::vector<std::vector<std::uint32_t>> id(k + 1);
     for (int i = 0; i <= k; ++i)
@@ -319,10 +341,14 @@ SphereCase octahedron_sphere(int k) {
         const Vec3 p = a + (static_cast<double>(i) / k) * (b - a) + (static_cast<double>(j) / k) * (c - a);
         const std::array<long long, 3> key{std::llround(p.x * 1e9), std::llround(p.y * 1e9), std::llround(p.z * 1e9)};
         const auto [it, added] = index.emplace(key, static_cast<std::uint32_t>(s.surface.positions.size()));
-        if (added) {
+        if (added && twist == 0) {
           s.surface.positions.push_back(normalized(p));
           s.map.vertex_triangle.push_back(f);
           s.map.vertex_uv.push_back({static_cast<double>(i) / k, static_cast<double>(j) / k});
+        } else if (added) {
+          const Vec3 n = normalized(p);
+          s.surface.positions.push_back(normalized(n + twist * Vec3{n.y * n.z, n.z * n.x, n.x * n.y}));
+          map_centrally(s.base, s.surface.positions.back(), s.map);
         }
         id[i].push_back(it->second);
       }
@@ -335,16 +361,18 @@ SphereCase octahedron_sphere(int k) {
   return s;
 }
 
-TEST(ParametrizedFit, SphereOverOctahedronLiesOnTheSurfaceWithoutFolds) {
-  const SphereCase s = octahedron_sphere(6);
-  const SubdivisionHierarchy hierarchy(s.base, 3);
+// Every fine point on the input triangles, the base vertices on their input
+// vertices, no fine face folded (its normal points outward), no two fine
+// points alike, no fallback.
+void expect_on_sphere_without_folds(const SphereCase& s, int levels) {
+  const SubdivisionHierarchy hierarchy(s.base, levels);
   const ParametrizedFitResult r = parametrized_fit(hierarchy, s.base.positions, s.surface, s.map);
   EXPECT_EQ(r.statistics.fallback_points, 0u);
-  ASSERT_EQ(r.positions.size(), hierarchy.vertex_count(3));
+  ASSERT_EQ(r.positions.size(), hierarchy.vertex_count(levels));
   const BinnedSurfaceDistance distance(s.surface);
   for (const Vec3& p : r.positions) EXPECT_LT(distance.distance(p), 1e-12);
   for (std::size_t v = 0; v < 6; ++v) EXPECT_EQ(r.positions[v], s.base.positions[v]);
-  const PolygonMesh fine = hierarchy.control_mesh(3, r.positions);
+  const PolygonMesh fine = hierarchy.control_mesh(levels, r.positions);
   for (std::size_t f = 0; f < fine.face_count(); ++f) {
     const std::uint32_t* q = fine.face_begin(f);
     const Vec3 normal = cross(fine.positions[q[2]] - fine.positions[q[0]], fine.positions[q[3]] - fine.positions[q[1]]);
@@ -357,6 +385,14 @@ TEST(ParametrizedFit, SphereOverOctahedronLiesOnTheSurfaceWithoutFolds) {
   EXPECT_GT(closest, 1e-3);
   EXPECT_LT(r.statistics.stretch_min, 1.0);
   EXPECT_GT(r.statistics.stretch_max, 1.0);
+}
+
+TEST(ParametrizedFit, SphereOverOctahedronLiesOnTheSurfaceWithoutFolds) {
+  expect_on_sphere_without_folds(octahedron_sphere(6), 3);
+}
+
+TEST(ParametrizedFit, TwistedSphereStraddlingBaseEdgesLiesOnTheSurfaceWithoutFolds) {
+  expect_on_sphere_without_folds(octahedron_sphere(7, 0.4), 3);
 }
 
 TEST(ParametrizedFit, SameResultForAnyThreadCount) {
