@@ -96,16 +96,16 @@ cli::CommandSpec convert_spec() {
   std::vector<cli::OptionSpec> options = {
       {"iso", true, "isovalue(s), comma separated (default 0 for builtin: inputs)", "V[,V2,...]"},
       {"fit", true,
-       "how the fine mesh is fitted: 'shrink-wrap' (default; the paper's) or 'parametrization' (surface points of a "
-       "MAPS map: on the isosurface, without folds)",
+       "how the fine mesh is fitted: 'shrink-wrap' (default; the paper's) or 'parametrization' (the points of a "
+       "MAPS map of the extracted surface, moved onto the trilinear isosurface)",
        "METHOD"},
       {"levels", true,
        "subdivision levels 1..6, or 'auto' (default): with the parametrization the fewest within --max-error, with "
        "the shrink-wrap the fine mesh as large as the isosurface",
        "L|auto"},
       {"max-error", true,
-       "with --fit parametrization and --levels auto: the fitted surface's distance D from the isosurface, in cells "
-       "(default 0.75 of the marching-cubes mesh's own)",
+       "with --fit parametrization and --levels auto: the bound on the fitted surface's sampling error D, in cells "
+       "(default: the marching-cubes mesh's own distance from the isosurface)",
        "CELLS"},
       {"base-vertices", true, "base mesh vertex target", "N"},
       {"base-ratio", true,

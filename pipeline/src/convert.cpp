@@ -147,7 +147,9 @@ double level_error_bound(const PreparedSurface& prepared, const ConvertOptions& 
   if (options.max_error_cells > 0) return options.max_error_cells;
   const SurfaceDeviation deviation =
       extracted_surface_deviation(prepared.isosurface.mesh, prepared.field, options.prepare.extract.iso);
-  return std::max(kLevelErrorFloorCells, kLevelErrorShare * deviation.rms);
+  const double share =
+      options.fine_points == FinePoints::OnTrilinearIsosurface ? kCorrectedLevelErrorShare : kLevelErrorShare;
+  return std::max(kLevelErrorFloorCells, share * deviation.rms);
 }
 
 // The parametrization-based fit (fit/parametrized_fit.h) of `simplified`:
@@ -183,6 +185,12 @@ std::shared_ptr<const SubdivisionHierarchy> fit_parametrized(const simplify::Sim
   }
   result.fine_vertices = hierarchy->fine_vertex_count();
   result.fine_faces = hierarchy->step(result.levels).face_vertices.size();
+  if (options.fine_points == FinePoints::OnTrilinearIsosurface) {
+    const WrapLevelMesh level = make_wrap_level_mesh(*hierarchy, result.levels, result.fit.positions, prepared.field,
+                                                     options.prepare.extract.iso);
+    result.fit.correction = correct_to_isosurface(level, prepared.field, options.prepare.extract.iso,
+                                                  kFinePointMoveCells, result.fit.positions);
+  }
   result.fit.folded_faces = count_folded_faces(*hierarchy, result.levels, result.fit.positions, prepared.field,
                                                orientation_from_flip(options.prepare.extract.flip));
   check_fit(prepared, options, result);

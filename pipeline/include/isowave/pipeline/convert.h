@@ -69,6 +69,15 @@ enum class FitMethod {
   Parametrization,  // surface points at the parameter positions of a MAPS map (fit/parametrized_fit.h)
 };
 
+// Where the parametrization puts the fine points (FitMethod::Parametrization).
+enum class FinePoints {
+  OnExtractedSurface,     // the map's points, on the marching-cubes triangles
+  // Those moved along the field gradient onto the isosurface of the trilinear
+  // field (correct_to_isosurface, within kFinePointMoveCells): off the
+  // marching-cubes mesh's own error, nearer the isosurface than it.
+  OnTrilinearIsosurface,
+};
+
 struct ConvertOptions {
   // Isovalue, orientation, clean-up, pre-filter and the distance band.
   PrepareOptions prepare;
@@ -80,10 +89,13 @@ struct ConvertOptions {
   // (the paper: 1.19 M fine control points for a 0.98 M-vertex isosurface).
   int levels = 0;
   // The automatic levels' bound on D in cells (>= 0); 0: kLevelErrorShare
-  // of the marching-cubes mesh's own distance from the trilinear isosurface
-  // (extracted_surface_deviation), at least kLevelErrorFloorCells.
+  // (kCorrectedLevelErrorShare with FinePoints::OnTrilinearIsosurface) of the
+  // marching-cubes mesh's own distance from the trilinear isosurface
+  // (extracted_surface_deviation), at least kLevelErrorFloorCells. D is
+  // measured against the extracted mesh before any correction.
   double max_error_cells = 0;
   FitMethod fit = FitMethod::ShrinkWrap;
+  FinePoints fine_points = FinePoints::OnTrilinearIsosurface;
   // The shrink-wrap (Sec. 4.2); convert_volume() sets `surface` to the extracted mesh.
   ShrinkWrapOptions shrink_wrap;
   // Quantization step in cells (IswEncodeOptions::step / cell size, > 0);
@@ -126,10 +138,14 @@ inline constexpr double kFoldedWarning = 0.01;
 // More than this share of folded fine faces makes the fit unusable (FoldedFit).
 inline constexpr double kUnusableFolded = 0.5;
 inline constexpr int kBaseAttempts = 3;
-// The automatic levels' default bound (ConvertOptions::max_error_cells): the
-// fit's own distance adds to the marching-cubes mesh's about in quadrature,
-// so 0.75 of it keeps the sum within 1.25 of it.
+// The automatic levels' default bound (ConvertOptions::max_error_cells). On
+// the extracted surface, the fit's sampling error adds to the marching-cubes
+// mesh's own about in quadrature: 0.75 of it keeps the sum within 1.25 of it.
+// Corrected onto the trilinear isosurface, the fit's error is its sampling
+// error alone: the marching-cubes mesh's own is the bound.
 inline constexpr double kLevelErrorShare = 0.75;
+inline constexpr double kCorrectedLevelErrorShare = 1.0;
+inline constexpr double kFinePointMoveCells = 0.5;
 inline constexpr double kLevelErrorFloorCells = 0.01;
 
 struct ConvertResult {
