@@ -11,11 +11,11 @@
 // -cl 10, decoded and measured the same way) is added when draco_encoder and
 // draco_decoder are on PATH.
 //
-// Then each pair of curves at equal size: log D interpolated linearly in
-// log bytes on one curve at the other's byte counts inside the range both
-// cover, and a Bjontegaard-style mean of log10 D(A) - log10 D(B) over that
-// range (the exact integral of the difference of the two piecewise linear
-// curves), printed as the ratio of D at equal size.
+// Then each pair of curves at equal size: both curves' log D, linear in log
+// bytes between a curve's points, at the byte counts of both inside the range
+// both cover, and a Bjontegaard-style mean of log10 D(A) - log10 D(B) over
+// that range (the exact integral of the difference of the two piecewise
+// linear curves), printed as the ratio of D at equal size.
 //
 // usage: bench_fit_rate_distortion VOLUME --iso V [--levels N] [--min-component-vertices N] [--smooth S]
 //                                  [--fit shrink-wrap|parametrization|both]
@@ -77,10 +77,32 @@ void add_point(Curve& curve, std::string label, std::uint64_t bytes, const Polyg
   curve.points.push_back({std::move(label), bytes, e.d()});
 }
 
+// The share of the wavelet coefficients' squared length along the normal of
+// `fine` (area-weighted vertex normals; coefficient i belongs to fine vertex
+// i): detail across the surface. The rest moves points along the surface,
+// which costs bits and changes the surface little.
+double normal_share(const std::vector<Vec3>& coefficients, std::size_t base, const PolygonMesh& fine) {
+  std::vector<Vec3> normals(fine.vertex_count());
+  for (std::size_t f = 0; f < fine.face_count(); ++f) {
+    const std::uint32_t* v = fine.face_begin(f);
+    Vec3 area;  // twice the vector area of the polygon's fan
+    for (std::uint32_t c = 2; c < fine.face_size(f); ++c)
+      area += cross(fine.positions[v[c - 1]] - fine.positions[v[0]], fine.positions[v[c]] - fine.positions[v[0]]);
+    for (std::uint32_t c = 0; c < fine.face_size(f); ++c) normals[v[c]] += area;
+  }
+  double along = 0, total = 0;
+  for (std::size_t i = base; i < coefficients.size(); ++i) {
+    along += std::pow(dot(coefficients[i], normalized(normals[i])), 2);
+    total += squared_norm(coefficients[i]);
+  }
+  return total > 0 ? along / total : 0;
+}
+
 // The fit's file decoded at each percentage as `isowave decode --percent P` does.
 Curve fit_curve(FitMethod fit, const FitOutcome& outcome, const Surfaces& s) {
   Curve curve{fit_name(fit), {}};
   std::shared_ptr<const SubdivisionHierarchy> hierarchy;  // built by the first decode, reused
+  double full_normal_share = 0;
   for (std::size_t r = 0; r < outcome.summary.size(); ++r) {
     const RateDistortionRow& row = outcome.summary[r];
     IswDecodeOptions options;
@@ -91,13 +113,17 @@ Curve fit_curve(FitMethod fit, const FitOutcome& outcome, const Surfaces& s) {
     if (decoded.ranked.size() != row.wavelet_coefficients)
       std::printf("(%s: the decode kept %zu coefficients, the summary row %zu)\n", curve.name.c_str(),
                   decoded.ranked.size(), row.wavelet_coefficients);
+    const std::vector<Vec3> coefficients = r == 0 ? decoded.coefficients : std::vector<Vec3>{};
     const PolygonMesh mesh =
         hierarchy->control_mesh(decoded.levels, take_reconstruction(decoded, decoded.ranked.size()));
+    if (r == 0) full_normal_share = normal_share(coefficients, decoded.base.vertex_count(), mesh);
     char label[32];
     if (row.is_base) std::snprintf(label, sizeof label, "base (%.2f%%)", row.percent);
     else std::snprintf(label, sizeof label, "%g%%", kPercents[r]);
     add_point(curve, label, row.bytes, mesh, s);
   }
+  std::printf("\n%s at 100%%: %.1f%% of the wavelet coefficients' squared length lies along the surface normal\n",
+              curve.name.c_str(), 100 * full_normal_share);
   return curve;
 }
 
