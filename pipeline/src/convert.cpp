@@ -176,7 +176,8 @@ std::shared_ptr<const SubdivisionHierarchy> fit_parametrized(const simplify::Sim
     result.parametrization = fit.statistics;
     result.levels = levels;
     const double error =
-        surface_error(hierarchy->control_mesh(levels, result.fit.positions), surface).d() / result.cell_size;
+        surface_error(hierarchy->control_mesh(levels, result.fit.positions), surface, kErrorSamples).d() /
+        result.cell_size;
     result.level_errors_cells.push_back(error);
     const double next_fine = fine_vertex_count(simplified.base, levels + 1);
     if (options.levels > 0 || error <= result.max_error_cells || levels == 6 ||
@@ -419,7 +420,7 @@ void measure_rows(const SubdivisionHierarchy& hierarchy, const IswDecoded& expec
     }
     const PolygonMesh decoded =
         hierarchy.control_mesh(result.levels, reconstruct(expected, result.summary[k].kept));
-    result.summary_surface_error.push_back(surface_error(decoded, extracted, kSummaryErrorSamples).d() /
+    result.summary_surface_error.push_back(surface_error(decoded, extracted, kErrorSamples).d() /
                                            result.cell_size);
   }
 }
