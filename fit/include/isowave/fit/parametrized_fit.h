@@ -16,10 +16,10 @@
 //
 // Inverse map: a parameter point (base triangle T, u, v) is located among the
 // input triangles with a vertex mapped into T or spanning T around one of its
-// corners, all unfolded isometrically into T's plane (base_positions' edge
-// lengths) and positively oriented there; its surface point is the
-// barycentric combination of the input triangle's vertices, so it lies on
-// the surface. Results are identical for any thread count (TBB).
+// corners, unfolded isometrically into T's plane (base_positions' edge
+// lengths); its surface point is the barycentric combination of the input
+// triangle's vertices, so it lies on the surface (fit/src/
+// surface_map_inverse.h). Results are identical for any thread count (TBB).
 #include <cstddef>
 #include <vector>
 
