@@ -434,7 +434,7 @@ TEST(ParametrizedFit, TwistedSphereStraddlingBaseEdgesLiesOnTheSurfaceWithoutFol
 }
 
 TEST(ParametrizedFit, TwistedSphereOverCubeLiesOnTheSurfaceWithoutFolds) {
-  expect_on_sphere_without_folds(cube_sphere(5, 0.4), 3);
+  expect_on_sphere_without_folds(cube_sphere(8, 0.2), 5);
 }
 
 TEST(ParametrizedFit, SameResultForAnyThreadCount) {
