@@ -1,8 +1,8 @@
 #include "surface_map_inverse.h"
 
 #include <algorithm>
-#include <cassert>
 #include <cmath>
+#include <functional>
 #include <limits>
 
 #include <tbb/blocked_range.h>
@@ -20,29 +20,6 @@ constexpr double kTolerance = 1e-9;
 constexpr std::size_t kGridThreshold = 16;
 // Added to the perimeter of an image that holds a corner of T (place_input).
 constexpr double kWrapped = 1e30;
-
-// Compressed rows: the values of key k are values[offsets[k] .. offsets[k+1]).
-struct Rows {
-  std::vector<std::size_t> offsets;
-  std::vector<std::uint32_t> values;
-  const std::uint32_t* begin(std::size_t k) const { return values.data() + offsets[k]; }
-  const std::uint32_t* end(std::size_t k) const { return values.data() + offsets[k + 1]; }
-  std::size_t size(std::size_t k) const { return offsets[k + 1] - offsets[k]; }
-};
-
-// Stable counting sort of values by key (keys < key_count): each row keeps
-// the values' given order. Serial, O(pairs + keys).
-Rows sort_into_rows(std::size_t key_count, const std::vector<std::uint32_t>& keys,
-                    const std::vector<std::uint32_t>& values) {
-  Rows rows;
-  rows.offsets.assign(key_count + 1, 0);
-  for (const std::uint32_t k : keys) ++rows.offsets[k + 1];
-  for (std::size_t k = 0; k < key_count; ++k) rows.offsets[k + 1] += rows.offsets[k];
-  std::vector<std::size_t> cursor(rows.offsets.begin(), rows.offsets.end() - 1);
-  rows.values.resize(keys.size());
-  for (std::size_t i = 0; i < keys.size(); ++i) rows.values[cursor[keys[i]]++] = values[i];
-  return rows;
-}
 
 // The surface's faces as triangles, larger faces fanned from their first corner.
 std::vector<Triangle> surface_triangles(const PolygonMesh& surface) {
@@ -67,7 +44,7 @@ int corner_of(const Triangle& t, std::uint32_t w) {
 // reach (only with an invalid map) follow it and are never unfolded. With
 // each base triangle's 3D angles at its corners (radians).
 struct BaseFans {
-  Rows rows;
+  IndexRows rows;
   std::vector<std::uint32_t> length;
   std::vector<std::uint8_t> closed;
   std::vector<std::array<double, 3>> angles;
@@ -199,7 +176,7 @@ void candidate_triangles(const simplify::SurfaceMap& map, const BaseFans& fans, 
 }
 
 // Per base triangle, its candidate input triangles in index order.
-Rows candidate_rows(const simplify::SurfaceMap& map, const BaseFans& fans, const std::vector<Triangle>& inputs) {
+IndexRows candidate_rows(const simplify::SurfaceMap& map, const BaseFans& fans, const std::vector<Triangle>& inputs) {
   const std::size_t n = inputs.size();
   std::vector<std::size_t> first(n + 1, 0);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
@@ -240,7 +217,7 @@ struct Context {
   const PolygonMesh& surface;
   const std::vector<Triangle>& inputs;
   const BaseFans& fans;
-  const Rows& candidates;
+  const IndexRows& candidates;
 
   double edge(std::uint32_t a, std::uint32_t b) const { return norm(base_positions[a] - base_positions[b]); }
 };
@@ -296,7 +273,7 @@ Layout* find_layout(Scratch& s, std::uint32_t triangle) {
   return nullptr;
 }
 
-bool same(const Corners& a, const Corners& b) {
+bool same_corners(const Corners& a, const Corners& b) {
   for (int k = 0; k < 3; ++k)
     if (a[k].x != b[k].x || a[k].y != b[k].y) return false;
   return true;
@@ -311,7 +288,7 @@ void record_layout(Scratch& s, std::uint32_t triangle, const Corners& corners) {
     return;
   }
   for (int way = 0; way < layout->ways; ++way)
-    if (same(layout->corners[way], corners)) return;
+    if (same_corners(layout->corners[way], corners)) return;
   if (layout->ways < Layout::kMaxWays) layout->corners[layout->ways++] = corners;
 }
 
@@ -351,14 +328,6 @@ void build_layouts(const Context& c, std::uint32_t t, Scratch& s) {
   }
 }
 
-// The image of input triangle `input` in T's frame, positively oriented (the
-// map preserves orientation). Where a vertex's base triangle is laid out
-// more than one way (round a corner of T), the combination of ways taken is
-// a positively oriented one that holds none of T's corners strictly inside
-// (the other ways wrap the image round the corner), and of those the one
-// with the shortest perimeter (the input triangles are small). False if a
-// vertex's base triangle is not laid out or no way orients the image
-// positively (a map that folds).
 // Whether T's corner (0, 0), (1, 0) or (0, 1) lies strictly inside p.
 bool holds_a_corner(const Corners& p) {
   for (const Vec2 corner : {Vec2{0, 0}, Vec2{1, 0}, Vec2{0, 1}}) {
@@ -368,6 +337,14 @@ bool holds_a_corner(const Corners& p) {
   return false;
 }
 
+// The image of input triangle `input` in T's frame, positively oriented (the
+// map preserves orientation). Where a vertex's base triangle is laid out
+// more than one way (round a corner of T), the combination of ways taken is
+// a positively oriented one that holds none of T's corners strictly inside
+// (the other ways wrap the image round the corner), and of those the one
+// with the shortest perimeter (the input triangles are small). False if a
+// vertex's base triangle is not laid out or no way orients the image
+// positively (a map that folds).
 bool place_input(const Context& c, Scratch& s, std::uint32_t input, Corners& image) {
   std::array<const Layout*, 3> layout;
   std::array<int, 3> radix{1, 1, 1};  // ways of each vertex's layout, 1 after its first vertex
@@ -517,17 +494,29 @@ Vec3 evaluate(const Context& c, std::uint32_t t, const Scratch& s, const MapPoin
 
 }  // namespace
 
+IndexRows sort_into_rows(std::size_t key_count, const std::vector<std::uint32_t>& keys,
+                         const std::vector<std::uint32_t>& values) {
+  IndexRows rows;
+  rows.offsets.assign(key_count + 1, 0);
+  for (const std::uint32_t k : keys) ++rows.offsets[k + 1];
+  for (std::size_t k = 0; k < key_count; ++k) rows.offsets[k + 1] += rows.offsets[k];
+  std::vector<std::size_t> cursor(rows.offsets.begin(), rows.offsets.end() - 1);
+  rows.values.resize(keys.size());
+  for (std::size_t i = 0; i < keys.size(); ++i) rows.values[cursor[keys[i]]++] = values[i];
+  return rows;
+}
+
 InverseMapResult inverse_map(const simplify::SurfaceMap& map, const std::vector<Vec3>& base_positions,
                              const PolygonMesh& surface, const std::vector<MapPoint>& queries) {
   const std::vector<Triangle> inputs = surface_triangles(surface);
   const BaseFans fans = build_fans(map.triangles, base_positions);
-  const Rows candidates = candidate_rows(map, fans, inputs);
+  const IndexRows candidates = candidate_rows(map, fans, inputs);
   std::vector<std::uint32_t> keys(queries.size()), order(queries.size());
   for (std::size_t i = 0; i < queries.size(); ++i) {
     keys[i] = queries[i].triangle;
     order[i] = static_cast<std::uint32_t>(i);
   }
-  const Rows by_triangle = sort_into_rows(map.triangle_count(), keys, order);
+  const IndexRows by_triangle = sort_into_rows(map.triangle_count(), keys, order);
   const Context c{map, base_positions, surface, inputs, fans, candidates};
 
   InverseMapResult result;

@@ -58,6 +58,21 @@ inline bool barycentric(const Corners& p, Vec2 q, std::array<double, 3>& w) {
   return true;
 }
 
+// Compressed rows of indices: the values of key k are
+// values[offsets[k] .. offsets[k+1]).
+struct IndexRows {
+  std::vector<std::size_t> offsets;
+  std::vector<std::uint32_t> values;
+  const std::uint32_t* begin(std::size_t k) const { return values.data() + offsets[k]; }
+  const std::uint32_t* end(std::size_t k) const { return values.data() + offsets[k + 1]; }
+  std::size_t size(std::size_t k) const { return offsets[k + 1] - offsets[k]; }
+};
+
+// Stable counting sort of values by key (every key < key_count): each row
+// keeps the values' given order. Serial, O(keys + key_count).
+IndexRows sort_into_rows(std::size_t key_count, const std::vector<std::uint32_t>& keys,
+                         const std::vector<std::uint32_t>& values);
+
 // A point of the parameter domain: a base triangle of the map and the
 // barycentric weights of its corners 1 and 2.
 struct MapPoint {

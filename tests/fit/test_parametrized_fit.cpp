@@ -232,17 +232,22 @@ TEST(ParametrizedFit, UnitSquareGivesTheDyadicGrid) {
   }
 }
 
-// Two unit squares sharing a base edge, the input a triangulation of the
-// whole 2 x 1 rectangle: points on the shared edge are the same from either
-// face, and the fine points the rectangle's dyadic grid.
-TEST(ParametrizedFit, TwoSquaresAgreeAlongTheirSharedEdge) {
+// Two unit squares sharing a base edge (split along different diagonals),
+// the input a k-fold triangulation of the whole 2 x 1 rectangle.
+FlatCase two_squares(int k) {
   FlatCase flat;
   flat.corners = {{0, 0}, {1, 0}, {2, 0}, {2, 1}, {1, 1}, {0, 1}};
   flat.faces = {{0, 1, 4, 5}, {1, 2, 3, 4}};
   flat.base_triangles = {{0, 1, 4}, {0, 4, 5}, {1, 3, 4}, {1, 2, 3}};
   flat.triangle_face = {0, 0, 1, 1};
-  fine_triangulation(flat, {1.13, 0.41}, 8);
-  const ParametrizedFitResult r = fit(flat, 3);
+  fine_triangulation(flat, {1.13, 0.41}, k);
+  return flat;
+}
+
+// Points on the shared edge are the same from either face, and the fine
+// points the rectangle's dyadic grid.
+TEST(ParametrizedFit, TwoSquaresAgreeAlongTheirSharedEdge) {
+  const ParametrizedFitResult r = fit(two_squares(8), 3);
   expect_dyadic_grid(r.positions, 3, 2, 1);
   EXPECT_EQ(r.statistics.fallback_points, 0u);
 }
@@ -461,12 +466,7 @@ void expect_invalid(const std::function<void()>& call) {
 
 // Maps that do not fit the base mesh or the surface.
 TEST(ParametrizedFit, RejectsMapsThatDoNotFit) {
-  FlatCase flat;
-  flat.corners = {{0, 0}, {1, 0}, {2, 0}, {2, 1}, {1, 1}, {0, 1}};
-  flat.faces = {{0, 1, 4, 5}, {1, 2, 3, 4}};
-  flat.base_triangles = {{0, 1, 4}, {0, 4, 5}, {1, 3, 4}, {1, 2, 3}};
-  flat.triangle_face = {0, 0, 1, 1};
-  fine_triangulation(flat, {1.13, 0.41}, 3);
+  const FlatCase flat = two_squares(3);
   const PolygonMesh base = flat.base(), surface = flat.surface();
   const SubdivisionHierarchy hierarchy(base, 1);
   const simplify::SurfaceMap good = flat.map();

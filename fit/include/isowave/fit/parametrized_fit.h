@@ -63,9 +63,10 @@ struct ParametrizedFitResult {
 // surface with an index out of range or a non-finite position
 // (validate_indices). Faces of the surface with more than 3 corners are fanned
 // from their first corner. Reports progress as one stage.
-// Cost: O(fine vertices + surface corners) time and memory (about 32 bytes
-// per fine vertex and 40 per surface triangle besides the result), plus
-// per base triangle the input triangles around it.
+// Cost: O(fine vertices + surface corners) time and memory besides the
+// result: at most about 60 bytes per fine vertex and 60 per surface triangle (a
+// few more for input triangles listed round low-valence or strongly curved
+// base vertices: surface_map_inverse.h).
 ParametrizedFitResult parametrized_fit(const SubdivisionHierarchy& hierarchy, const std::vector<Vec3>& base_positions,
                                        const PolygonMesh& surface, const simplify::SurfaceMap& map,
                                        ProgressSink& progress = no_progress());
