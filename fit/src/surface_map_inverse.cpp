@@ -522,7 +522,7 @@ InverseMapResult inverse_map(const simplify::SurfaceMap& map, const std::vector<
   InverseMapResult result;
   result.points.resize(queries.size());
   result.fallback_points = tbb::parallel_reduce(
-      tbb::blocked_range<std::size_t>(0, map.triangle_count(), 64), std::size_t{0},
+      tbb::blocked_range<std::size_t>(0, map.triangle_count(), 8), std::size_t{0},
       [&](const tbb::blocked_range<std::size_t>& r, std::size_t fallbacks) {
         Scratch s;
         for (std::size_t t = r.begin(); t < r.end(); ++t) {
