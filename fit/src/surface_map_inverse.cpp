@@ -1,8 +1,8 @@
 #include "surface_map_inverse.h"
 
 #include <algorithm>
+#include <cassert>
 #include <cmath>
-#include <functional>
 #include <limits>
 
 #include <tbb/blocked_range.h>
@@ -18,8 +18,6 @@ constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
 constexpr double kTolerance = 1e-9;
 // Candidates beyond which a base triangle bins them in a grid.
 constexpr std::size_t kGridThreshold = 16;
-// Added to the perimeter of an image that holds a corner of T (place_input).
-constexpr double kWrapped = 1e30;
 
 // The surface's faces as triangles, larger faces fanned from their first corner.
 std::vector<Triangle> surface_triangles(const PolygonMesh& surface) {
@@ -41,13 +39,11 @@ int corner_of(const Triangle& t, std::uint32_t w) {
 // The base triangles around each base vertex, counter-clockwise: rows[w]
 // starts with the walked fan (length[w] triangles, closed[w] when it is a
 // cycle; an open fan starts at the boundary); triangles the walk did not
-// reach (only with an invalid map) follow it and are never unfolded. With
-// each base triangle's 3D angles at its corners (radians).
+// reach (only with an invalid map) follow it and are never unfolded.
 struct BaseFans {
   IndexRows rows;
   std::vector<std::uint32_t> length;
   std::vector<std::uint8_t> closed;
-  std::vector<std::array<double, 3>> angles;
 
   // Position of triangle t in w's walked fan, or kNone.
   std::uint32_t position(std::uint32_t w, std::uint32_t t) const {
@@ -90,13 +86,7 @@ void order_fan(const std::vector<Triangle>& triangles, std::uint32_t w, std::uin
   std::copy(order.begin(), order.end(), fan);
 }
 
-double corner_angle(const Vec3& at, const Vec3& a, const Vec3& b) {
-  const Vec3 u = a - at, v = b - at;
-  return std::atan2(norm(cross(u, v)), dot(u, v));
-}
-
-BaseFans build_fans(const std::vector<Triangle>& triangles, const std::vector<Vec3>& positions) {
-  const std::size_t vertex_count = positions.size();
+BaseFans build_fans(const std::vector<Triangle>& triangles, std::size_t vertex_count) {
   std::vector<std::uint32_t> keys, values;
   keys.reserve(3 * triangles.size());
   values.reserve(3 * triangles.size());
@@ -109,11 +99,6 @@ BaseFans build_fans(const std::vector<Triangle>& triangles, const std::vector<Ve
   fans.rows = sort_into_rows(vertex_count, keys, values);
   fans.length.assign(vertex_count, 0);
   fans.closed.assign(vertex_count, 0);
-  fans.angles.resize(triangles.size());
-  for (std::size_t t = 0; t < triangles.size(); ++t)
-    for (int c = 0; c < 3; ++c)
-      fans.angles[t][c] = corner_angle(positions[triangles[t][c]], positions[triangles[t][(c + 1) % 3]],
-                                       positions[triangles[t][(c + 2) % 3]]);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, vertex_count, 1024), [&](const tbb::blocked_range<std::size_t>& r) {
     for (std::size_t w = r.begin(); w < r.end(); ++w) {
       if (fans.rows.size(w) == 0) continue;
@@ -124,53 +109,49 @@ BaseFans build_fans(const std::vector<Triangle>& triangles, const std::vector<Ve
   return fans;
 }
 
-// Walks w's fan from the triangle at position `from`, counter-clockwise
-// (direction 1) or clockwise (-1), round a closed fan up to the triangle
-// before `from`, and stops where the triangles passed (after `from`, before
-// the next) reach pi at w: no straight segment goes farther round w.
-// visit(triangle) returns whether to go on.
+// Calls visit(position) for the fan positions strictly between from and to:
+// along an open fan, its one way; around a closed fan, both ways (which way
+// the input triangle goes, the orientation of its image decides: see
+// add_candidates).
 template <typename Visit>
-void walk_fan(const simplify::SurfaceMap& map, const BaseFans& fans, std::uint32_t w, std::uint32_t from,
-              int direction, Visit visit) {
-  const std::uint32_t length = fans.length[w];
-  const std::uint32_t steps = fans.closed[w] ? length - 1 : direction > 0 ? length - 1 - from : from;
-  const double pi = std::acos(-1.0);
-  double passed = 0;
-  for (std::uint32_t step = 1; step <= steps; ++step) {
-    const std::uint32_t t = fans.rows.begin(w)[direction > 0 ? (from + step) % length : (from + length - step) % length];
-    if (!visit(t)) return;
-    passed += fans.angles[t][corner_of(map.triangles[t], w)];
-    if (passed >= pi) return;
+void between_in_fan(std::uint32_t from, std::uint32_t to, std::uint32_t length, bool closed, Visit visit) {
+  if (closed) {
+    for (std::uint32_t i = 0; i < length; ++i)
+      if (i != from && i != to) visit(i);
+  } else if (from < to) {
+    for (std::uint32_t i = from + 1; i < to; ++i) visit(i);
+  } else {
+    for (std::uint32_t i = to + 1; i < from; ++i) visit(i);
   }
 }
 
 // The base triangles whose candidate input triangle t is: those of its
-// vertices, and those between two of them round a vertex they share, either
-// way (less than pi of angle between them). Sorted, distinct.
+// vertices, and those around a base vertex between two of them sharing only
+// that vertex. Sorted, distinct.
 void candidate_triangles(const simplify::SurfaceMap& map, const BaseFans& fans, const Triangle& input,
-                         std::vector<std::uint32_t>& out, std::vector<std::uint32_t>& between) {
+                         std::vector<std::uint32_t>& out) {
   out.clear();
   for (const std::uint32_t i : input) out.push_back(map.vertex_triangle[i]);
   std::sort(out.begin(), out.end());
   out.erase(std::unique(out.begin(), out.end()), out.end());
   const std::size_t distinct = out.size();
   for (std::size_t a = 0; a < distinct; ++a)
-    for (std::size_t b = a + 1; b < distinct; ++b)
-      for (const std::uint32_t w : map.triangles[out[a]]) {
-        if (corner_of(map.triangles[out[b]], w) < 0) continue;
-        const std::uint32_t from = fans.position(w, out[a]);
-        if (from == kNone) continue;
-        for (const int direction : {1, -1}) {
-          between.clear();
-          bool reached = false;
-          walk_fan(map, fans, w, from, direction, [&](std::uint32_t t) {
-            reached = t == out[b];
-            if (!reached) between.push_back(t);
-            return !reached;
-          });
-          if (reached) out.insert(out.end(), between.begin(), between.end());
+    for (std::size_t b = a + 1; b < distinct; ++b) {
+      const Triangle& sa = map.triangles[out[a]];
+      const Triangle& sb = map.triangles[out[b]];
+      int shared = 0;
+      std::uint32_t w = kNone;
+      for (const std::uint32_t x : sa)
+        if (corner_of(sb, x) >= 0) {
+          ++shared;
+          w = x;
         }
-      }
+      if (shared != 1) continue;
+      const std::uint32_t ia = fans.position(w, out[a]), ib = fans.position(w, out[b]);
+      if (ia == kNone || ib == kNone) continue;
+      between_in_fan(ia, ib, fans.length[w], fans.closed[w] != 0,
+                     [&](std::uint32_t i) { out.push_back(fans.rows.begin(w)[i]); });
+    }
   std::sort(out.begin(), out.end());
   out.erase(std::unique(out.begin(), out.end()), out.end());
 }
@@ -180,18 +161,18 @@ IndexRows candidate_rows(const simplify::SurfaceMap& map, const BaseFans& fans, 
   const std::size_t n = inputs.size();
   std::vector<std::size_t> first(n + 1, 0);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
-    std::vector<std::uint32_t> scratch, between;
+    std::vector<std::uint32_t> scratch;
     for (std::size_t t = r.begin(); t < r.end(); ++t) {
-      candidate_triangles(map, fans, inputs[t], scratch, between);
+      candidate_triangles(map, fans, inputs[t], scratch);
       first[t + 1] = scratch.size();
     }
   });
   for (std::size_t t = 0; t < n; ++t) first[t + 1] += first[t];
   std::vector<std::uint32_t> keys(first[n]), values(first[n]);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
-    std::vector<std::uint32_t> scratch, between;
+    std::vector<std::uint32_t> scratch;
     for (std::size_t t = r.begin(); t < r.end(); ++t) {
-      candidate_triangles(map, fans, inputs[t], scratch, between);
+      candidate_triangles(map, fans, inputs[t], scratch);
       std::copy(scratch.begin(), scratch.end(), keys.begin() + static_cast<std::ptrdiff_t>(first[t]));
       std::fill_n(values.begin() + static_cast<std::ptrdiff_t>(first[t]), scratch.size(), static_cast<std::uint32_t>(t));
     }
@@ -241,15 +222,9 @@ bool unfold_across(const Context& c, std::uint32_t current, const Corners& at, s
   return false;
 }
 
-// A base triangle laid out in T's (u, v) frame, each way it is reached
-// round a corner of T within pi of angle: T itself one way, an edge
-// neighbour across the edge and the long way round either end, a triangle
-// sharing a corner round that corner either way.
 struct Layout {
-  static constexpr int kMaxWays = 3;
-  std::uint32_t triangle = 0;
-  int ways = 1;
-  std::array<Corners, kMaxWays> corners;
+  std::uint32_t triangle;
+  Corners corners;  // in the (u, v) frame of the base triangle being processed
 };
 
 struct Candidate {
@@ -259,7 +234,6 @@ struct Candidate {
 };
 
 struct Scratch {
-  Vec2 e1{1, 0}, e2{0, 1};  // T's edges from corner 0 in its plane: (u, v) -> u e1 + v e2 is an isometry
   std::vector<Layout> layouts;
   std::vector<Candidate> candidates;
   std::vector<std::uint32_t> cell_offsets, cell_list, cell_cursor;
@@ -267,36 +241,17 @@ struct Scratch {
   Vec2 grid_lo, grid_scale;
 };
 
-Layout* find_layout(Scratch& s, std::uint32_t triangle) {
-  for (Layout& l : s.layouts)
+const Layout* find_layout(const Scratch& s, std::uint32_t triangle) {
+  for (const Layout& l : s.layouts)
     if (l.triangle == triangle) return &l;
   return nullptr;
 }
 
-bool same_corners(const Corners& a, const Corners& b) {
-  for (int k = 0; k < 3; ++k)
-    if (a[k].x != b[k].x || a[k].y != b[k].y) return false;
-  return true;
-}
-
-// Records one way to a base triangle (the same way found round both ends of
-// an edge counts once).
-void record_layout(Scratch& s, std::uint32_t triangle, const Corners& corners) {
-  Layout* layout = find_layout(s, triangle);
-  if (!layout) {
-    s.layouts.push_back({triangle, 1, {corners, {}, {}}});
-    return;
-  }
-  for (int way = 0; way < layout->ways; ++way)
-    if (same_corners(layout->corners[way], corners)) return;
-  if (layout->ways < Layout::kMaxWays) layout->corners[layout->ways++] = corners;
-}
-
-// Lays out the base triangles round every corner of T in T's (u, v) frame,
-// each way within pi of angle (walk_fan); T itself first.
+// Lays out the base triangles around every corner of T (the shorter way
+// round each, all of an open fan) in T's (u, v) frame; T itself first.
 void build_layouts(const Context& c, std::uint32_t t, Scratch& s) {
   s.layouts.clear();
-  s.layouts.push_back({t, 1, {Corners{Vec2{0, 0}, Vec2{1, 0}, Vec2{0, 1}}, {}, {}}});
+  s.layouts.push_back({t, {Vec2{0, 0}, Vec2{1, 0}, Vec2{0, 1}}});
   const Triangle& tri = c.map.triangles[t];
   Corners plane;  // T in its plane: corner 0 at the origin, corner 1 on the x axis
   plane[0] = {0, 0};
@@ -304,93 +259,51 @@ void build_layouts(const Context& c, std::uint32_t t, Scratch& s) {
   plane[2] = place_right(plane[1], plane[0], c.edge(tri[1], tri[2]), c.edge(tri[0], tri[2]));
   const Vec2 e1 = plane[1] - plane[0], e2 = plane[2] - plane[0];
   const double det = cross(e1, e2);
-  s.e1 = {1, 0};
-  s.e2 = {0, 1};
   if (!(det > 0)) return;  // degenerate in 3D: only T's own candidates
-  s.e1 = e1;
-  s.e2 = e2;
   auto to_frame = [&](Vec2 x) { return Vec2{cross(x - plane[0], e2) / det, cross(e1, x - plane[0]) / det}; };
   for (const std::uint32_t w : tri) {
-    const std::uint32_t at = c.fans.position(w, t);
+    const std::uint32_t at = c.fans.position(w, t), length = c.fans.length[w];
     if (at == kNone) continue;
+    const bool closed = c.fans.closed[w] != 0;
+    const std::uint32_t forward = closed ? length / 2 : length - 1 - at;
+    const std::uint32_t backward = closed ? length - 1 - length / 2 : at;
     for (const int direction : {1, -1}) {
       std::uint32_t current = t;
       Corners corners = plane;
-      walk_fan(c.map, c.fans, w, at, direction, [&](std::uint32_t next) {
+      const std::uint32_t steps = direction > 0 ? forward : backward;
+      for (std::uint32_t step = 1; step <= steps; ++step) {
+        const std::uint32_t i = direction > 0 ? (at + step) % length : (at + length - step) % length;
+        const std::uint32_t next = c.fans.rows.begin(w)[i];
         Corners next_corners;
-        if (!unfold_across(c, current, corners, next, next_corners)) return false;
-        record_layout(s, next, {to_frame(next_corners[0]), to_frame(next_corners[1]), to_frame(next_corners[2])});
+        if (!unfold_across(c, current, corners, next, next_corners)) break;
+        if (!find_layout(s, next))
+          s.layouts.push_back({next, {to_frame(next_corners[0]), to_frame(next_corners[1]), to_frame(next_corners[2])}});
         current = next;
         corners = next_corners;
-        return true;
-      });
+      }
     }
   }
 }
 
-// Whether T's corner (0, 0), (1, 0) or (0, 1) lies strictly inside p.
-bool holds_a_corner(const Corners& p) {
-  for (const Vec2 corner : {Vec2{0, 0}, Vec2{1, 0}, Vec2{0, 1}}) {
-    std::array<double, 3> w;
-    if (barycentric(p, corner, w) && std::min({w[0], w[1], w[2]}) > kTolerance) return true;
-  }
-  return false;
-}
-
-// The image of input triangle `input` in T's frame, positively oriented (the
-// map preserves orientation). Where a vertex's base triangle is laid out
-// more than one way (round a corner of T), the combination of ways taken is
-// a positively oriented one that holds none of T's corners strictly inside
-// (the other ways wrap the image round the corner), and of those the one
-// with the shortest perimeter (the input triangles are small). False if a
-// vertex's base triangle is not laid out or no way orients the image
-// positively (a map that folds).
-bool place_input(const Context& c, Scratch& s, std::uint32_t input, Corners& image) {
-  std::array<const Layout*, 3> layout;
-  std::array<int, 3> radix{1, 1, 1};  // ways of each vertex's layout, 1 after its first vertex
-  int combinations = 1;
-  for (int k = 0; k < 3; ++k) {
-    layout[k] = find_layout(s, c.map.vertex_triangle[c.inputs[input][k]]);
-    if (!layout[k]) return false;
-    if (std::find(layout.begin(), layout.begin() + k, layout[k]) == layout.begin() + k) radix[k] = layout[k]->ways;
-    combinations *= radix[k];
-  }
-  double shortest = std::numeric_limits<double>::infinity();
-  for (int combination = 0; combination < combinations; ++combination) {
-    std::array<int, 3> way{};
-    for (int k = 0, rest = combination; k < 3; ++k) {
-      const auto first = std::find(layout.begin(), layout.begin() + k, layout[k]);
-      way[k] = first != layout.begin() + k ? way[first - layout.begin()] : rest % radix[k];
-      rest /= radix[k];
-    }
-    Corners p;
-    for (int k = 0; k < 3; ++k) {
-      const Corners& l = layout[k]->corners[way[k]];
-      const auto& uv = c.map.vertex_uv[c.inputs[input][k]];
-      p[k] = l[0] + uv[0] * (l[1] - l[0]) + uv[1] * (l[2] - l[0]);
-    }
-    if (!(cross(p[1] - p[0], p[2] - p[0]) > 0)) continue;
-    double perimeter = holds_a_corner(p) ? kWrapped : 0;
-    for (int k = 0; k < 3; ++k) {
-      const Vec2 d = p[(k + 1) % 3] - p[k];
-      const Vec2 in_plane = d.x * s.e1 + d.y * s.e2;
-      perimeter += std::sqrt(in_plane.x * in_plane.x + in_plane.y * in_plane.y);
-    }
-    if (perimeter < shortest) {
-      shortest = perimeter;
-      image = p;
-    }
-  }
-  return shortest < std::numeric_limits<double>::infinity();
-}
-
-// Adds the input triangles [begin, end) that place_input() lays out in T's
-// (u, v) frame.
+// Adds the input triangles [begin, end) whose three vertices lie in laid-out
+// base triangles, in T's (u, v) frame, unless their image there is not
+// positively oriented: the map preserves orientation, so such an image is
+// the triangle unfolded the wrong way round a base vertex (or the map folds).
 void add_candidates(const Context& c, const std::uint32_t* begin, const std::uint32_t* end, Scratch& s) {
   for (const std::uint32_t* it = begin; it != end; ++it) {
     Candidate candidate{*it, {}, {}, {}};
-    if (!place_input(c, s, *it, candidate.corners)) continue;
+    bool placed = true;
+    for (int k = 0; k < 3 && placed; ++k) {
+      const std::uint32_t vertex = c.inputs[*it][k];
+      const Layout* layout = find_layout(s, c.map.vertex_triangle[vertex]);
+      placed = layout != nullptr;
+      if (!placed) break;
+      const auto& uv = c.map.vertex_uv[vertex];
+      const Corners& l = layout->corners;
+      candidate.corners[k] = l[0] + uv[0] * (l[1] - l[0]) + uv[1] * (l[2] - l[0]);
+    }
     const Corners& p = candidate.corners;
+    if (!placed || !(cross(p[1] - p[0], p[2] - p[0]) > 0)) continue;
     candidate.lo = {std::min({p[0].x, p[1].x, p[2].x}), std::min({p[0].y, p[1].y, p[2].y})};
     candidate.hi = {std::max({p[0].x, p[1].x, p[2].x}), std::max({p[0].y, p[1].y, p[2].y})};
     s.candidates.push_back(candidate);
@@ -509,7 +422,7 @@ IndexRows sort_into_rows(std::size_t key_count, const std::vector<std::uint32_t>
 InverseMapResult inverse_map(const simplify::SurfaceMap& map, const std::vector<Vec3>& base_positions,
                              const PolygonMesh& surface, const std::vector<MapPoint>& queries) {
   const std::vector<Triangle> inputs = surface_triangles(surface);
-  const BaseFans fans = build_fans(map.triangles, base_positions);
+  const BaseFans fans = build_fans(map.triangles, base_positions.size());
   const IndexRows candidates = candidate_rows(map, fans, inputs);
   std::vector<std::uint32_t> keys(queries.size()), order(queries.size());
   for (std::size_t i = 0; i < queries.size(); ++i) {
@@ -522,7 +435,7 @@ InverseMapResult inverse_map(const simplify::SurfaceMap& map, const std::vector<
   InverseMapResult result;
   result.points.resize(queries.size());
   result.fallback_points = tbb::parallel_reduce(
-      tbb::blocked_range<std::size_t>(0, map.triangle_count(), 8), std::size_t{0},
+      tbb::blocked_range<std::size_t>(0, map.triangle_count(), 64), std::size_t{0},
       [&](const tbb::blocked_range<std::size_t>& r, std::size_t fallbacks) {
         Scratch s;
         for (std::size_t t = r.begin(); t < r.end(); ++t) {

@@ -6,21 +6,19 @@
 // Input triangle t = (i, j, k) maps to the triangle of the images of its
 // vertices, straight in the plane of the base triangles unfolded around them.
 // A base triangle T's candidates are the input triangles with a vertex mapped
-// into T, and those with vertices in two base triangles that share a base
-// vertex w, T between them round w (either way, if less than pi of angle at
-// w lies between them: no straight segment goes farther round a point).
-// Each candidate's vertices are unfolded into T's (u, v) frame with the base
-// triangles' 3D edge lengths, round the corners of T; where that reaches a
-// base triangle more than one way (across an edge and round either end of
-// it, or round a corner either way: they differ where the angles round the
-// corner do not sum to 2 pi), the image taken is positively oriented (the map
-// preserves orientation), holds no corner of T strictly inside, and has the
-// shortest perimeter. A query point is located among the images (barycentric
-// test, a uniform grid when there are more than 16); where none contains it,
-// the candidate whose smallest barycentric coordinate is the largest gives
-// it, clamped (a fallback). Where no candidate can be unfolded into T, those
-// of the triangles around T are tried; failing these too, the point of the
-// base triangle itself is returned (also a fallback).
+// into T, and those with vertices in two base triangles that share only a
+// base vertex w, T between them around w (either way round a closed fan).
+// Each candidate's vertices are unfolded into T's (u, v) frame: across an
+// edge of T, or around a corner of T the shorter way (a boundary vertex's fan
+// has one way), with the base triangles' 3D edge lengths; a candidate whose
+// image is not positively oriented there (unfolded the wrong way round, or a
+// map that folds) is dropped, since the map preserves orientation. A query
+// point is located among them (barycentric test, a uniform grid when there
+// are more than 16); where none contains it, the candidate whose smallest
+// barycentric coordinate is the largest gives it, clamped (a fallback). Where
+// no candidate can be unfolded into T, those of the triangles around T are
+// tried; failing these too, the point of the base triangle itself is
+// returned (also a fallback).
 //
 // Base triangles are processed in parallel (TBB), each with thread-local
 // scratch, and every result depends only on its base triangle: identical for
@@ -58,6 +56,13 @@ inline bool barycentric(const Corners& p, Vec2 q, std::array<double, 3>& w) {
   return true;
 }
 
+// A point of the parameter domain: a base triangle of the map and the
+// barycentric weights of its corners 1 and 2.
+struct MapPoint {
+  std::uint32_t triangle = 0;
+  double u = 0, v = 0;
+};
+
 // Compressed rows of indices: the values of key k are
 // values[offsets[k] .. offsets[k+1]).
 struct IndexRows {
@@ -72,13 +77,6 @@ struct IndexRows {
 // keeps the values' given order. Serial, O(keys + key_count).
 IndexRows sort_into_rows(std::size_t key_count, const std::vector<std::uint32_t>& keys,
                          const std::vector<std::uint32_t>& values);
-
-// A point of the parameter domain: a base triangle of the map and the
-// barycentric weights of its corners 1 and 2.
-struct MapPoint {
-  std::uint32_t triangle = 0;
-  double u = 0, v = 0;
-};
 
 struct InverseMapResult {
   std::vector<Vec3> points;  // points[i] for queries[i]
