@@ -338,8 +338,9 @@ void print_json_result(const JobOutcome& o) {
   for (std::size_t k = 0; k < r.summary.size(); ++k) {
     const RateDistortionRow& row = r.summary[k];
     std::printf("%s{\"percent\": %.4f, \"coefficients\": %zu, \"rmse_percent_cell\": %.6g, \"max_percent_cell\": "
-                "%.6g, \"bytes\": %llu, \"base\": %s}",
+                "%.6g, \"d_percent_cell\": %.6g, \"bytes\": %llu, \"base\": %s}",
                 k ? ", " : "", row.percent, row.kept, rmse_percent(r, row.rms), rmse_percent(r, row.max),
+                100.0 * r.summary_surface_error[k],
                 static_cast<unsigned long long>(row.bytes), row.is_base ? "true" : "false");
   }
   std::printf("], \"quantization_rmse_percent_cell\": %.6g, \"quantization_max_percent_cell\": %.6g}",
@@ -374,7 +375,9 @@ void print_table_row(const std::string& output, const JobOutcome& o) {
     // Percentages below the base mesh's share all give the base mesh: one entry.
     if (previous && previous->kept == row.kept) continue;
     previous = &row;
-    std::snprintf(cell, sizeof cell, "%s%.4g%%: %.3g", errors.empty() ? "" : "  ", row.percent, rmse_percent(r, row.rms));
+    const double d = r.summary_surface_error[static_cast<std::size_t>(&row - r.summary.data())];
+    std::snprintf(cell, sizeof cell, "%s%.4g%%: %.3g (D %.3g)", errors.empty() ? "" : "  ", row.percent,
+                  rmse_percent(r, row.rms), 100.0 * d);
     errors += cell;
   }
   std::printf("%-28s %10zu %9zu %9zu %10zu %3d %8.1f  %s\n", output.c_str(), r.bytes.size(), r.extracted_vertices,
@@ -411,7 +414,8 @@ void print_table_row(const std::string& output, const JobOutcome& o) {
 // The summary table; a failed input's error was printed as it happened.
 void print_table(const std::vector<Job>& jobs, const std::vector<JobOutcome>& outcomes, const Totals& totals) {
   std::printf("\n%-28s %10s %9s %9s %10s %3s %8s  %s\n", "output", "bytes", "isosurf.", "base", "fine", "L",
-              "seconds", "RMSE [% cell] against the full decode at percent kept (base last)");
+              "seconds",
+              "RMSE [% cell] against the full decode (D: against the isosurface) at percent kept (base last)");
   for (std::size_t j = 0; j < jobs.size(); ++j) {
     if (outcomes[j].ok) print_table_row(jobs[j].output, outcomes[j]);
     else std::printf("%-28s FAILED (the error is above)\n", (jobs[j].problem.empty() ? jobs[j].output : jobs[j].input).c_str());

@@ -51,29 +51,6 @@ int corner_in_face(const PolygonMesh& base, std::size_t f, std::uint32_t a) {
   return -1;
 }
 
-// Compressed rows of the map's triangles by base face, or by base vertex
-// (each triangle under its three corners), in triangle order.
-struct TriangleRows {
-  std::vector<std::size_t> offsets;
-  std::vector<std::uint32_t> triangles;
-  const std::uint32_t* begin(std::size_t k) const { return triangles.data() + offsets[k]; }
-  const std::uint32_t* end(std::size_t k) const { return triangles.data() + offsets[k + 1]; }
-};
-
-template <typename KeysOf>
-TriangleRows triangle_rows(std::size_t key_count, std::size_t triangle_count, KeysOf keys_of) {
-  TriangleRows rows;
-  rows.offsets.assign(key_count + 1, 0);
-  for (std::uint32_t t = 0; t < triangle_count; ++t)
-    keys_of(t, [&](std::uint32_t key) { ++rows.offsets[key + 1]; });
-  for (std::size_t k = 0; k < key_count; ++k) rows.offsets[k + 1] += rows.offsets[k];
-  std::vector<std::size_t> cursor(rows.offsets.begin(), rows.offsets.end() - 1);
-  rows.triangles.resize(rows.offsets.back());
-  for (std::uint32_t t = 0; t < triangle_count; ++t)
-    keys_of(t, [&](std::uint32_t key) { rows.triangles[cursor[key]++] = t; });
-  return rows;
-}
-
 // Checks one base face's triangles: n - 2 of them, each of three distinct
 // corners of the face, positively oriented in its chart, and together a
 // triangulation (every boundary edge once in the face's direction, every
@@ -111,7 +88,7 @@ void check_face_triangles(const PolygonMesh& base, const simplify::SurfaceMap& m
 // Throws Error(InvalidArgument) unless the map fits the base mesh and the
 // surface (parametrized_fit.h); Error(Format) for an invalid surface.
 void check_inputs(const PolygonMesh& base, const std::vector<Vec3>& base_positions, const PolygonMesh& surface,
-                  const simplify::SurfaceMap& map, const TriangleRows& by_face) {
+                  const simplify::SurfaceMap& map, const IndexRows& by_face) {
   if (base_positions.size() < base.vertex_count())
     fail("base positions: " + std::to_string(base_positions.size()) + " for " +
          std::to_string(base.vertex_count()) + " base vertices");
@@ -252,8 +229,8 @@ MapPoint weighted(std::uint32_t t, const std::array<double, 3>& w) { return {t, 
 // Location -> (base triangle, u, v): base vertices and edges in the
 // lowest-index map triangle holding them (an edge: one whose face has it as
 // an edge), interior points in the chart triangle holding them.
-MapPoint to_map_point(const PolygonMesh& base, const simplify::SurfaceMap& map, const TriangleRows& by_face,
-                      const TriangleRows& by_vertex, const std::vector<Corners>& charts, const Location& l) {
+MapPoint to_map_point(const PolygonMesh& base, const simplify::SurfaceMap& map, const IndexRows& by_face,
+                      const IndexRows& by_vertex, const std::vector<Corners>& charts, const Location& l) {
   if (l.kind == LocationKind::Interior) {
     MapPoint best;
     double best_smallest = -std::numeric_limits<double>::infinity();
@@ -331,6 +308,42 @@ void measure_stretch(const SubdivisionHierarchy& hierarchy, const std::vector<Ve
   s.stretch_max = *std::max_element(areas.begin(), areas.end()) / mean;
 }
 
+// The map's triangles by base face (rows in triangle order).
+IndexRows triangles_by_face(const simplify::SurfaceMap& map, std::size_t face_count) {
+  std::vector<std::uint32_t> ids(map.triangle_count());
+  for (std::uint32_t t = 0; t < map.triangle_count(); ++t) ids[t] = t;
+  return sort_into_rows(face_count, map.triangle_face, ids);
+}
+
+// The level-L vertices' points of the parameter domain, in the hierarchy's
+// order (fine_locations, to_map_point).
+std::vector<MapPoint> parameter_points(const SubdivisionHierarchy& hierarchy, const simplify::SurfaceMap& map,
+                                       const IndexRows& by_face) {
+  const PolygonMesh& base = hierarchy.base();
+  std::vector<std::uint32_t> corners, corner_triangles;
+  std::vector<Corners> charts(map.triangle_count());  // each map triangle in its face's chart
+  for (std::uint32_t t = 0; t < map.triangle_count(); ++t) {
+    const std::uint32_t f = map.triangle_face[t];
+    for (int c = 0; c < 3; ++c)
+      charts[t][c] = chart_corner(static_cast<std::uint32_t>(corner_in_face(base, f, map.triangles[t][c])),
+                                  base.face_size(f));
+    corners.insert(corners.end(), map.triangles[t].begin(), map.triangles[t].end());
+    corner_triangles.insert(corner_triangles.end(), 3, t);
+  }
+  const IndexRows by_vertex = sort_into_rows(base.vertex_count(), corners, corner_triangles);
+  BaseFaceOf base_face_of;
+  for (std::uint32_t f = 0; f < base.face_count(); ++f)
+    base_face_of.face_of_corner.insert(base_face_of.face_of_corner.end(), base.face_size(f), f);
+
+  const std::vector<Location> locations = fine_locations(hierarchy, base_face_of);
+  std::vector<MapPoint> points(locations.size());
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, locations.size(), 4096), [&](const auto& r) {
+    for (std::size_t i = r.begin(); i < r.end(); ++i)
+      points[i] = to_map_point(base, map, by_face, by_vertex, charts, locations[i]);
+  });
+  return points;
+}
+
 }  // namespace
 
 ParametrizedFitResult parametrized_fit(const SubdivisionHierarchy& hierarchy, const std::vector<Vec3>& base_positions,
@@ -338,28 +351,10 @@ ParametrizedFitResult parametrized_fit(const SubdivisionHierarchy& hierarchy, co
                                        ProgressSink& progress) {
   const auto start = std::chrono::steady_clock::now();
   progress.begin_stage("parametrized fit");
-  const PolygonMesh& base = hierarchy.base();
-  check_map_sizes(base, surface, map);
-  const TriangleRows by_face = triangle_rows(base.face_count(), map.triangle_count(),
-                                             [&](std::uint32_t t, auto add) { add(map.triangle_face[t]); });
-  check_inputs(base, base_positions, surface, map, by_face);
-  const TriangleRows by_vertex = triangle_rows(base.vertex_count(), map.triangle_count(), [&](std::uint32_t t, auto add) {
-    for (const std::uint32_t w : map.triangles[t]) add(w);
-  });
-
-  std::vector<Corners> charts(map.triangle_count());  // each map triangle in its face's chart
-  for (std::size_t t = 0; t < map.triangle_count(); ++t)
-    for (int c = 0; c < 3; ++c)
-      charts[t][c] = chart_corner(
-          static_cast<std::uint32_t>(corner_in_face(base, map.triangle_face[t], map.triangles[t][c])),
-          base.face_size(map.triangle_face[t]));
-  BaseFaceOf base_face_of;
-  for (std::uint32_t f = 0; f < base.face_count(); ++f) base_face_of.face_of_corner.insert(base_face_of.face_of_corner.end(), base.face_size(f), f);
-  const std::vector<Location> locations = fine_locations(hierarchy, base_face_of);
-  std::vector<MapPoint> queries(locations.size());
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, locations.size(), 4096), [&](const auto& r) {
-    for (std::size_t i = r.begin(); i < r.end(); ++i) queries[i] = to_map_point(base, map, by_face, by_vertex, charts, locations[i]);
-  });
+  check_map_sizes(hierarchy.base(), surface, map);
+  const IndexRows by_face = triangles_by_face(map, hierarchy.base().face_count());
+  check_inputs(hierarchy.base(), base_positions, surface, map, by_face);
+  const std::vector<MapPoint> queries = parameter_points(hierarchy, map, by_face);
   progress.update(0.3);
 
   InverseMapResult points = inverse_map(map, base_positions, surface, queries);

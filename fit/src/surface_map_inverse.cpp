@@ -19,29 +19,6 @@ constexpr double kTolerance = 1e-9;
 // Candidates beyond which a base triangle bins them in a grid.
 constexpr std::size_t kGridThreshold = 16;
 
-// Compressed rows: the values of key k are values[offsets[k] .. offsets[k+1]).
-struct Rows {
-  std::vector<std::size_t> offsets;
-  std::vector<std::uint32_t> values;
-  const std::uint32_t* begin(std::size_t k) const { return values.data() + offsets[k]; }
-  const std::uint32_t* end(std::size_t k) const { return values.data() + offsets[k + 1]; }
-  std::size_t size(std::size_t k) const { return offsets[k + 1] - offsets[k]; }
-};
-
-// Stable counting sort of values by key (keys < key_count): each row keeps
-// the values' given order. Serial, O(pairs + keys).
-Rows sort_into_rows(std::size_t key_count, const std::vector<std::uint32_t>& keys,
-                    const std::vector<std::uint32_t>& values) {
-  Rows rows;
-  rows.offsets.assign(key_count + 1, 0);
-  for (const std::uint32_t k : keys) ++rows.offsets[k + 1];
-  for (std::size_t k = 0; k < key_count; ++k) rows.offsets[k + 1] += rows.offsets[k];
-  std::vector<std::size_t> cursor(rows.offsets.begin(), rows.offsets.end() - 1);
-  rows.values.resize(keys.size());
-  for (std::size_t i = 0; i < keys.size(); ++i) rows.values[cursor[keys[i]]++] = values[i];
-  return rows;
-}
-
 // The surface's faces as triangles, larger faces fanned from their first corner.
 std::vector<Triangle> surface_triangles(const PolygonMesh& surface) {
   std::vector<Triangle> triangles;
@@ -64,7 +41,7 @@ int corner_of(const Triangle& t, std::uint32_t w) {
 // cycle; an open fan starts at the boundary); triangles the walk did not
 // reach (only with an invalid map) follow it and are never unfolded.
 struct BaseFans {
-  Rows rows;
+  IndexRows rows;
   std::vector<std::uint32_t> length;
   std::vector<std::uint8_t> closed;
 
@@ -180,7 +157,7 @@ void candidate_triangles(const simplify::SurfaceMap& map, const BaseFans& fans, 
 }
 
 // Per base triangle, its candidate input triangles in index order.
-Rows candidate_rows(const simplify::SurfaceMap& map, const BaseFans& fans, const std::vector<Triangle>& inputs) {
+IndexRows candidate_rows(const simplify::SurfaceMap& map, const BaseFans& fans, const std::vector<Triangle>& inputs) {
   const std::size_t n = inputs.size();
   std::vector<std::size_t> first(n + 1, 0);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
@@ -221,7 +198,7 @@ struct Context {
   const PolygonMesh& surface;
   const std::vector<Triangle>& inputs;
   const BaseFans& fans;
-  const Rows& candidates;
+  const IndexRows& candidates;
 
   double edge(std::uint32_t a, std::uint32_t b) const { return norm(base_positions[a] - base_positions[b]); }
 };
@@ -430,17 +407,29 @@ Vec3 evaluate(const Context& c, std::uint32_t t, const Scratch& s, const MapPoin
 
 }  // namespace
 
+IndexRows sort_into_rows(std::size_t key_count, const std::vector<std::uint32_t>& keys,
+                         const std::vector<std::uint32_t>& values) {
+  IndexRows rows;
+  rows.offsets.assign(key_count + 1, 0);
+  for (const std::uint32_t k : keys) ++rows.offsets[k + 1];
+  for (std::size_t k = 0; k < key_count; ++k) rows.offsets[k + 1] += rows.offsets[k];
+  std::vector<std::size_t> cursor(rows.offsets.begin(), rows.offsets.end() - 1);
+  rows.values.resize(keys.size());
+  for (std::size_t i = 0; i < keys.size(); ++i) rows.values[cursor[keys[i]]++] = values[i];
+  return rows;
+}
+
 InverseMapResult inverse_map(const simplify::SurfaceMap& map, const std::vector<Vec3>& base_positions,
                              const PolygonMesh& surface, const std::vector<MapPoint>& queries) {
   const std::vector<Triangle> inputs = surface_triangles(surface);
   const BaseFans fans = build_fans(map.triangles, base_positions.size());
-  const Rows candidates = candidate_rows(map, fans, inputs);
+  const IndexRows candidates = candidate_rows(map, fans, inputs);
   std::vector<std::uint32_t> keys(queries.size()), order(queries.size());
   for (std::size_t i = 0; i < queries.size(); ++i) {
     keys[i] = queries[i].triangle;
     order[i] = static_cast<std::uint32_t>(i);
   }
-  const Rows by_triangle = sort_into_rows(map.triangle_count(), keys, order);
+  const IndexRows by_triangle = sort_into_rows(map.triangle_count(), keys, order);
   const Context c{map, base_positions, surface, inputs, fans, candidates};
 
   InverseMapResult result;

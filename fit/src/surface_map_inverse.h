@@ -63,6 +63,21 @@ struct MapPoint {
   double u = 0, v = 0;
 };
 
+// Compressed rows of indices: the values of key k are
+// values[offsets[k] .. offsets[k+1]).
+struct IndexRows {
+  std::vector<std::size_t> offsets;
+  std::vector<std::uint32_t> values;
+  const std::uint32_t* begin(std::size_t k) const { return values.data() + offsets[k]; }
+  const std::uint32_t* end(std::size_t k) const { return values.data() + offsets[k + 1]; }
+  std::size_t size(std::size_t k) const { return offsets[k + 1] - offsets[k]; }
+};
+
+// Stable counting sort of values by key (every key < key_count): each row
+// keeps the values' given order. Serial, O(keys + key_count).
+IndexRows sort_into_rows(std::size_t key_count, const std::vector<std::uint32_t>& keys,
+                         const std::vector<std::uint32_t>& values);
+
 struct InverseMapResult {
   std::vector<Vec3> points;  // points[i] for queries[i]
   std::size_t fallback_points = 0;

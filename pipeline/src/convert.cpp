@@ -176,7 +176,8 @@ std::shared_ptr<const SubdivisionHierarchy> fit_parametrized(const simplify::Sim
     result.parametrization = fit.statistics;
     result.levels = levels;
     const double error =
-        surface_error(hierarchy->control_mesh(levels, result.fit.positions), surface).d() / result.cell_size;
+        surface_error(hierarchy->control_mesh(levels, result.fit.positions), surface, kErrorSamples).d() /
+        result.cell_size;
     result.level_errors_cells.push_back(error);
     const double next_fine = fine_vertex_count(simplified.base, levels + 1);
     if (options.levels > 0 || error <= result.max_error_cells || levels == 6 ||
@@ -406,11 +407,30 @@ Coded analyze_and_encode(const SubdivisionHierarchy& hierarchy, IswMetadata meta
   return coded;
 }
 
+// D (surface_error.h) of the decoded surface of each summary row against
+// the extracted isosurface, in cells; rows keeping the same coefficients
+// share one.
+void measure_rows(const SubdivisionHierarchy& hierarchy, const IswDecoded& expected, const PolygonMesh& extracted,
+                  ConvertResult& result) {
+  result.summary_surface_error.clear();
+  for (std::size_t k = 0; k < result.summary.size(); ++k) {
+    if (k > 0 && result.summary[k].kept == result.summary[k - 1].kept) {
+      result.summary_surface_error.push_back(result.summary_surface_error.back());
+      continue;
+    }
+    const PolygonMesh decoded =
+        hierarchy.control_mesh(result.levels, reconstruct(expected, result.summary[k].kept));
+    result.summary_surface_error.push_back(surface_error(decoded, extracted, kErrorSamples).d() /
+                                           result.cell_size);
+  }
+}
+
 // Error summary (error_table, as stats makes it), from what the file holds
 // as the encoder stored it, without decoding the file again
-// (FileCheck::DecodeAgain does).
-void evaluate(const std::shared_ptr<const SubdivisionHierarchy>& hierarchy, Coded coded, const std::string& source,
-              const ConvertOptions& options, ConvertResult& result, ProgressSink& progress) {
+// (FileCheck::DecodeAgain does); and each row's D against `extracted`.
+void evaluate(const std::shared_ptr<const SubdivisionHierarchy>& hierarchy, Coded coded, const PolygonMesh& extracted,
+              const std::string& source, const ConvertOptions& options, ConvertResult& result,
+              ProgressSink& progress) {
   const auto start = Clock::now();
   progress.begin_stage("evaluate");
   const IswDecoded expected =
@@ -426,6 +446,7 @@ void evaluate(const std::shared_ptr<const SubdivisionHierarchy>& hierarchy, Code
   ErrorTable errors = error_table(expected, options.summary_percents, &coded.full_decode);
   result.summary = std::move(errors.rows);
   result.quantization = errors.quantization;
+  measure_rows(*hierarchy, expected, extracted, result);
   if (decodes_as_expected.valid() && !decodes_as_expected.get())
     throw std::logic_error(source + ": the file written does not decode to the coefficients it was coded from");
   progress.end_stage();
@@ -454,11 +475,12 @@ ConvertResult convert_volume(Volume volume, const std::string& source, const Con
   IswMetadata metadata = metadata_of(prepared.field, source, options, result);
 
   // What the coding stages no longer need goes before their peak.
-  if (options.keep_extracted_mesh) result.extracted_mesh = std::move(prepared.isosurface.mesh);
+  PolygonMesh extracted = std::move(prepared.isosurface.mesh);
   prepared = PreparedSurface{};
 
   Coded coded = analyze_and_encode(*hierarchy, std::move(metadata), options, result, progress);
-  evaluate(hierarchy, std::move(coded), source, options, result, progress);
+  evaluate(hierarchy, std::move(coded), extracted, source, options, result, progress);
+  if (options.keep_extracted_mesh) result.extracted_mesh = std::move(extracted);
   return result;
 }
 

@@ -214,12 +214,12 @@ void expect_dyadic_grid(const std::vector<Vec3>& points, int level, int cols, in
   }
 }
 
-// The regular 4-gon chart of a unit square is an isometry: the fine points
-// are the square's dyadic grid, although the input triangles straddle the
-// base diagonal; every fine face has the same area.
+// The regular 4-gon chart of a unit square is an isometry: at levels 0 to 3
+// the fine points are the square's dyadic grid, although the input triangles
+// straddle the base diagonal; every fine face has the same area.
 TEST(ParametrizedFit, UnitSquareGivesTheDyadicGrid) {
   const FlatCase flat = unit_square();
-  for (int level = 1; level <= 3; ++level) {
+  for (int level = 0; level <= 3; ++level) {
     const ParametrizedFitResult r = fit(flat, level);
     SCOPED_TRACE(level);
     expect_dyadic_grid(r.positions, level, 1, 1);
@@ -232,17 +232,22 @@ TEST(ParametrizedFit, UnitSquareGivesTheDyadicGrid) {
   }
 }
 
-// Two unit squares sharing a base edge, the input a triangulation of the
-// whole 2 x 1 rectangle: points on the shared edge are the same from either
-// face, and the fine points the rectangle's dyadic grid.
-TEST(ParametrizedFit, TwoSquaresAgreeAlongTheirSharedEdge) {
+// Two unit squares sharing a base edge (split along different diagonals),
+// the input a k-fold triangulation of the whole 2 x 1 rectangle.
+FlatCase two_squares(int k) {
   FlatCase flat;
   flat.corners = {{0, 0}, {1, 0}, {2, 0}, {2, 1}, {1, 1}, {0, 1}};
   flat.faces = {{0, 1, 4, 5}, {1, 2, 3, 4}};
   flat.base_triangles = {{0, 1, 4}, {0, 4, 5}, {1, 3, 4}, {1, 2, 3}};
   flat.triangle_face = {0, 0, 1, 1};
-  fine_triangulation(flat, {1.13, 0.41}, 8);
-  const ParametrizedFitResult r = fit(flat, 3);
+  fine_triangulation(flat, {1.13, 0.41}, k);
+  return flat;
+}
+
+// Points on the shared edge are the same from either face, and the fine
+// points the rectangle's dyadic grid.
+TEST(ParametrizedFit, TwoSquaresAgreeAlongTheirSharedEdge) {
+  const ParametrizedFitResult r = fit(two_squares(8), 3);
   expect_dyadic_grid(r.positions, 3, 2, 1);
   EXPECT_EQ(r.statistics.fallback_points, 0u);
 }
@@ -294,47 +299,45 @@ TEST(ParametrizedFit, TriangleAndPentagonGiveTheChartImages) {
   expect_chart_images(coarse, 3);
 }
 
-// The octahedron and a sphere: each octahedron face subdivided k times, its
-// vertices projected onto the unit sphere, mapped by their barycentric
-// coordinates in the flat face. With a twist, each vertex p then moves to
-// normalized(p + twist (yz, zx, xy)), which keeps the octahedron's vertices,
-// and is mapped by its central projection onto the octahedron: the input
-// triangles straddle the base edges.
+// A sphere over a convex polyhedron with its vertices on the unit sphere
+// (octahedron, cube): each map triangle subdivided k times, the vertices
+// projected onto the sphere and mapped by their barycentric coordinates in
+// the flat triangle. With a twist, each vertex p then moves to
+// normalized(p + twist (yz, zx, xy)), which keeps the polyhedron's vertices
+// (there the displacement is parallel to p), and is mapped by its central
+// projection onto the polyhedron: the input triangles straddle base edges.
 struct SphereCase {
   PolygonMesh base, surface;
   simplify::SurfaceMap map;
 };
 
-// The first face of the octahedron holding the central projection of p, and
-// the barycentric (u, v) there.
-void map_centrally(const PolygonMesh& octahedron, const Vec3& p, simplify::SurfaceMap& map) {
-  const Vec3 q = (1 / (std::abs(p.x) + std::abs(p.y) + std::abs(p.z))) * p;
-  for (std::uint32_t f = 0; f < octahedron.face_count(); ++f) {
-    const std::uint32_t* v = octahedron.face_begin(f);
-    const Vec3 &a = octahedron.positions[v[0]], &b = octahedron.positions[v[1]], &c = octahedron.positions[v[2]];
+// The first map triangle holding the central projection of p, and the
+// barycentric (u, v) there.
+void map_centrally(const std::vector<Vec3>& corners, const Vec3& p, simplify::SurfaceMap& map) {
+  for (std::uint32_t t = 0; t < map.triangle_count(); ++t) {
+    const Vec3 &a = corners[map.triangles[t][0]], &b = corners[map.triangles[t][1]], &c = corners[map.triangles[t][2]];
     const Vec3 n = cross(b - a, c - a);
+    if (!(dot(n, p) > 0)) continue;
+    const Vec3 q = (dot(n, a) / dot(n, p)) * p;
     const double u = dot(cross(q - a, c - a), n) / dot(n, n), w = dot(cross(b - a, q - a), n) / dot(n, n);
-    if (std::min({u, w, 1 - u - w}) < -1e-12 || std::abs(dot(q - a, n)) > 1e-12) continue;
-    map.vertex_triangle.push_back(f);
+    if (std::min({u, w, 1 - u - w}) < -1e-12) continue;
+    map.vertex_triangle.push_back(t);
     map.vertex_uv.push_back({std::max(0.0, u), std::max(0.0, w)});
     return;
   }
-  ADD_FAILURE() << "no face";
+  ADD_FAILURE() << "no triangle";
 }
 
-SphereCase octahedron_sphere(int k, double twist = 0) {
+SphereCase sphere_over(const PolygonMesh& polyhedron, const std::vector<Triangle>& triangles,
+                       const std::vector<std::uint32_t>& triangle_face, int k, double twist) {
   SphereCase s;
-  s.base.positions = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
-  const std::vector<Triangle> faces = {{0, 2, 4}, {2, 1, 4}, {1, 3, 4}, {3, 0, 4},
-                                       {2, 0, 5}, {1, 2, 5}, {3, 1, 5}, {0, 3, 5}};
-  for (std::uint32_t f = 0; f < faces.size(); ++f) {
-    s.base.add_face(faces[f].data(), 3);
-    s.map.triangles.push_back(faces[f]);
-    s.map.triangle_face.push_back(f);
-  }
+  s.base = polyhedron;
+  s.map.triangles = triangles;
+  s.map.triangle_face = triangle_face;
   std::map<std::array<long long, 3>, std::uint32_t> index;
-  for (std::uint32_t f = 0; f < faces.size(); ++f) {
-    const Vec3 &a = s.base.positions[faces[f][0]], &b = s.base.positions[faces[f][1]], &c = s.base.positions[faces[f][2]];
+  for (std::uint32_t t = 0; t < triangles.size(); ++t) {
+    const Vec3 &a = s.base.positions[triangles[t][0]], &b = s.base.positions[triangles[t][1]],
+               &c = s.base.positions[triangles[t][2]];
     std::vector<std::vector<std::uint32_t>> id(k + 1);
     for (int i = 0; i <= k; ++i)
       for (int j = 0; i + j <= k; ++j) {
@@ -343,12 +346,12 @@ SphereCase octahedron_sphere(int k, double twist = 0) {
         const auto [it, added] = index.emplace(key, static_cast<std::uint32_t>(s.surface.positions.size()));
         if (added && twist == 0) {
           s.surface.positions.push_back(normalized(p));
-          s.map.vertex_triangle.push_back(f);
+          s.map.vertex_triangle.push_back(t);
           s.map.vertex_uv.push_back({static_cast<double>(i) / k, static_cast<double>(j) / k});
         } else if (added) {
           const Vec3 n = normalized(p);
           s.surface.positions.push_back(normalized(n + twist * Vec3{n.y * n.z, n.z * n.x, n.x * n.y}));
-          map_centrally(s.base, s.surface.positions.back(), s.map);
+          map_centrally(s.base.positions, s.surface.positions.back(), s.map);
         }
         id[i].push_back(it->second);
       }
@@ -361,6 +364,42 @@ SphereCase octahedron_sphere(int k, double twist = 0) {
   return s;
 }
 
+SphereCase octahedron_sphere(int k, double twist = 0) {
+  PolygonMesh octahedron;
+  octahedron.positions = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+  const std::vector<Triangle> faces = {{0, 2, 4}, {2, 1, 4}, {1, 3, 4}, {3, 0, 4},
+                                       {2, 0, 5}, {1, 2, 5}, {3, 1, 5}, {0, 3, 5}};
+  std::vector<std::uint32_t> triangle_face;
+  for (std::uint32_t f = 0; f < faces.size(); ++f) {
+    octahedron.add_face(faces[f].data(), 3);
+    triangle_face.push_back(f);
+  }
+  return sphere_over(octahedron, faces, triangle_face, k, twist);
+}
+
+// The cube with its vertices on the unit sphere; each face split into two
+// map triangles, along either diagonal.
+SphereCase cube_sphere(int k, double twist) {
+  PolygonMesh cube;
+  const double a = 1 / std::sqrt(3.0);
+  for (int i = 0; i < 8; ++i) cube.positions.push_back({i & 1 ? a : -a, i & 2 ? a : -a, i & 4 ? a : -a});
+  const std::vector<std::array<std::uint32_t, 4>> faces = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
+                                                           {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+  std::vector<Triangle> triangles;
+  std::vector<std::uint32_t> triangle_face;
+  for (std::uint32_t f = 0; f < faces.size(); ++f) {
+    const auto& q = faces[f];
+    cube.add_face(q.data(), 4);
+    if (f % 2 == 0) {
+      triangles.insert(triangles.end(), {Triangle{q[0], q[1], q[2]}, Triangle{q[0], q[2], q[3]}});
+    } else {
+      triangles.insert(triangles.end(), {Triangle{q[1], q[2], q[3]}, Triangle{q[1], q[3], q[0]}});
+    }
+    triangle_face.insert(triangle_face.end(), {f, f});
+  }
+  return sphere_over(cube, triangles, triangle_face, k, twist);
+}
+
 // Every fine point on the input triangles, the base vertices on their input
 // vertices, no fine face folded (its normal points outward), no two fine
 // points alike, no fallback.
@@ -371,7 +410,11 @@ void expect_on_sphere_without_folds(const SphereCase& s, int levels) {
   ASSERT_EQ(r.positions.size(), hierarchy.vertex_count(levels));
   const BinnedSurfaceDistance distance(s.surface);
   for (const Vec3& p : r.positions) EXPECT_LT(distance.distance(p), 1e-12);
-  for (std::size_t v = 0; v < 6; ++v) EXPECT_EQ(r.positions[v], s.base.positions[v]);
+  for (std::size_t v = 0; v < s.base.vertex_count(); ++v) {
+    double nearest = std::numeric_limits<double>::infinity();
+    for (const Vec3& input : s.surface.positions) nearest = std::min(nearest, norm(r.positions[v] - input));
+    EXPECT_LT(nearest, 1e-15) << "base vertex " << v;
+  }
   const PolygonMesh fine = hierarchy.control_mesh(levels, r.positions);
   for (std::size_t f = 0; f < fine.face_count(); ++f) {
     const std::uint32_t* q = fine.face_begin(f);
@@ -393,6 +436,20 @@ TEST(ParametrizedFit, SphereOverOctahedronLiesOnTheSurfaceWithoutFolds) {
 
 TEST(ParametrizedFit, TwistedSphereStraddlingBaseEdgesLiesOnTheSurfaceWithoutFolds) {
   expect_on_sphere_without_folds(octahedron_sphere(7, 0.4), 3);
+}
+
+// Round a cube corner the base triangles' angles sum to 3 pi / 2: the
+// shorter-way unfold lays a few input triangles there the wrong way round,
+// and the points they would hold fall back to the nearest one (clamped onto
+// it: still on the surface). A known limit of the isometric unfold; MAPS's
+// z^a flattening of the corner's fan would remove it. Its share stays small.
+TEST(ParametrizedFit, TwistedSphereOverCubeLiesOnTheSurface) {
+  const SphereCase s = cube_sphere(8, 0.2);
+  const SubdivisionHierarchy hierarchy(s.base, 5);
+  const ParametrizedFitResult r = parametrized_fit(hierarchy, s.base.positions, s.surface, s.map);
+  const BinnedSurfaceDistance distance(s.surface);
+  for (const Vec3& p : r.positions) EXPECT_LT(distance.distance(p), 1e-12);
+  EXPECT_LE(double(r.statistics.fallback_points), 0.005 * double(r.positions.size()));
 }
 
 TEST(ParametrizedFit, SameResultForAnyThreadCount) {
@@ -419,12 +476,7 @@ void expect_invalid(const std::function<void()>& call) {
 
 // Maps that do not fit the base mesh or the surface.
 TEST(ParametrizedFit, RejectsMapsThatDoNotFit) {
-  FlatCase flat;
-  flat.corners = {{0, 0}, {1, 0}, {2, 0}, {2, 1}, {1, 1}, {0, 1}};
-  flat.faces = {{0, 1, 4, 5}, {1, 2, 3, 4}};
-  flat.base_triangles = {{0, 1, 4}, {0, 4, 5}, {1, 3, 4}, {1, 2, 3}};
-  flat.triangle_face = {0, 0, 1, 1};
-  fine_triangulation(flat, {1.13, 0.41}, 3);
+  const FlatCase flat = two_squares(3);
   const PolygonMesh base = flat.base(), surface = flat.surface();
   const SubdivisionHierarchy hierarchy(base, 1);
   const simplify::SurfaceMap good = flat.map();

@@ -16,10 +16,10 @@
 //
 // Inverse map: a parameter point (base triangle T, u, v) is located among the
 // input triangles with a vertex mapped into T or spanning T around one of its
-// corners, all unfolded isometrically into T's plane (base_positions' edge
-// lengths) and positively oriented there; its surface point is the
-// barycentric combination of the input triangle's vertices, so it lies on
-// the surface. Results are identical for any thread count (TBB).
+// corners, unfolded isometrically into T's plane (base_positions' edge
+// lengths); its surface point is the barycentric combination of the input
+// triangle's vertices, so it lies on the surface (fit/src/
+// surface_map_inverse.h). Results are identical for any thread count (TBB).
 #include <cstddef>
 #include <vector>
 
@@ -63,9 +63,10 @@ struct ParametrizedFitResult {
 // surface with an index out of range or a non-finite position
 // (validate_indices). Faces of the surface with more than 3 corners are fanned
 // from their first corner. Reports progress as one stage.
-// Cost: O(fine vertices + surface corners) time and memory (about 32 bytes
-// per fine vertex and 40 per surface triangle besides the result), plus
-// per base triangle the input triangles around it.
+// Cost: O(fine vertices + surface corners) time and memory besides the
+// result: at most about 60 bytes per fine vertex and 60 per surface triangle (a
+// few more for input triangles listed round low-valence or strongly curved
+// base vertices: surface_map_inverse.h).
 ParametrizedFitResult parametrized_fit(const SubdivisionHierarchy& hierarchy, const std::vector<Vec3>& base_positions,
                                        const PolygonMesh& surface, const simplify::SurfaceMap& map,
                                        ProgressSink& progress = no_progress());

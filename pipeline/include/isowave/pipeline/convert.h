@@ -146,6 +146,9 @@ inline constexpr int kBaseAttempts = 3;
 inline constexpr double kLevelErrorShare = 0.75;
 inline constexpr double kCorrectedLevelErrorShare = 1.0;
 inline constexpr double kFinePointMoveCells = 0.5;
+// Samples each way for the D convert measures (levels, summary rows):
+// enough for a few per mille of noise.
+inline constexpr std::size_t kErrorSamples = 50000;
 inline constexpr double kLevelErrorFloorCells = 0.01;
 
 struct ConvertResult {
@@ -183,6 +186,10 @@ struct ConvertResult {
   // error_table() of the file written, as `isowave stats` reports it: rows
   // against the full-resolution decode; the quantization error separately.
   std::vector<RateDistortionRow> summary;
+  // Per summary row: D (surface_error.h, kErrorSamples each way) of
+  // the decoded surface against the extracted isosurface, in cells: what a
+  // user gets back, which the rows' control-point errors do not show.
+  std::vector<double> summary_surface_error;
   QuantizationError quantization;
   std::vector<std::string> warnings;  // one line each, e.g. a base mesh kept large by the topology
 };
