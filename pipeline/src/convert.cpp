@@ -155,7 +155,7 @@ double level_error_bound(const PreparedSurface& prepared, const ConvertOptions& 
 // The parametrization-based fit (fit/parametrized_fit.h) of `simplified`:
 // with automatic levels, level after level until the fitted fine mesh lies
 // within the bound of the extracted isosurface (D), at most 6, and not past a
-// fine mesh of 16 times the isosurface's vertices.
+// fine mesh of kMaxFineShare times the isosurface's vertices.
 std::shared_ptr<const SubdivisionHierarchy> fit_parametrized(const simplify::SimplifyResult& simplified,
                                                              const PreparedSurface& prepared,
                                                              const ConvertOptions& options, ConvertResult& result,
@@ -181,7 +181,7 @@ std::shared_ptr<const SubdivisionHierarchy> fit_parametrized(const simplify::Sim
     result.level_errors_cells.push_back(error);
     const double next_fine = fine_vertex_count(simplified.base, levels + 1);
     if (options.levels > 0 || error <= result.max_error_cells || levels == 6 ||
-        next_fine > 16.0 * double(result.extracted_vertices))
+        next_fine > kMaxFineShare * double(result.extracted_vertices))
       break;
   }
   result.fine_vertices = hierarchy->fine_vertex_count();

@@ -145,6 +145,10 @@ inline constexpr int kBaseAttempts = 3;
 // error alone: the marching-cubes mesh's own is the bound.
 inline constexpr double kLevelErrorShare = 0.75;
 inline constexpr double kCorrectedLevelErrorShare = 1.0;
+// The automatic levels stop before a fine mesh of more than this many times
+// the isosurface's vertices (beyond it, a denser sampling of the same map
+// costs more than it gains).
+inline constexpr double kMaxFineShare = 4.0;
 inline constexpr double kFinePointMoveCells = 0.5;
 // Samples each way for the D convert measures (levels, summary rows):
 // enough for a few per mille of noise.
