@@ -440,7 +440,7 @@ std::size_t count_folded_faces(const SubdivisionHierarchy& hierarchy, int level,
                                const Volume& field, Orientation orientation) {
   const WrapLevelMesh mesh = make_wrap_level_mesh(hierarchy, level, positions, field);
   HugePageVector<std::uint8_t> folded;
-  return find_folded_faces(mesh, TrilinearGrid(field), orientation, positions, folded);
+  return wrap::find_folded_faces(mesh, TrilinearGrid(field), orientation, positions, folded);
 }
 
 }  // namespace isowave
