@@ -554,7 +554,7 @@ SmoothingStatistics smooth_surface_map(simplify::SurfaceMap& map, const PolygonM
     ++statistics.rounds;
     std::fill(state.moves.begin(), state.moves.end(), 0.0);
     sweep(c, classes, state.tangled, state);  // untangling first
-    sweep(c, classes, state.active, state);
+    if (options.mode == SmoothingMode::Relax) sweep(c, classes, state.active, state);
     for (std::size_t i = 0; i < n; ++i) total[i] += state.moves[i];
     if (!mark_active(mesh, state.moves, options.min_move * domain.mean_edge, state.active)) break;
   }
@@ -567,3 +567,4 @@ SmoothingStatistics smooth_surface_map(simplify::SurfaceMap& map, const PolygonM
 }
 
 }  // namespace isowave
+

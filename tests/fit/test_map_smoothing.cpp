@@ -27,6 +27,10 @@ namespace isowave {
 namespace {
 
 using Triangle = std::array<std::uint32_t, 3>;
+// Inverted input triangles a smoothed map may keep (their share of all).
+constexpr double kMaxInvertedShare = 0.01;
+// On a mesh with many holes whose boundary vertices stay (elephant: 106).
+constexpr double kMaxInvertedShareManyHoles = 0.11;
 
 // A point of the base mesh from a map entry.
 Vec3 mapped_point(const simplify::SurfaceMap& map, const std::vector<Vec3>& base, std::size_t v) {
@@ -107,6 +111,7 @@ TEST(MapSmoothingTest, UntanglesAFlatSquareAndReachesItsMeanValuePositions) {
   const std::size_t tangled = square.inverted();
   ASSERT_GT(tangled, 0u) << "the distortion must turn triangles over";
   SmoothingOptions options;
+  options.mode = SmoothingMode::Relax;
   options.max_rounds = 1000;
   options.min_move = 1e-12;
   const SmoothingStatistics s = smooth_surface_map(square.map, square.surface, square.base, options);
@@ -165,43 +170,85 @@ TEST(MapSmoothingTest, SameMapForOneAndTwoThreads) {
   const PolygonMesh input = mixing_isosurface(40);
   const simplify::SimplifyResult simplified = simplified_with_map(input, input.vertex_count() / 20);
   simplify::SurfaceMap one = simplified.map, two = simplified.map;
+  SmoothingOptions relax;
+  relax.mode = SmoothingMode::Relax;
   {
     tbb::global_control threads(tbb::global_control::max_allowed_parallelism, 1);
-    smooth_surface_map(one, input, simplified.base.positions);
+    smooth_surface_map(one, input, simplified.base.positions, relax);
   }
   {
     tbb::global_control threads(tbb::global_control::max_allowed_parallelism, 2);
-    smooth_surface_map(two, input, simplified.base.positions);
+    smooth_surface_map(two, input, simplified.base.positions, relax);
   }
+  EXPECT_NE(one.vertex_uv, simplified.map.vertex_uv);
   EXPECT_EQ(one.vertex_triangle, two.vertex_triangle);
   EXPECT_EQ(one.vertex_uv, two.vertex_uv);
 }
 
-// On simplified meshes: every vertex stays in the base mesh, the surface's
-// boundary vertices and the base vertices' survivors keep their points, and
-// the inverted input triangles do not grow in number.
-void check_smoothing(const PolygonMesh& input, std::size_t target, const std::string& name) {
-  SCOPED_TRACE(name);
-  simplify::SimplifyResult simplified = simplified_with_map(input, target);
-  const simplify::SurfaceMap before = simplified.map;
-  const SmoothingStatistics s = smooth_surface_map(simplified.map, input, simplified.base.positions);
+// Input triangles with all three corners mapped into one base triangle and
+// turned over there.
+std::size_t same_triangle_inverted(const PolygonMesh& input, const simplify::SurfaceMap& map) {
+  std::size_t count = 0;
+  for (std::size_t f = 0; f < input.face_count(); ++f) {
+    const std::uint32_t* v = input.face_begin(f);
+    for (std::uint32_t k = 1; k + 1 < input.face_size(f); ++k) {
+      const std::uint32_t t = map.vertex_triangle[v[0]];
+      if (map.vertex_triangle[v[k]] != t || map.vertex_triangle[v[k + 1]] != t) continue;
+      const auto &a = map.vertex_uv[v[0]], &b = map.vertex_uv[v[k]], &c = map.vertex_uv[v[k + 1]];
+      count += (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]) < 0;
+    }
+  }
+  return count;
+}
+
+void check_smoothing(const PolygonMesh& input, const simplify::SimplifyResult& simplified, SmoothingMode mode,
+                     double max_inverted_share, const std::string& name) {
+  const char* mode_name = mode == SmoothingMode::Relax ? "relax" : "untangle";
+  SCOPED_TRACE(name + ", " + mode_name);
+  const simplify::SurfaceMap& before = simplified.map;
+  simplify::SurfaceMap map = before;
+  SmoothingOptions options;
+  options.mode = mode;
+  const SmoothingStatistics s = smooth_surface_map(map, input, simplified.base.positions, options);
   std::size_t triangles = 0;
   for (std::size_t f = 0; f < input.face_count(); ++f) triangles += input.face_size(f) - 2;
-  std::printf("%s: %zu input triangles, inverted %zu -> %zu (%.3f%% -> %.3f%%), %d rounds, mean move %.3g, %.2f s\n",
-              name.c_str(), triangles, s.inverted_before, s.inverted_after, 100.0 * s.inverted_before / triangles,
-              100.0 * s.inverted_after / triangles, s.rounds, s.mean_move, s.seconds);
-  expect_in_domain(simplified.map);
+  std::printf("%s, %s: %zu input triangles, inverted %zu -> %zu (%.3f%% -> %.3f%%), %d rounds, mean move %.3g, "
+              "%.2f s\n",
+              name.c_str(), mode_name, triangles, s.inverted_before, s.inverted_after,
+              100.0 * double(s.inverted_before) / double(triangles), 100.0 * double(s.inverted_after) / double(triangles),
+              s.rounds, s.mean_move, s.seconds);
+  expect_in_domain(map);
   EXPECT_LE(s.inverted_after, s.inverted_before);
   std::size_t moved = 0;
   for (std::size_t v = 0; v < input.vertex_count(); ++v) {
-    const bool same = simplified.map.vertex_triangle[v] == before.vertex_triangle[v] &&
-                      simplified.map.vertex_uv[v] == before.vertex_uv[v];
+    const bool same = map.vertex_triangle[v] == before.vertex_triangle[v] && map.vertex_uv[v] == before.vertex_uv[v];
     const auto [u, w] = before.vertex_uv[v];
-    if ((u == 1 || w == 1 || (u == 0 && w == 0))) EXPECT_TRUE(same) << "base vertex survivor " << v << " moved";
+    if (u == 1 || w == 1 || (u == 0 && w == 0)) {
+      EXPECT_TRUE(same) << "base vertex survivor " << v << " moved";
+    }
     moved += !same;
   }
-  EXPECT_GT(moved, 0u);
+  if (mode == SmoothingMode::Relax || s.inverted_before > 0) {
+    EXPECT_GT(moved, 0u);
+  }
   EXPECT_LE(moved, s.free_vertices);
+  EXPECT_LE(double(s.inverted_after) / double(triangles), max_inverted_share);
+  // Independently of the unfoldings: triangles with all corners in one base
+  // triangle, turned over in its (u, v) coordinates (as the simplifier's test counts).
+  const std::size_t same_before = same_triangle_inverted(input, before), same_after = same_triangle_inverted(input, map);
+  std::printf("  inverted within one base triangle: %zu -> %zu\n", same_before, same_after);
+  EXPECT_LE(same_after, same_before);
+}
+
+// On simplified meshes, in both modes: every vertex stays in the base mesh,
+// the base vertices' survivors keep their points, and the inverted input
+// triangles do not grow in number and end below a share of all (the
+// simplifier's map has about 1%, the mixing isosurface 2.6%).
+void check_smoothing(const PolygonMesh& input, std::size_t target, const std::string& name,
+                     double max_inverted_share = kMaxInvertedShare) {
+  const simplify::SimplifyResult simplified = simplified_with_map(input, target);
+  for (const SmoothingMode mode : {SmoothingMode::Untangle, SmoothingMode::Relax})
+    check_smoothing(input, simplified, mode, max_inverted_share, name);
 }
 
 TEST(MapSmoothingTest, SmoothsTheMapsOfGeneratedMeshes) {
@@ -220,7 +267,8 @@ TEST(MapSmoothingTest, SmoothsTheMapsOfTheMeshCorpus) {
   if (test::shared_data_dir().empty()) GTEST_SKIP() << "shared data absent";
   for (const std::string& file : files) {
     const PolygonMesh input = read_mesh(test::shared_data_file("meshes/" + file));
-    check_smoothing(input, input.vertex_count() / 30, file);
+    check_smoothing(input, input.vertex_count() / 30, file,
+                    file == "elephant_106holes.off" ? kMaxInvertedShareManyHoles : kMaxInvertedShare);
   }
 }
 

@@ -4,10 +4,10 @@
 // collapses leave is bijective on vertices but uneven, and a few input
 // triangles' images turn over; the fine points then crowd, thin out and
 // fold there. MAPS smooths its parametrization the same way (Lee et al.,
-// SIGGRAPH 1998, Sec. 3.5): each input vertex's parameter point moves toward
+// SIGGRAPH 1998): each input vertex's parameter point moves toward
 // a weighted mean of its neighbours' parameter points, inside the base mesh.
 //
-// A round moves every free input vertex once toward the mean of its
+// A Relax round moves every free input vertex once toward the mean of its
 // neighbours with Floater's mean-value weights of the input surface's 3D
 // geometry (Floater, CAGD 2003; positive for every triangle, so the mean
 // lies inside the neighbours' hull: a shape-preserving, low-distortion
@@ -16,11 +16,19 @@
 // way that puts the neighbour nearest, as the inverse map unfolds:
 // surface_map_inverse.h). A move that leaves the base triangle walks on
 // across base edges into the neighbouring triangles; at the base mesh's
-// boundary it stops. A round first moves the vertices of inverted input
-// triangles (image not positively oriented in the moving vertex's frame),
-// then every free vertex; a move is kept only if it turns over no input
-// triangle round the vertex that was not turned over, or lowers their count
-// (tried at the full step, a half and a quarter).
+// boundary it stops. Every round (Untangle and Relax) first moves the
+// vertices of inverted input triangles (image not positively oriented in the
+// moving vertex's frame), Relax then every free vertex; a move is kept only
+// if it turns over no input triangle round the vertex that was not turned
+// over, or lowers their count (tried at the full step, a half and a quarter).
+//
+// Isometric unfoldings round a base vertex whose angles do not sum to 2 pi
+// disagree from one base triangle's plane to the next; where input triangles
+// are large against the base triangles (a few input vertices per base
+// triangle), Relax moves images across such corners, and the inverse map
+// (surface_map_inverse.h), unfolding from the other side, then finds more
+// parameter points in no image. Untangle moves only the tangled vertices,
+// and little: it is the default.
 //
 // Fixed: input vertices on the surface's boundary or not on a disk of
 // triangles, and those mapped onto a base vertex (the simplification's
@@ -37,9 +45,15 @@
 
 namespace isowave {
 
+enum class SmoothingMode {
+  Untangle,  // move only the corners of inverted input triangles
+  Relax,     // then every free vertex toward its neighbours' mean-value mean
+};
+
 struct SmoothingOptions {
-  int max_rounds = 20;       // rounds at most; 0 leaves the map as it is
-  double min_move = 1e-3;    // stop once no vertex moved farther (share of the mean base edge)
+  SmoothingMode mode = SmoothingMode::Untangle;
+  int max_rounds = 20;     // rounds at most; 0 leaves the map as it is
+  double min_move = 1e-3;  // stop once no vertex moved farther (share of the mean base edge)
 };
 
 struct SmoothingStatistics {
