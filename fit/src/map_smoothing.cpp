@@ -138,7 +138,7 @@ Vec2 point_in(const Corners& c, const std::array<double, 2>& uv) {
   return c[0] + uv[0] * (c[1] - c[0]) + uv[1] * (c[2] - c[0]);
 }
 
-double distance(Vec2 a, Vec2 b) { return std::hypot(a.x - b.x, a.y - b.y); }
+double distance(Vec2 a, Vec2 b) { return std::sqrt((a.x - b.x) * (a.x - b.x) + (a.y - b.y) * (a.y - b.y)); }
 
 // Base triangle s laid out in the plane of base triangle t (corners
 // `plane`), by breadth-first search over the edge neighbours up to
@@ -172,33 +172,38 @@ bool reach(const BaseDomain& d, std::uint32_t t, const Corners& plane, std::uint
   return false;
 }
 
-// The point (s, uv) in the plane of base triangle t (corners `plane`): in t,
-// across an edge, round a shared base vertex (either way, within pi of
-// angle: no straight segment goes farther round it) the way nearest to
-// `near`, or else by the fewest edge crossings (reach). False if none of
-// these reaches s.
-bool unfold_point(const BaseDomain& d, std::uint32_t t, const Corners& plane, std::uint32_t s,
-                  const std::array<double, 2>& uv, Vec2 near, Vec2& out) {
+// The ways base triangle s is laid out in the plane of base triangle t
+// (corners `plane`): t itself, across an edge, round each shared base vertex
+// either way (within pi of angle: no straight segment goes farther round
+// it), or else by the fewest edge crossings (reach). Returns how many (0:
+// none reaches s).
+struct Ways {
+  std::uint32_t triangle = kNone;
+  int count = 0;
+  std::array<Corners, 4> corners;
+};
+
+void find_ways(const BaseDomain& d, std::uint32_t t, const Corners& plane, std::uint32_t s, Ways& ways) {
+  ways.triangle = s;
+  ways.count = 0;
   if (s == t) {
-    out = point_in(plane, uv);
-    return true;
+    ways.corners[ways.count++] = plane;
+    return;
   }
-  Corners corners;
   for (int k = 0; k < 3; ++k) {
     std::uint32_t next = kNone;
-    if (d.across[t][k] == s && step_across(d, t, plane, k, next, corners)) {
-      out = point_in(corners, uv);
-      return true;
+    if (d.across[t][k] == s && step_across(d, t, plane, k, next, ways.corners[0])) {
+      ways.count = 1;
+      return;
     }
   }
-  double best = std::numeric_limits<double>::infinity();
   for (const std::uint32_t w : d.triangle(t)) {
     if (corner_of(d.triangle(s), w) < 0) continue;
     for (const int direction : {1, -1}) {
       std::uint32_t current = t;
-      corners = plane;
+      Corners corners = plane;
       double turned = 0;
-      for (int step = 0; step < kMaxWalk && turned < kPi; ++step) {
+      for (int step = 0; step < kMaxWalk && turned < kPi && ways.count < 4; ++step) {
         const int c = corner_of(d.triangle(current), w);
         std::uint32_t next = kNone;
         Corners next_corners;
@@ -206,18 +211,24 @@ bool unfold_point(const BaseDomain& d, std::uint32_t t, const Corners& plane, st
         current = next;
         corners = next_corners;
         if (current == s) {
-          const Vec2 p = point_in(corners, uv);
-          if (distance(p, near) < best) best = distance(p, near), out = p;
+          ways.corners[ways.count++] = corners;
           break;
         }
         turned += d.angles[current][corner_of(d.triangle(current), w)];
       }
     }
   }
-  if (best < std::numeric_limits<double>::infinity()) return true;
-  if (!reach(d, t, plane, s, corners)) return false;
-  out = point_in(corners, uv);
-  return true;
+  if (ways.count == 0 && reach(d, t, plane, s, ways.corners[0])) ways.count = 1;
+}
+
+// The point uv of ways.triangle laid out the way nearest to `near`.
+bool place(const Ways& ways, const std::array<double, 2>& uv, Vec2 near, Vec2& out) {
+  double best = std::numeric_limits<double>::infinity();
+  for (int k = 0; k < ways.count; ++k) {
+    const Vec2 p = point_in(ways.corners[k], uv);
+    if (distance(p, near) < best) best = distance(p, near), out = p;
+  }
+  return ways.count > 0;
 }
 
 // Where a move ends: its base triangle, its point in the moving vertex's
@@ -276,6 +287,9 @@ struct InputMesh {
   std::vector<Triangle> triangles;
   std::vector<std::size_t> star_offsets;  // vertex i's triangles: star[star_offsets[i] .. star_offsets[i + 1])
   std::vector<std::uint32_t> star;
+  // Per star entry: the neighbour slots of the triangle's next and previous
+  // corners after i (so that (i, next, previous) keeps its orientation).
+  std::vector<std::array<std::uint8_t, 2>> star_slots;
   // Vertex i's neighbours: neighbours[2 star_offsets[i] ..) , neighbour_count[i] of them.
   std::vector<std::uint32_t> neighbours, neighbour_count;
   std::vector<double> weights;
@@ -323,6 +337,7 @@ void weigh_neighbours(const PolygonMesh& surface, InputMesh& m, std::uint32_t i)
     while (k < count && ids[k] != j) ++k;
     if (k == count) ids[count] = j, weights[count++] = 0;
     weights[k] += w;
+    return static_cast<std::uint8_t>(std::min<std::uint32_t>(k, 255));
   };
   for (std::size_t s = m.star_offsets[i]; s < m.star_offsets[i + 1]; ++s) {
     const Triangle& tri = m.triangles[m.star[s]];
@@ -331,8 +346,7 @@ void weigh_neighbours(const PolygonMesh& surface, InputMesh& m, std::uint32_t i)
     const Vec3 a = surface.positions[j] - surface.positions[i], b = surface.positions[k] - surface.positions[i];
     const double la = norm(a), lb = norm(b), denominator = la * lb + dot(a, b);
     const double half_tan = denominator > 0 ? norm(cross(a, b)) / denominator : 0;
-    add(j, la > 0 ? half_tan / la : 0);
-    add(k, lb > 0 ? half_tan / lb : 0);
+    m.star_slots[s] = {add(j, la > 0 ? half_tan / la : 0), add(k, lb > 0 ? half_tan / lb : 0)};
   }
   m.neighbour_count[i] = count;
 }
@@ -349,6 +363,7 @@ InputMesh make_input(const PolygonMesh& surface, const simplify::SurfaceMap& map
   m.star.resize(m.star_offsets.back());
   for (std::uint32_t t = 0; t < m.triangles.size(); ++t)
     for (const std::uint32_t v : m.triangles[t]) m.star[cursor[v]++] = t;
+  m.star_slots.resize(m.star.size());
   m.neighbours.resize(2 * m.star.size());
   m.weights.resize(2 * m.star.size());
   m.neighbour_count.assign(n, 0);
@@ -362,7 +377,8 @@ InputMesh make_input(const PolygonMesh& surface, const simplify::SurfaceMap& map
       const bool at_base_vertex = uv[0] == 1 || uv[1] == 1 || (uv[0] == 0 && uv[1] == 0);
       double total = 0;
       for (std::uint32_t k = 0; k < m.neighbour_count[i]; ++k) total += m.weights[2 * m.star_offsets[i] + k];
-      m.free[i] = !at_base_vertex && total > 0 && closed_fan(m, i);
+      const bool few_neighbours = m.neighbour_count[i] < 256;  // star_slots are bytes
+      m.free[i] = !at_base_vertex && few_neighbours && total > 0 && closed_fan(m, i);
     }
   });
   return m;
@@ -399,8 +415,9 @@ struct Context {
 // Vertex i's neighbourhood in the plane of its base triangle.
 struct Star {
   Corners plane;
-  Vec2 point;                 // i itself
-  std::vector<Vec2> points;   // its neighbours, in row order
+  Vec2 point;                // i itself
+  std::vector<Vec2> points;  // its neighbours, in row order
+  std::vector<Ways> ways;    // of the base triangles they lie in
 };
 
 bool gather_star(const Context& c, std::uint32_t i, Star& s) {
@@ -409,28 +426,27 @@ bool gather_star(const Context& c, std::uint32_t i, Star& s) {
   s.point = point_in(s.plane, c.map.vertex_uv[i]);
   const std::uint32_t* ids = c.mesh.neighbours.data() + 2 * c.mesh.star_offsets[i];
   s.points.resize(c.mesh.neighbour_count[i]);
-  for (std::uint32_t k = 0; k < c.mesh.neighbour_count[i]; ++k)
-    if (!unfold_point(c.domain, t, s.plane, c.map.vertex_triangle[ids[k]], c.map.vertex_uv[ids[k]], s.point,
-                      s.points[k]))
-      return false;
+  s.ways.clear();
+  for (std::uint32_t k = 0; k < c.mesh.neighbour_count[i]; ++k) {
+    const std::uint32_t base = c.map.vertex_triangle[ids[k]];
+    auto known = std::find_if(s.ways.begin(), s.ways.end(), [&](const Ways& w) { return w.triangle == base; });
+    if (known == s.ways.end()) {
+      s.ways.emplace_back();
+      find_ways(c.domain, t, s.plane, base, s.ways.back());
+      known = s.ways.end() - 1;
+    }
+    if (!place(*known, c.map.vertex_uv[ids[k]], s.point, s.points[k])) return false;
+  }
   return true;
-}
-
-Vec2 star_point(const Context& c, std::uint32_t i, const Star& s, std::uint32_t j, Vec2 at) {
-  if (j == i) return at;
-  const std::uint32_t* ids = c.mesh.neighbours.data() + 2 * c.mesh.star_offsets[i];
-  return s.points[static_cast<std::size_t>(std::find(ids, ids + c.mesh.neighbour_count[i], j) - ids)];
 }
 
 // Bit k set: the k-th triangle round i is not positively oriented with i at `at`.
 std::uint64_t inverted_around(const Context& c, std::uint32_t i, const Star& s, Vec2 at) {
   std::uint64_t bits = 0;
-  for (std::size_t k = c.mesh.star_offsets[i]; k < c.mesh.star_offsets[i + 1]; ++k) {
-    const Triangle& tri = c.mesh.triangles[c.mesh.star[k]];
-    const Vec2 p0 = star_point(c, i, s, tri[0], at), p1 = star_point(c, i, s, tri[1], at),
-               p2 = star_point(c, i, s, tri[2], at);
-    const std::size_t bit = k - c.mesh.star_offsets[i];
-    if (!(cross(p1 - p0, p2 - p0) > 0) && bit < 64) bits |= std::uint64_t{1} << bit;
+  const std::size_t first = c.mesh.star_offsets[i], count = std::min<std::size_t>(c.mesh.star_offsets[i + 1] - first, 64);
+  for (std::size_t k = 0; k < count; ++k) {
+    const auto [next, previous] = c.mesh.star_slots[first + k];
+    if (!(cross(s.points[next] - at, s.points[previous] - at) > 0)) bits |= std::uint64_t{1} << k;
   }
   return bits;
 }
@@ -482,8 +498,11 @@ std::vector<std::uint8_t> find_inverted(const Context& c) {
       std::array<Vec2, 3> p;
       p[0] = point_in(plane, c.map.vertex_uv[tri[0]]);
       bool placed = true;
-      for (int k = 1; k < 3 && placed; ++k)
-        placed = unfold_point(c.domain, base, plane, c.map.vertex_triangle[tri[k]], c.map.vertex_uv[tri[k]], p[0], p[k]);
+      Ways ways;
+      for (int k = 1; k < 3 && placed; ++k) {
+        find_ways(c.domain, base, plane, c.map.vertex_triangle[tri[k]], ways);
+        placed = place(ways, c.map.vertex_uv[tri[k]], p[0], p[k]);
+      }
       inverted[t] = !placed || !(cross(p[1] - p[0], p[2] - p[0]) > 0);
     }
   });
