@@ -457,10 +457,17 @@ int ones(std::uint64_t bits) {
   return n;
 }
 
-// Moves vertex i toward its neighbours' weighted mean (the first step that
-// turns over no triangle round it or lowers their count); returns the
-// distance moved in its plane.
-double move_vertex(const Context& c, std::uint32_t i, Star& s, std::uint8_t& tangled) {
+// Whether `after` (bits of inverted_around) is acceptable against `before`:
+// no triangle newly turned over, or fewer turned over.
+bool acceptable(std::uint64_t before, std::uint64_t after) {
+  return (after & ~before) == 0 || ones(after) < ones(before);
+}
+
+// Moves vertex i toward its neighbours' weighted mean: the first step that
+// is acceptable in the plane of its base triangle and, where it lands in
+// another base triangle, in that one's plane too (round a base vertex the
+// two planes disagree). Returns the distance moved in its plane.
+double move_vertex(const Context& c, std::uint32_t i, Star& s, Star& landed, std::uint8_t& tangled) {
   if (!gather_star(c, i, s)) return 0;
   const double* weights = c.mesh.weights.data() + 2 * c.mesh.star_offsets[i];
   Vec2 mean;
@@ -472,14 +479,23 @@ double move_vertex(const Context& c, std::uint32_t i, Star& s, std::uint8_t& tan
   mean = (1 / total) * mean;
   const std::uint64_t before = inverted_around(c, i, s, s.point);
   tangled = before != 0;
+  const std::uint32_t from = c.map.vertex_triangle[i];
+  const std::array<double, 2> from_uv = c.map.vertex_uv[i];
   for (const double step : kSteps) {
     Landing landing;
-    if (!walk(c.domain, c.map.vertex_triangle[i], s.plane, s.point, s.point + step * (mean - s.point), landing))
-      continue;
-    const std::uint64_t after = inverted_around(c, i, s, landing.point);
-    if ((after & ~before) != 0 && ones(after) >= ones(before)) continue;
+    if (!walk(c.domain, from, s.plane, s.point, s.point + step * (mean - s.point), landing)) continue;
+    std::uint64_t after = inverted_around(c, i, s, landing.point);
+    if (!acceptable(before, after)) continue;
     c.map.vertex_triangle[i] = landing.triangle;
     c.map.vertex_uv[i] = {landing.weights[1], landing.weights[2]};
+    if (landing.triangle != from) {
+      after = gather_star(c, i, landed) ? inverted_around(c, i, landed, landed.point) : ~std::uint64_t{0};
+      if (!acceptable(before, after)) {
+        c.map.vertex_triangle[i] = from;
+        c.map.vertex_uv[i] = from_uv;
+        continue;
+      }
+    }
     tangled = after != 0;
     return distance(landing.point, s.point);
   }
@@ -522,10 +538,10 @@ void sweep(const Context& c, const std::vector<std::vector<std::uint32_t>>& clas
            const std::vector<std::uint8_t>& selected, RoundState& state) {
   for (const std::vector<std::uint32_t>& members : classes)
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, members.size(), 256), [&](const tbb::blocked_range<std::size_t>& r) {
-      Star s;
+      Star s, landed;
       for (std::size_t k = r.begin(); k < r.end(); ++k) {
         const std::uint32_t i = members[k];
-        if (selected[i]) state.moves[i] += move_vertex(c, i, s, state.tangled[i]);
+        if (selected[i]) state.moves[i] += move_vertex(c, i, s, landed, state.tangled[i]);
       }
     });
 }

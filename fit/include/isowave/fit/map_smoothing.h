@@ -53,7 +53,7 @@ enum class SmoothingMode {
 struct SmoothingOptions {
   SmoothingMode mode = SmoothingMode::Untangle;
   int max_rounds = 20;     // rounds at most; 0 leaves the map as it is
-  double min_move = 1e-3;  // stop once no vertex moved farther (share of the mean base edge)
+  double min_move = 1e-2;  // stop once no vertex moved farther (share of the mean base edge)
 };
 
 struct SmoothingStatistics {
