@@ -152,11 +152,11 @@ double level_error_bound(const PreparedSurface& prepared, const ConvertOptions& 
   return std::max(kLevelErrorFloorCells, share * deviation.rms);
 }
 
-// The parametrization-based fit (fit/parametrized_fit.h) of `simplified`:
-// with automatic levels, level after level until the fitted fine mesh lies
+// The parametrization-based fit (fit/parametrized_fit.h) of `simplified`,
+// its map smoothed first (fit/map_smoothing.h): with automatic levels, level after level until the fitted fine mesh lies
 // within the bound of the extracted isosurface (D), at most 6, and not past a
-// fine mesh of 16 times the isosurface's vertices.
-std::shared_ptr<const SubdivisionHierarchy> fit_parametrized(const simplify::SimplifyResult& simplified,
+// fine mesh of kMaxFineShare times the isosurface's vertices.
+std::shared_ptr<const SubdivisionHierarchy> fit_parametrized(simplify::SimplifyResult& simplified,
                                                              const PreparedSurface& prepared,
                                                              const ConvertOptions& options, ConvertResult& result,
                                                              ProgressSink& progress) {
@@ -164,6 +164,7 @@ std::shared_ptr<const SubdivisionHierarchy> fit_parametrized(const simplify::Sim
   const PolygonMesh& surface = prepared.isosurface.mesh;
   result.max_error_cells = level_error_bound(prepared, options);
   result.level_errors_cells.clear();
+  result.map_smoothing = smooth_surface_map(simplified.map, surface, simplified.base.positions, options.map_smoothing);
   std::shared_ptr<const SubdivisionHierarchy> hierarchy;
   for (int levels = options.levels > 0 ? options.levels : 1;; ++levels) {
     check_memory(double(fine_vertex_count(simplified.base, levels)), kFitBytesPerFineVertex,
@@ -181,7 +182,7 @@ std::shared_ptr<const SubdivisionHierarchy> fit_parametrized(const simplify::Sim
     result.level_errors_cells.push_back(error);
     const double next_fine = fine_vertex_count(simplified.base, levels + 1);
     if (options.levels > 0 || error <= result.max_error_cells || levels == 6 ||
-        next_fine > 16.0 * double(result.extracted_vertices))
+        next_fine > kMaxFineShare * double(result.extracted_vertices))
       break;
   }
   result.fine_vertices = hierarchy->fine_vertex_count();
@@ -234,7 +235,7 @@ std::shared_ptr<const SubdivisionHierarchy> fit_surface(PreparedSurface& prepare
   if (options.fit == FitMethod::Parametrization) {
     // Every part of the surface is in the map: no distance field, no growth.
     simplify_options.surface_map = simplify::SurfaceMapping::Build;
-    const simplify::SimplifyResult simplified = simplify_base(prepared, simplify_options, options, result, progress);
+    simplify::SimplifyResult simplified = simplify_base(prepared, simplify_options, options, result, progress);
     return fit_parametrized(simplified, prepared, options, result, progress);
   }
   BackgroundDistance distance(prepared, options.prepare);
