@@ -244,6 +244,11 @@ std::shared_ptr<const SubdivisionHierarchy> fit_surface(PreparedSurface& prepare
   simplify::SimplifyOptions simplify_options = options.base.simplify;
   simplify_options.target_vertices = target = base_target(options.base, result.extracted_vertices);
   simplify_options.compute_distance = false;
+  // Each level multiplies the vertices by about 4 (the first by about 6): a
+  // lower bound of the fine mesh before the base mesh is made.
+  if (options.levels > 0)
+    check_memory(double(std::min(target, result.extracted_vertices)) * std::pow(4.0, options.levels),
+                 kFitBytesPerFineVertex, std::to_string(options.levels) + " levels");
   if (options.fit == FitMethod::Parametrization) {
     // Every part of the surface is in the map: no distance field, no growth.
     simplify_options.surface_map = simplify::SurfaceMapping::Build;
@@ -252,11 +257,6 @@ std::shared_ptr<const SubdivisionHierarchy> fit_surface(PreparedSurface& prepare
   }
   BackgroundDistance distance(prepared, options.prepare);
   simplify_options.serial_phase_begins = [&distance] { distance.start(); };
-  // Each level multiplies the vertices by about 4 (the first by about 6): a
-  // lower bound of the fine mesh before the base mesh is made.
-  if (options.levels > 0)
-    check_memory(double(std::min(target, result.extracted_vertices)) * std::pow(4.0, options.levels),
-                 kFitBytesPerFineVertex, std::to_string(options.levels) + " levels");
   std::shared_ptr<const SubdivisionHierarchy> hierarchy;
   for (result.base_attempts = 1;; ++result.base_attempts) {
     const PolygonMesh base = simplify_base(prepared, simplify_options, options, result, progress).base;
