@@ -152,6 +152,23 @@ double level_error_bound(const PreparedSurface& prepared, const ConvertOptions& 
   return std::max(kLevelErrorFloorCells, share * deviation.rms);
 }
 
+// FinePoints::OnTrilinearIsosurface: the fitted points move along the field
+// gradient onto the trilinear isosurface; a point the correction took
+// farther than kFinePointMoveCells (its fallbacks: a neighbours' centroid, a
+// wide search) goes back onto the extracted surface, where it was.
+void move_onto_isosurface(const SubdivisionHierarchy& hierarchy, const PreparedSurface& prepared,
+                          const ConvertOptions& options, ConvertResult& result) {
+  std::vector<Vec3>& positions = result.fit.positions;
+  const std::vector<Vec3> on_surface = positions;
+  const WrapLevelMesh level =
+      make_wrap_level_mesh(hierarchy, result.levels, positions, prepared.field, options.prepare.extract.iso);
+  result.fit.correction =
+      correct_to_isosurface(level, prepared.field, options.prepare.extract.iso, kFinePointMoveCells, positions);
+  const double reach = kFinePointMoveCells * result.cell_size;
+  for (std::size_t v = 0; v < positions.size(); ++v)
+    if (!(squared_norm(positions[v] - on_surface[v]) <= reach * reach)) positions[v] = on_surface[v];
+}
+
 // The parametrization-based fit (fit/parametrized_fit.h) of `simplified`,
 // its map smoothed first (fit/map_smoothing.h): with automatic levels, level after level until the fitted fine mesh lies
 // within the bound of the extracted isosurface (D), at most 6, and not past a
@@ -187,12 +204,7 @@ std::shared_ptr<const SubdivisionHierarchy> fit_parametrized(simplify::SimplifyR
   }
   result.fine_vertices = hierarchy->fine_vertex_count();
   result.fine_faces = hierarchy->step(result.levels).face_vertices.size();
-  if (options.fine_points == FinePoints::OnTrilinearIsosurface) {
-    const WrapLevelMesh level = make_wrap_level_mesh(*hierarchy, result.levels, result.fit.positions, prepared.field,
-                                                     options.prepare.extract.iso);
-    result.fit.correction = correct_to_isosurface(level, prepared.field, options.prepare.extract.iso,
-                                                  kFinePointMoveCells, result.fit.positions);
-  }
+  if (options.fine_points == FinePoints::OnTrilinearIsosurface) move_onto_isosurface(*hierarchy, prepared, options, result);
   result.fit.folded_faces = count_folded_faces(*hierarchy, result.levels, result.fit.positions, prepared.field,
                                                orientation_from_flip(options.prepare.extract.flip));
   check_fit(prepared, options, result);
@@ -232,6 +244,11 @@ std::shared_ptr<const SubdivisionHierarchy> fit_surface(PreparedSurface& prepare
   simplify::SimplifyOptions simplify_options = options.base.simplify;
   simplify_options.target_vertices = target = base_target(options.base, result.extracted_vertices);
   simplify_options.compute_distance = false;
+  // Each level multiplies the vertices by about 4 (the first by about 6): a
+  // lower bound of the fine mesh before the base mesh is made.
+  if (options.levels > 0)
+    check_memory(double(std::min(target, result.extracted_vertices)) * std::pow(4.0, options.levels),
+                 kFitBytesPerFineVertex, std::to_string(options.levels) + " levels");
   if (options.fit == FitMethod::Parametrization) {
     // Every part of the surface is in the map: no distance field, no growth.
     simplify_options.surface_map = simplify::SurfaceMapping::Build;
@@ -240,11 +257,6 @@ std::shared_ptr<const SubdivisionHierarchy> fit_surface(PreparedSurface& prepare
   }
   BackgroundDistance distance(prepared, options.prepare);
   simplify_options.serial_phase_begins = [&distance] { distance.start(); };
-  // Each level multiplies the vertices by about 4 (the first by about 6): a
-  // lower bound of the fine mesh before the base mesh is made.
-  if (options.levels > 0)
-    check_memory(double(std::min(target, result.extracted_vertices)) * std::pow(4.0, options.levels),
-                 kFitBytesPerFineVertex, std::to_string(options.levels) + " levels");
   std::shared_ptr<const SubdivisionHierarchy> hierarchy;
   for (result.base_attempts = 1;; ++result.base_attempts) {
     const PolygonMesh base = simplify_base(prepared, simplify_options, options, result, progress).base;
