@@ -416,9 +416,11 @@ void print_table_row(const std::string& output, const JobOutcome& o) {
                 "", levels.c_str(), 100.0 * r.max_error_cells, r.parametrization.stretch_min,
                 r.parametrization.stretch_max, r.parametrization.stretch_median, r.parametrization.fallback_points);
     const SmoothingStatistics& m = r.map_smoothing;
-    std::printf("%-28s map smoothing: %zu -> %zu inverted input triangles, %d rounds, mean move %.3g base edges, "
-                "%.2f s\n",
-                "", m.inverted_before, m.inverted_after, m.rounds, m.mean_move, m.seconds);
+    if (m.rounds == 0) std::printf("%-28s map smoothing: off\n", "");
+    else
+      std::printf("%-28s map smoothing: %zu -> %zu inverted input triangles, %d rounds, mean move %.3g base edges, "
+                  "%.2f s\n",
+                  "", m.inverted_before, m.inverted_after, m.rounds, m.mean_move, m.seconds);
   }
 }
 

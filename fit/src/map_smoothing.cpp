@@ -11,7 +11,6 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
-#include <tbb/parallel_reduce.h>
 
 #include "surface_map_inverse.h"  // Vec2, Corners, barycentric
 
@@ -570,6 +569,7 @@ SmoothingStatistics smooth_surface_map(simplify::SurfaceMap& map, const PolygonM
                                        const std::vector<Vec3>& base_positions, const SmoothingOptions& options) {
   const auto start = std::chrono::steady_clock::now();
   assert(map.vertex_count() == surface.vertex_count() && map.vertex_uv.size() == map.vertex_count());
+  if (options.max_rounds <= 0) return {};
   const BaseDomain domain = make_domain(map, base_positions);
   const InputMesh mesh = make_input(surface, map);
   const std::vector<std::vector<std::uint32_t>> classes = colour_classes(mesh);

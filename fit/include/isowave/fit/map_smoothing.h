@@ -18,9 +18,12 @@
 // across base edges into the neighbouring triangles; at the base mesh's
 // boundary it stops. Every round (Untangle and Relax) first moves the
 // vertices of inverted input triangles (image not positively oriented in the
-// moving vertex's frame), Relax then every free vertex; a move is kept only
-// if it turns over no input triangle round the vertex that was not turned
-// over, or lowers their count (tried at the full step, a half and a quarter).
+// moving vertex's frame), Relax then every free vertex that moved, or whose
+// neighbour moved, in the round before; a move is kept only if it turns over
+// no input triangle round the vertex that was not turned over, or lowers
+// their count, in the plane of its base triangle and, where it lands in
+// another, in that one's plane too (tried at the full step, a half and a
+// quarter).
 //
 // Isometric unfoldings round a base vertex whose angles do not sum to 2 pi
 // disagree from one base triangle's plane to the next; where input triangles
@@ -52,7 +55,7 @@ enum class SmoothingMode {
 
 struct SmoothingOptions {
   SmoothingMode mode = SmoothingMode::Untangle;
-  int max_rounds = 20;     // rounds at most; 0 leaves the map as it is
+  int max_rounds = 20;     // rounds at most; 0 returns at once (all statistics 0)
   double min_move = 1e-2;  // stop once no vertex moved farther (share of the mean base edge)
 };
 
@@ -73,8 +76,8 @@ struct SmoothingStatistics {
 // coordinates in [0, 1] (as parametrized_fit() checks); the surface's faces
 // are valid (validate_indices); faces of more than 3 corners are fanned from
 // their first corner. Cost per round: O(surface corners) times the base
-// triangles walked per neighbour (a few); memory about 60 bytes per input
-// vertex and 12 per input triangle.
+// triangles walked per neighbour (a few); memory about 40 bytes per input
+// vertex and 100 per input triangle.
 SmoothingStatistics smooth_surface_map(simplify::SurfaceMap& map, const PolygonMesh& surface,
                                        const std::vector<Vec3>& base_positions, const SmoothingOptions& options = {});
 
