@@ -151,9 +151,10 @@ double level_error_bound(const PreparedSurface& prepared, const ConvertOptions& 
 }
 
 // The parametrization-based fit (fit/parametrized_fit.h) of `simplified`,
-// its map smoothed first (fit/map_smoothing.h): with automatic levels, level after level until the fitted fine mesh lies
-// within the bound of the extracted isosurface (D), at most 6, and not past a
-// fine mesh of 16 times the isosurface's vertices.
+// its map smoothed first (fit/map_smoothing.h; in the fit's time): with
+// automatic levels, level after level until the fitted fine mesh lies within
+// the bound of the extracted isosurface (D), at most 6, and not past a fine
+// mesh of 16 times the isosurface's vertices.
 std::shared_ptr<const SubdivisionHierarchy> fit_parametrized(simplify::SimplifyResult& simplified,
                                                              const PreparedSurface& prepared,
                                                              const ConvertOptions& options, ConvertResult& result,
