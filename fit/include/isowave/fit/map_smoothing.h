@@ -18,20 +18,20 @@
 // across base edges into the neighbouring triangles; at the base mesh's
 // boundary it stops. Every round (Untangle and Relax) first moves the
 // vertices of inverted input triangles (image not positively oriented in the
-// moving vertex's frame), Relax then every free vertex that moved, or whose
-// neighbour moved, in the round before; a move is kept only if it turns over
-// no input triangle round the vertex that was not turned over, or lowers
-// their count, in the plane of its base triangle and, where it lands in
-// another, in that one's plane too (tried at the full step, a half and a
-// quarter).
+// moving vertex's frame), Relax then every other free vertex that moved, or
+// whose neighbour moved, in the round before, if all its neighbours lie in
+// its base triangle or the three across its edges; a move is kept only if
+// it turns over no input triangle round the vertex that was not turned
+// over, or lowers their count, in the plane of its base triangle and, where
+// it lands in another, in that one's plane too (tried at the full step, a
+// half and a quarter).
 //
-// Isometric unfoldings round a base vertex whose angles do not sum to 2 pi
-// disagree from one base triangle's plane to the next; where input triangles
-// are large against the base triangles (a few input vertices per base
-// triangle), Relax moves images across such corners, and the inverse map
-// (surface_map_inverse.h), unfolding from the other side, then finds more
-// parameter points in no image. Untangle moves only the tangled vertices,
-// and little: it is the default.
+// Why the restrictions: isometric unfoldings round a base vertex whose
+// angles do not sum to 2 pi disagree from one base triangle's plane to the
+// next. Where input triangles are large against the base triangles (a few
+// input vertices per base triangle), a vertex relaxed in its own plane round
+// such a corner leaves gaps in its neighbours' planes, and the inverse map
+// (surface_map_inverse.h) finds more parameter points in no image.
 //
 // Fixed: input vertices on the surface's boundary or not on a disk of
 // triangles, and those mapped onto a base vertex (the simplification's
