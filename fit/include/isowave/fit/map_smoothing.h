@@ -50,12 +50,12 @@ namespace isowave {
 
 enum class SmoothingMode {
   Untangle,  // move only the corners of inverted input triangles
-  Relax,     // then every free vertex toward its neighbours' mean-value mean
+  Relax,     // then every free vertex whose neighbours lie in its base triangle or across its edges
 };
 
 struct SmoothingOptions {
-  SmoothingMode mode = SmoothingMode::Untangle;
-  int max_rounds = 20;     // rounds at most; 0 returns at once (all statistics 0)
+  SmoothingMode mode = SmoothingMode::Relax;
+  int max_rounds = 10;     // rounds at most; 0 returns at once (all statistics 0)
   double min_move = 1e-2;  // stop once no vertex moved farther (share of the mean base edge)
 };
 
