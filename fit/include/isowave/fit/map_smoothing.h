@@ -7,18 +7,17 @@
 // SIGGRAPH 1998): each input vertex's parameter point moves toward
 // a weighted mean of its neighbours' parameter points, inside the base mesh.
 //
-// A Relax round moves every free input vertex once toward the mean of its
-// neighbours with Floater's mean-value weights of the input surface's 3D
-// geometry (Floater, CAGD 2003; positive for every triangle, so the mean
-// lies inside the neighbours' hull: a shape-preserving, low-distortion
-// parametrization), all unfolded isometrically into the plane of the
-// vertex's base triangle (across an edge, or round a shared base vertex the
-// way that puts the neighbour nearest, as the inverse map unfolds:
-// surface_map_inverse.h). A move that leaves the base triangle walks on
+// A round moves input vertices toward the mean of their neighbours with
+// Floater's mean-value weights of the input surface's 3D geometry (Floater,
+// CAGD 2003; positive for every triangle, so the mean lies inside the
+// neighbours' hull: a shape-preserving, low-distortion parametrization),
+// all unfolded isometrically into the plane of the moving vertex's base
+// triangle (across an edge, or round a shared base vertex the way that puts
+// the neighbour nearest, as the inverse map unfolds: surface_map_inverse.h). A move that leaves the base triangle walks on
 // across base edges into the neighbouring triangles; at the base mesh's
 // boundary it stops. Every round (Untangle and Relax) first moves the
 // vertices of inverted input triangles (image not positively oriented in the
-// moving vertex's frame), Relax then every other free vertex that moved, or
+// moving vertex's plane), Relax then every other free vertex that moved, or
 // whose neighbour moved, in the round before, if all its neighbours lie in
 // its base triangle or the three across its edges; a move is kept only if
 // it turns over no input triangle round the vertex that was not turned
