@@ -11,7 +11,6 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
-#include <tbb/parallel_reduce.h>
 
 #include "surface_map_inverse.h"  // Vec2, Corners, barycentric
 
@@ -463,7 +462,20 @@ bool acceptable(std::uint64_t before, std::uint64_t after) {
   return (after & ~before) == 0 || ones(after) < ones(before);
 }
 
-// Moves vertex i toward its neighbours' weighted mean: the first step that
+// Whether every neighbour of i lies in base triangle t or in one across its
+// edges: the unfoldings of those agree in every plane (not round a vertex).
+bool edge_local(const Context& c, std::uint32_t i, std::uint32_t t) {
+  const std::uint32_t* ids = c.mesh.neighbours.data() + 2 * c.mesh.star_offsets[i];
+  const auto& across = c.domain.across[t];
+  for (std::uint32_t k = 0; k < c.mesh.neighbour_count[i]; ++k) {
+    const std::uint32_t b = c.map.vertex_triangle[ids[k]];
+    if (b != t && b != across[0] && b != across[1] && b != across[2]) return false;
+  }
+  return true;
+}
+
+// Moves vertex i toward its neighbours' weighted mean (untangled vertices
+// only where edge_local): the first step that
 // is acceptable in the plane of its base triangle and, where it lands in
 // another base triangle, in that one's plane too (round a base vertex the
 // two planes disagree). Returns the distance moved in its plane.
@@ -481,6 +493,7 @@ double move_vertex(const Context& c, std::uint32_t i, Star& s, Star& landed, std
   tangled = before != 0;
   const std::uint32_t from = c.map.vertex_triangle[i];
   const std::array<double, 2> from_uv = c.map.vertex_uv[i];
+  if (!tangled && !edge_local(c, i, from)) return 0;
   for (const double step : kSteps) {
     Landing landing;
     if (!walk(c.domain, from, s.plane, s.point, s.point + step * (mean - s.point), landing)) continue;
@@ -570,6 +583,7 @@ SmoothingStatistics smooth_surface_map(simplify::SurfaceMap& map, const PolygonM
                                        const std::vector<Vec3>& base_positions, const SmoothingOptions& options) {
   const auto start = std::chrono::steady_clock::now();
   assert(map.vertex_count() == surface.vertex_count() && map.vertex_uv.size() == map.vertex_count());
+  if (options.max_rounds <= 0) return {};
   const BaseDomain domain = make_domain(map, base_positions);
   const InputMesh mesh = make_input(surface, map);
   const std::vector<std::vector<std::uint32_t>> classes = colour_classes(mesh);

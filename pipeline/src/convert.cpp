@@ -170,9 +170,10 @@ void move_onto_isosurface(const SubdivisionHierarchy& hierarchy, const PreparedS
 }
 
 // The parametrization-based fit (fit/parametrized_fit.h) of `simplified`,
-// its map smoothed first (fit/map_smoothing.h): with automatic levels, level after level until the fitted fine mesh lies
-// within the bound of the extracted isosurface (D), at most 6, and not past a
-// fine mesh of kMaxFineShare times the isosurface's vertices.
+// its map smoothed first (fit/map_smoothing.h; in the fit's time): with
+// automatic levels, level after level until the fitted fine mesh lies within
+// the bound of the extracted isosurface (D), at most 6, and not past a fine
+// mesh of kMaxFineShare times the isosurface's vertices.
 std::shared_ptr<const SubdivisionHierarchy> fit_parametrized(simplify::SimplifyResult& simplified,
                                                              const PreparedSurface& prepared,
                                                              const ConvertOptions& options, ConvertResult& result,

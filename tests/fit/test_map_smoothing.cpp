@@ -148,6 +148,7 @@ TEST(MapSmoothingTest, ZeroRoundsLeaveTheMap) {
   options.max_rounds = 0;
   const SmoothingStatistics s = smooth_surface_map(square.map, square.surface, square.base, options);
   EXPECT_EQ(s.rounds, 0);
+  EXPECT_EQ(s.inverted_before, 0u);  // not counted
   EXPECT_EQ(square.map.vertex_uv, before.vertex_uv);
   EXPECT_EQ(square.map.vertex_triangle, before.vertex_triangle);
 }
