@@ -77,10 +77,12 @@ std::vector<Vec3> area_samples(const PolygonMesh& mesh, std::size_t count, std::
 
 namespace {
 
-// RMS and maximum distance from `samples` to the surface of `target`, summed
-// in sample order (the same result for any thread count).
-void distances_to(const PolygonMesh& target, const std::vector<Vec3>& samples, double& rms, double& max) {
-  const std::vector<double> distance = BinnedSurfaceDistance(target).distances(samples);
+constexpr std::uint64_t kMeshSeed = 0x6d657368, kReferenceSeed = 0x72656665;
+
+// RMS and maximum distance from `samples` to the surface `target` measures,
+// summed in sample order (the same result for any thread count).
+void distances_to(const BinnedSurfaceDistance& target, const std::vector<Vec3>& samples, double& rms, double& max) {
+  const std::vector<double> distance = target.distances(samples);
   double sum = 0;
   max = 0;
   for (const double d : distance) {
@@ -92,13 +94,21 @@ void distances_to(const PolygonMesh& target, const std::vector<Vec3>& samples, d
 
 }  // namespace
 
-SurfaceError surface_error(const PolygonMesh& mesh, const PolygonMesh& reference, std::size_t samples) {
-  if (samples == 0) throw Error(ErrorKind::InvalidArgument, "surface error: at least one sample is needed");
-  constexpr std::uint64_t kMeshSeed = 0x6d657368, kReferenceSeed = 0x72656665;
+SurfaceErrorReference::SurfaceErrorReference(const PolygonMesh& reference, std::size_t samples)
+    : samples_(samples == 0 ? throw Error(ErrorKind::InvalidArgument, "surface error: at least one sample is needed")
+                            : samples),
+      reference_samples_(area_samples(reference, samples, kReferenceSeed)),
+      distance_(reference) {}
+
+SurfaceError SurfaceErrorReference::measure(const PolygonMesh& mesh) const {
   SurfaceError error;
-  distances_to(reference, area_samples(mesh, samples, kMeshSeed), error.forward_rms, error.forward_max);
-  distances_to(mesh, area_samples(reference, samples, kReferenceSeed), error.backward_rms, error.backward_max);
+  distances_to(distance_, area_samples(mesh, samples_, kMeshSeed), error.forward_rms, error.forward_max);
+  distances_to(BinnedSurfaceDistance(mesh), reference_samples_, error.backward_rms, error.backward_max);
   return error;
+}
+
+SurfaceError surface_error(const PolygonMesh& mesh, const PolygonMesh& reference, std::size_t samples) {
+  return SurfaceErrorReference(reference, samples).measure(mesh);
 }
 
 }  // namespace isowave

@@ -183,6 +183,7 @@ std::shared_ptr<const SubdivisionHierarchy> fit_parametrized(simplify::SimplifyR
   result.max_error_cells = level_error_bound(prepared, options);
   result.level_errors_cells.clear();
   result.map_smoothing = smooth_surface_map(simplified.map, surface, simplified.base.positions, options.map_smoothing);
+  const SurfaceErrorReference against_surface(surface, kErrorSamples);
   std::shared_ptr<const SubdivisionHierarchy> hierarchy;
   for (int levels = options.levels > 0 ? options.levels : 1;; ++levels) {
     check_memory(double(fine_vertex_count(simplified.base, levels)), kFitBytesPerFineVertex,
@@ -195,7 +196,7 @@ std::shared_ptr<const SubdivisionHierarchy> fit_parametrized(simplify::SimplifyR
     result.parametrization = fit.statistics;
     result.levels = levels;
     const double error =
-        surface_error(hierarchy->control_mesh(levels, result.fit.positions), surface, kErrorSamples).d() /
+        against_surface.measure(hierarchy->control_mesh(levels, result.fit.positions)).d() /
         result.cell_size;
     result.level_errors_cells.push_back(error);
     const double next_fine = fine_vertex_count(simplified.base, levels + 1);
@@ -427,6 +428,7 @@ Coded analyze_and_encode(const SubdivisionHierarchy& hierarchy, IswMetadata meta
 void measure_rows(const SubdivisionHierarchy& hierarchy, const IswDecoded& expected, const PolygonMesh& extracted,
                   ConvertResult& result) {
   result.summary_surface_error.clear();
+  const SurfaceErrorReference against_surface(extracted, kErrorSamples);
   for (std::size_t k = 0; k < result.summary.size(); ++k) {
     if (k > 0 && result.summary[k].kept == result.summary[k - 1].kept) {
       result.summary_surface_error.push_back(result.summary_surface_error.back());
@@ -434,7 +436,7 @@ void measure_rows(const SubdivisionHierarchy& hierarchy, const IswDecoded& expec
     }
     const PolygonMesh decoded =
         hierarchy.control_mesh(result.levels, reconstruct(expected, result.summary[k].kept));
-    result.summary_surface_error.push_back(surface_error(decoded, extracted, kErrorSamples).d() /
+    result.summary_surface_error.push_back(against_surface.measure(decoded).d() /
                                            result.cell_size);
   }
 }

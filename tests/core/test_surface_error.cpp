@@ -221,6 +221,20 @@ TEST(SurfaceError, SameResultForAnyThreadCount) {
   EXPECT_FALSE(area_samples(mesh, 50000, 18) == samples[0]) << "another seed gives other samples";
 }
 
+TEST(SurfaceError, AReferenceMeasuresManyMeshesAsEachAlone) {
+  const PolygonMesh reference = icosphere(4);
+  const SurfaceErrorReference against(reference, 5000);
+  for (const int levels : {1, 2, 3}) {
+    const SurfaceError once = against.measure(icosphere(levels));
+    const SurfaceError alone = surface_error(icosphere(levels), reference, 5000);
+    EXPECT_EQ(once.forward_rms, alone.forward_rms);
+    EXPECT_EQ(once.backward_rms, alone.backward_rms);
+    EXPECT_EQ(once.forward_max, alone.forward_max);
+    EXPECT_EQ(once.backward_max, alone.backward_max);
+  }
+  EXPECT_THROW(SurfaceErrorReference(reference, 0), Error);
+}
+
 TEST(SurfaceError, MeshesWithoutAreaAreRefused) {
   PolygonMesh empty, degenerate;
   degenerate.positions = {{0, 0, 0}, {1, 1, 1}, {2, 2, 2}};

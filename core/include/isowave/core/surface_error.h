@@ -13,6 +13,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "isowave/core/binned_surface_distance.h"
 #include "isowave/core/mesh.h"
 #include "isowave/core/vec3.h"
 
@@ -41,5 +42,20 @@ struct SurfaceError {
 // larger mesh. Throws Error(InvalidArgument) for samples == 0, a mesh without
 // area (see area_samples()) or with a non-finite position.
 SurfaceError surface_error(const PolygonMesh& mesh, const PolygonMesh& reference, std::size_t samples = 200000);
+
+// The same against one reference for many meshes (convert's levels and
+// summary rows): the reference's samples and distance bins are made once.
+// measure(mesh) equals surface_error(mesh, reference, samples). The
+// reference is not kept. Errors as surface_error().
+class SurfaceErrorReference {
+ public:
+  explicit SurfaceErrorReference(const PolygonMesh& reference, std::size_t samples = 200000);
+  SurfaceError measure(const PolygonMesh& mesh) const;
+
+ private:
+  std::size_t samples_;
+  std::vector<Vec3> reference_samples_;
+  BinnedSurfaceDistance distance_;
+};
 
 }  // namespace isowave

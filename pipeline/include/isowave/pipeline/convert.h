@@ -154,7 +154,7 @@ inline constexpr double kCorrectedLevelErrorShare = 1.0;
 inline constexpr double kMaxFineShare = 4.0;
 inline constexpr double kFinePointMoveCells = 0.5;
 // Samples each way for the D convert measures (levels, summary rows):
-// enough for a few per mille of noise.
+// enough for a few per mille of noise where no rare far point dominates.
 inline constexpr std::size_t kErrorSamples = 50000;
 inline constexpr double kLevelErrorFloorCells = 0.01;
 
