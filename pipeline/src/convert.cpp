@@ -10,6 +10,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
 #include "isowave/codec/importance.h"
@@ -424,21 +425,21 @@ Coded analyze_and_encode(const SubdivisionHierarchy& hierarchy, IswMetadata meta
 
 // D (surface_error.h) of the decoded surface of each summary row against
 // the extracted isosurface, in cells; rows keeping the same coefficients
-// share one.
+// share one. Rows in parallel: each one's distance bins are built serially.
 void measure_rows(const SubdivisionHierarchy& hierarchy, const IswDecoded& expected, const PolygonMesh& extracted,
                   ConvertResult& result) {
-  result.summary_surface_error.clear();
+  const std::vector<RateDistortionRow>& rows = result.summary;
+  std::vector<double>& errors = result.summary_surface_error;
+  errors.assign(rows.size(), 0.0);
   const SurfaceErrorReference against_surface(extracted, kErrorSamples);
-  for (std::size_t k = 0; k < result.summary.size(); ++k) {
-    if (k > 0 && result.summary[k].kept == result.summary[k - 1].kept) {
-      result.summary_surface_error.push_back(result.summary_surface_error.back());
-      continue;
-    }
-    const PolygonMesh decoded =
-        hierarchy.control_mesh(result.levels, reconstruct(expected, result.summary[k].kept));
-    result.summary_surface_error.push_back(against_surface.measure(decoded).d() /
-                                           result.cell_size);
-  }
+  const auto repeats = [&](std::size_t k) { return k > 0 && rows[k].kept == rows[k - 1].kept; };
+  tbb::parallel_for(std::size_t{0}, rows.size(), [&](std::size_t k) {
+    if (repeats(k)) return;
+    const PolygonMesh decoded = hierarchy.control_mesh(result.levels, reconstruct(expected, rows[k].kept));
+    errors[k] = against_surface.measure(decoded).d() / result.cell_size;
+  });
+  for (std::size_t k = 1; k < rows.size(); ++k)
+    if (repeats(k)) errors[k] = errors[k - 1];
 }
 
 // Error summary (error_table, as stats makes it), from what the file holds
