@@ -436,9 +436,8 @@ UnfoldStatistics unfold(const WrapLevelMesh& mesh, const Volume& field, double i
                            max_move_cells, positions);
 }
 
-std::size_t count_folded_faces(const SubdivisionHierarchy& hierarchy, int level, const std::vector<Vec3>& positions,
-                               const Volume& field, Orientation orientation) {
-  const WrapLevelMesh mesh = make_wrap_level_mesh(hierarchy, level, positions, field);
+std::size_t count_folded_faces(const WrapLevelMesh& mesh, const std::vector<Vec3>& positions, const Volume& field,
+                               Orientation orientation) {
   HugePageVector<std::uint8_t> folded;
   return wrap::find_folded_faces(mesh, TrilinearGrid(field), orientation, positions, folded);
 }

@@ -157,12 +157,10 @@ double level_error_bound(const PreparedSurface& prepared, const ConvertOptions& 
 // gradient onto the trilinear isosurface; a point the correction took
 // farther than kFinePointMoveCells (its fallbacks: a neighbours' centroid, a
 // wide search) goes back onto the extracted surface, where it was.
-void move_onto_isosurface(const SubdivisionHierarchy& hierarchy, const PreparedSurface& prepared,
-                          const ConvertOptions& options, ConvertResult& result) {
+void move_onto_isosurface(const WrapLevelMesh& level, const PreparedSurface& prepared, const ConvertOptions& options,
+                          ConvertResult& result) {
   std::vector<Vec3>& positions = result.fit.positions;
   const std::vector<Vec3> on_surface = positions;
-  const WrapLevelMesh level =
-      make_wrap_level_mesh(hierarchy, result.levels, positions, prepared.field, options.prepare.extract.iso);
   result.fit.correction =
       correct_to_isosurface(level, prepared.field, options.prepare.extract.iso, kFinePointMoveCells, positions);
   const double reach = kFinePointMoveCells * result.cell_size;
@@ -207,8 +205,11 @@ std::shared_ptr<const SubdivisionHierarchy> fit_parametrized(simplify::SimplifyR
   }
   result.fine_vertices = hierarchy->fine_vertex_count();
   result.fine_faces = hierarchy->step(result.levels).face_vertices.size();
-  if (options.fine_points == FinePoints::OnTrilinearIsosurface) move_onto_isosurface(*hierarchy, prepared, options, result);
-  result.fit.folded_faces = count_folded_faces(*hierarchy, result.levels, result.fit.positions, prepared.field,
+  // One connectivity of level L for the correction and the fold count.
+  const WrapLevelMesh level =
+      make_wrap_level_mesh(*hierarchy, result.levels, result.fit.positions, prepared.field, options.prepare.extract.iso);
+  if (options.fine_points == FinePoints::OnTrilinearIsosurface) move_onto_isosurface(level, prepared, options, result);
+  result.fit.folded_faces = count_folded_faces(level, result.fit.positions, prepared.field,
                                                orientation_from_flip(options.prepare.extract.flip));
   check_fit(prepared, options, result);
   result.seconds.fit += seconds_since(start);

@@ -86,11 +86,11 @@ void SurfaceMapTracker::place_on_circle(Lane& lane) {
   for (std::size_t k = 0; k < n; ++k) total += lane.arcs[k];
   const double floor = total > 0 && std::isfinite(total) ? kArcFloor * total / double(n) : 1.0;
   double sum = 0;
-  for (std::size_t k = 0; k < n; ++k) sum += std::isfinite(lane.arcs[k]) ? lane.arcs[k] + floor : floor;
+  for (double& arc : lane.arcs) sum += arc = (std::isfinite(arc) ? arc : 0.0) + floor;  // each edge's share
   double angle = 0;
   for (std::size_t k = 0; k < n; ++k) {
     lane.chart.push_back(ChartVertex{lane.polygon[k], std::cos(angle), std::sin(angle)});
-    angle += kTwoPi * (std::isfinite(lane.arcs[k]) ? lane.arcs[k] + floor : floor) / sum;
+    angle += kTwoPi * lane.arcs[k] / sum;
   }
 }
 
@@ -160,10 +160,9 @@ void SurfaceMapTracker::chart_inside(const CollapseMesh& mesh, std::uint32_t vi,
   const double xj = bx + w_ji * xi, yj = by + w_ji * yi;
   lane.chart.push_back(ChartVertex{vi, xi, yi});
   lane.chart.push_back(ChartVertex{vj, xj, yj});
-  if (position.x == mesh.position(vi).x && position.y == mesh.position(vi).y && position.z == mesh.position(vi).z)
+  if (position == mesh.position(vi))
     lane.new_vertex = {xi, yi};
-  else if (position.x == mesh.position(vj).x && position.y == mesh.position(vj).y &&
-           position.z == mesh.position(vj).z)
+  else if (position == mesh.position(vj))
     lane.new_vertex = {xj, yj};
   else
     lane.new_vertex = {0.5 * (xi + xj), 0.5 * (yi + yj)};

@@ -82,7 +82,8 @@ class SurfaceMapTracker {
   // lane.polygon: the region's boundary, counter-clockwise, from lane.triangles.
   static void boundary_polygon(const CollapseMesh& mesh, Lane& lane);
   // Appends lane.polygon to lane.chart on the unit circle, each edge's arc
-  // proportional to lane.arcs (its length) plus kArcFloor of the mean.
+  // proportional to lane.arcs (its length) plus kArcFloor of the mean;
+  // lane.arcs then holds those shares.
   static void place_on_circle(Lane& lane);
   // The chart position of interior vertex v from its neighbours' (all in the
   // chart except `unplaced`, whose weight is returned): the mean-value

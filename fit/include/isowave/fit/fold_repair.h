@@ -16,7 +16,6 @@
 #include "isowave/core/volume.h"
 #include "isowave/fit/orientation.h"
 #include "isowave/fit/wrap_level_mesh.h"
-#include "isowave/transform/hierarchy.h"
 
 namespace isowave {
 
@@ -58,12 +57,11 @@ struct UnfoldStatistics {
 UnfoldStatistics unfold(const WrapLevelMesh& mesh, const Volume& field, double iso, Orientation orientation,
                         int rounds, double max_move_cells, std::vector<Vec3>& positions);
 
-// The faces of level `level` of `hierarchy`, with control points `positions`
-// (at least vertex_count(level)), whose normal disagrees with the gradient of
-// `field` at their centroid (orientation.h): the folds a fit reports.
-// Parallel, deterministic; O(vertices) for the level's connectivity, then
-// one gradient sample per face.
-std::size_t count_folded_faces(const SubdivisionHierarchy& hierarchy, int level, const std::vector<Vec3>& positions,
-                               const Volume& field, Orientation orientation);
+// The faces of `mesh`, with control points `positions` (at least
+// mesh.vertex_count), whose normal disagrees with the gradient of `field` at
+// their centroid (orientation.h): the folds a fit reports. Parallel,
+// deterministic; one gradient sample per face.
+std::size_t count_folded_faces(const WrapLevelMesh& mesh, const std::vector<Vec3>& positions, const Volume& field,
+                               Orientation orientation);
 
 }  // namespace isowave
