@@ -103,10 +103,6 @@ cli::CommandSpec convert_spec() {
        "subdivision levels 1..6, or 'auto' (default): with the parametrization the fewest within --max-error, with "
        "the shrink-wrap the fine mesh as large as the isosurface",
        "L|auto"},
-      {"map-smoothing", true,
-       "with --fit parametrization: 'relax' (default: the map's vertices move toward their neighbours' mean, the "
-       "corners of inverted triangles first), 'untangle' (only those) or 'off'",
-       "MODE"},
       {"max-error", true,
        "with --fit parametrization and --levels auto: the bound on the fitted surface's sampling error D, in cells "
        "(default: the marching-cubes mesh's own distance from the isosurface)",
@@ -158,12 +154,6 @@ ConvertOptions convert_options_from(const cli::Arguments& args) {
   if (fit == "parametrization") options.fit = FitMethod::Parametrization;
   else if (fit != "shrink-wrap")
     throw Error(ErrorKind::InvalidArgument, "--fit must be 'shrink-wrap' or 'parametrization', not '" + fit + "'");
-  const std::string smoothing = args.get("map-smoothing", "relax");
-  if (smoothing == "untangle") options.map_smoothing.mode = SmoothingMode::Untangle;
-  else if (smoothing == "off") options.map_smoothing.max_rounds = 0;
-  else if (smoothing != "relax")
-    throw Error(ErrorKind::InvalidArgument,
-                "--map-smoothing must be 'untangle', 'relax' or 'off', not '" + smoothing + "'");
   options.max_error_cells = args.get_double("max-error", 0.0);
   if (!(options.max_error_cells > 0) && args.has("max-error"))
     throw Error(ErrorKind::InvalidArgument, "--max-error must be a positive number of cells");
@@ -418,12 +408,6 @@ void print_table_row(const std::string& output, const JobOutcome& o) {
                 "nearest input triangle\n",
                 "", levels.c_str(), 100.0 * r.max_error_cells, r.parametrization.stretch_min,
                 r.parametrization.stretch_max, r.parametrization.stretch_median, r.parametrization.fallback_points);
-    const SmoothingStatistics& m = r.map_smoothing;
-    if (m.rounds == 0) std::printf("%-28s map smoothing: off\n", "");
-    else
-      std::printf("%-28s map smoothing: %zu -> %zu inverted input triangles, %d rounds, mean move %.3g base edges, "
-                  "%.2f s\n",
-                  "", m.inverted_before, m.inverted_after, m.rounds, m.mean_move, m.seconds);
   }
 }
 

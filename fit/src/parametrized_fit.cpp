@@ -10,6 +10,7 @@
 #include <tbb/parallel_for.h>
 
 #include "isowave/core/error.h"
+#include "history_inverse.h"
 #include "surface_map_inverse.h"
 
 namespace isowave {
@@ -354,10 +355,12 @@ ParametrizedFitResult parametrized_fit(const SubdivisionHierarchy& hierarchy, co
   check_map_sizes(hierarchy.base(), surface, map);
   const IndexRows by_face = triangles_by_face(map, hierarchy.base().face_count());
   check_inputs(hierarchy.base(), base_positions, surface, map, by_face);
+  if (!map.history.empty()) check_history(map.history, map.triangle_count(), surface.vertex_count());
   const std::vector<MapPoint> queries = parameter_points(hierarchy, map, by_face);
   progress.update(0.3);
 
-  InverseMapResult points = inverse_map(map, base_positions, surface, queries);
+  InverseMapResult points = map.history.empty() ? inverse_map(map, base_positions, surface, queries)
+                                                 : inverse_map_by_history(map.history, surface.positions, queries);
   ParametrizedFitResult result;
   result.positions = std::move(points.points);
   result.statistics.fine_vertices = result.positions.size();

@@ -168,12 +168,11 @@ void move_onto_isosurface(const WrapLevelMesh& level, const PreparedSurface& pre
     if (!(squared_norm(positions[v] - on_surface[v]) <= reach * reach)) positions[v] = on_surface[v];
 }
 
-// The parametrization-based fit (fit/parametrized_fit.h) of `simplified`,
-// its map smoothed first (fit/map_smoothing.h; in the fit's time): with
+// The parametrization-based fit (fit/parametrized_fit.h) of `simplified`: with
 // automatic levels, level after level until the fitted fine mesh lies within
 // the bound of the extracted isosurface (D), at most 6, and not past a fine
 // mesh of kMaxFineShare times the isosurface's vertices.
-std::shared_ptr<const SubdivisionHierarchy> fit_parametrized(simplify::SimplifyResult& simplified,
+std::shared_ptr<const SubdivisionHierarchy> fit_parametrized(const simplify::SimplifyResult& simplified,
                                                              const PreparedSurface& prepared,
                                                              const ConvertOptions& options, ConvertResult& result,
                                                              ProgressSink& progress) {
@@ -181,7 +180,6 @@ std::shared_ptr<const SubdivisionHierarchy> fit_parametrized(simplify::SimplifyR
   const PolygonMesh& surface = prepared.isosurface.mesh;
   result.max_error_cells = level_error_bound(prepared, options);
   result.level_errors_cells.clear();
-  result.map_smoothing = smooth_surface_map(simplified.map, surface, simplified.base.positions, options.map_smoothing);
   const SurfaceErrorReference against_surface(surface, kErrorSamples);
   std::shared_ptr<const SubdivisionHierarchy> hierarchy;
   for (int levels = options.levels > 0 ? options.levels : 1;; ++levels) {
@@ -256,6 +254,7 @@ std::shared_ptr<const SubdivisionHierarchy> fit_surface(PreparedSurface& prepare
   if (options.fit == FitMethod::Parametrization) {
     // Every part of the surface is in the map: no distance field, no growth.
     simplify_options.surface_map = simplify::SurfaceMapping::Build;
+    simplify_options.max_vertex_area_share = kParametrizationAreaShare;
     simplify::SimplifyResult simplified = simplify_base(prepared, simplify_options, options, result, progress);
     return fit_parametrized(simplified, prepared, options, result, progress);
   }
@@ -315,9 +314,12 @@ std::string fold_cause(const ConvertResult& result, const ConvertOptions& option
 
 // The warnings on the base mesh and the fit (one line each).
 void add_fit_warnings(const ConvertOptions& options, std::size_t target, ConvertResult& result) {
-  if (result.base_vertices > 3 * target / 2) {
+  // The parametrization's area budget alone keeps target / share vertices.
+  const double floor = options.fit == FitMethod::Parametrization ? double(target) / kParametrizationAreaShare
+                                                                  : double(target);
+  if (double(result.base_vertices) > 1.5 * floor) {
     std::ostringstream warning;
-    warning << "the base mesh keeps " << result.base_vertices << " vertices (target " << target
+    warning << "the base mesh keeps " << result.base_vertices << " vertices (target " << std::llround(floor)
             << "): the isosurface has " << result.extraction.after.components << " components and genus "
             << result.extraction.after.genus
             << ", which the base mesh must keep; --min-component-vertices N and --smooth SIGMA remove small bubbles "

@@ -109,6 +109,7 @@ std::uint32_t CollapseMesh::collapse(std::uint32_t e, const Vec3& position, std:
   vertices_[vi].flags |= vertices_[vj].flags & (kSharp | kBoundary);
   if (boundary_edge) --loop_size_[vertices_[vi].boundary_loop];
   vertices_[vi].position = position;
+  if (!vertex_area_.empty()) vertex_area_[vi] += vertex_area_[vj];
   vertices_[vj].halfedge = kNone;
   vertices_[vj].boundary_loop = kNone;
   ++counts.removed_vertices;

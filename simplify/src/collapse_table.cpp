@@ -103,6 +103,7 @@ void CollapseMesh::build(const PolygonMesh& mesh, const std::uint32_t* order) {
   build_vertices(mesh, order);
   build_corners(mesh, order, new_index);
   std::vector<std::uint32_t>().swap(new_index);
+  if (rules_.max_vertex_area > 0) share_area();
   pair_corners();
   number_edges();
   initial_vertices_ = vertex_count;
@@ -162,6 +163,17 @@ void CollapseMesh::build_corners(const PolygonMesh& mesh, const std::uint32_t* o
     }
   });
   if (repeated_vertex) not_manifold("a triangle uses a vertex twice");
+}
+
+void CollapseMesh::share_area() {
+  vertex_area_.assign(vertices_.size(), 0.0f);
+  for (std::uint32_t t = 0; 3 * t < corners_.size(); ++t) {
+    const Vec3& a = vertices_[corners_[3 * t].vertex].position;
+    const Vec3 ab = vertices_[corners_[3 * t + 1].vertex].position - a;
+    const Vec3 ac = vertices_[corners_[3 * t + 2].vertex].position - a;
+    const float third = static_cast<float>(std::sqrt(squared_norm(cross(ab, ac))) / 6.0);
+    for (int k = 0; k < 3; ++k) vertex_area_[corners_[3 * t + k].vertex] += third;
+  }
 }
 
 void CollapseMesh::pair_corners() {

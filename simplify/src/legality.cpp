@@ -32,6 +32,7 @@ const char* to_string(Legality legality) {
     case Legality::LinkCondition: return "link condition";
     case Legality::NormalFlip: return "normal flip";
     case Legality::DegenerateTriangle: return "degenerate triangle";
+    case Legality::AreaBudget: return "area budget";
   }
   return "?";
 }
@@ -126,6 +127,8 @@ Legality CollapseMesh::vertex_rules(std::uint32_t e, int max_valence) const {
   const bool boundary_i = is_boundary(vi), boundary_j = is_boundary(vj);
   if (!boundary_edge && boundary_i && boundary_j) return Legality::InteriorEdgeOnBoundary;
   if (boundary_edge && loop_size_[vertices_[vi].boundary_loop] <= 3) return Legality::BoundaryLoopMinimum;
+  if (!vertex_area_.empty() && double(vertex_area_[vi]) + vertex_area_[vj] > rules_.max_vertex_area)
+    return Legality::AreaBudget;
 
   // Paper: the new vertex has valence N_i + N_j - 4 (a boundary edge has one
   // shared neighbour fewer: - 3); a and b lose one.

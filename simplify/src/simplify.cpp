@@ -33,6 +33,19 @@ void check_options(const SimplifyOptions& options) {
   if (options.max_flip_rounds < 0) fail("flip rounds must not be negative");
   if (!(options.batch_error_factor >= 1 && options.batch_error_factor <= 1e20))
     fail("batch error factor must be in [1, 1e20]");
+  if (!(options.max_vertex_area_share >= 0 && options.max_vertex_area_share <= 1e6))
+    fail("area share must be in [0, 1e6]");
+}
+
+// The triangles' total area.
+double surface_area(const PolygonMesh& mesh) {
+  double area = 0;
+  for (std::size_t f = 0; f < mesh.face_count(); ++f) {
+    const std::uint32_t* v = mesh.face_begin(f);
+    area += 0.5 * std::sqrt(squared_norm(cross(mesh.positions[v[1]] - mesh.positions[v[0]],
+                                               mesh.positions[v[2]] - mesh.positions[v[0]])));
+  }
+  return area;
 }
 
 // Error for anything wrong with the data.
@@ -60,6 +73,8 @@ CollapseMesh build_collapse_mesh(const PolygonMesh& input, const SimplifyOptions
   rules.min_normal_dot = options.collapse_min_normal_dot;
   rules.boundary_curve_error = options.boundary_curve_error;
   rules.flip_min_normal_dot = options.flip_min_normal_dot;
+  if (options.max_vertex_area_share > 0 && options.target_vertices > 0)
+    rules.max_vertex_area = options.max_vertex_area_share * surface_area(input) / double(options.target_vertices);
   const bool mapped = options.surface_map == SurfaceMapping::Build;
   CollapseMesh mesh = build_table(input, rules, source, mapped ? &vertex_order : nullptr);
   if (mapped) {

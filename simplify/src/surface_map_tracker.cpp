@@ -30,7 +30,16 @@ SurfaceMapTracker::SurfaceMapTracker(const CollapseMesh& mesh)
     : point_triangle_(mesh.vertex_slots()),
       point_uv_(mesh.vertex_slots()),
       next_point_(mesh.vertex_slots(), kNone),
-      first_point_(mesh.triangle_slots(), kNone) {
+      first_point_(mesh.triangle_slots(), kNone),
+      version_(mesh.triangle_slots()) {
+  history_.input_corners.resize(mesh.triangle_slots());
+  for (std::uint32_t t = 0; t < mesh.triangle_slots(); ++t) {
+    version_[t] = t;
+    for (int k = 0; k < 3; ++k) history_.input_corners[t][k] = mesh.origin(3 * t + static_cast<std::uint32_t>(k));
+  }
+  history_.chart_begin.push_back(0);
+  history_.consumed_begin.push_back(0);
+  history_.made_begin.push_back(mesh.triangle_slots());
   for (std::uint32_t v = 0; v < mesh.vertex_slots(); ++v) {
     assert(mesh.vertex_alive(v));
     const std::uint32_t corner = mesh.vertex_halfedge(v);
@@ -211,6 +220,47 @@ void SurfaceMapTracker::chart_boundary_edge(const CollapseMesh& mesh, std::uint3
   lane.new_vertex = {k.x, k.y};
 }
 
+std::uint8_t SurfaceMapTracker::chart_index(const Lane& lane, std::uint32_t v) {
+  const std::size_t k = static_cast<std::size_t>(&chart_of(lane, v) - lane.chart.data());
+  assert(k < 255);
+  return static_cast<std::uint8_t>(k);
+}
+
+void SurfaceMapTracker::note_consumed(const CollapseMesh& mesh, Lane& lane) const {
+  lane.consumed.clear();
+  lane.consumed_corners.clear();
+  for (const std::uint32_t t : lane.triangles) {
+    lane.consumed.push_back(version_[t]);
+    lane.consumed_corners.push_back({chart_index(lane, mesh.origin(3 * t)), chart_index(lane, mesh.origin(3 * t + 1)),
+                                     chart_index(lane, mesh.origin(3 * t + 2))});
+  }
+}
+
+void SurfaceMapTracker::record(const CollapseMesh& mesh, const Lane& lane) {
+  const auto new_vertex = static_cast<std::uint8_t>(lane.chart.size());
+  const std::lock_guard<std::mutex> lock(history_mutex_);
+  SurfaceMapHistory& h = history_;
+  for (const ChartVertex& c : lane.chart) h.chart.push_back({static_cast<float>(c.x), static_cast<float>(c.y)});
+  if (lane.survivor != kNone)
+    h.chart.push_back({static_cast<float>(lane.new_vertex[0]), static_cast<float>(lane.new_vertex[1])});
+  h.chart_begin.push_back(static_cast<std::uint32_t>(h.chart.size()));
+  h.consumed.insert(h.consumed.end(), lane.consumed.begin(), lane.consumed.end());
+  h.consumed_corners.insert(h.consumed_corners.end(), lane.consumed_corners.begin(), lane.consumed_corners.end());
+  h.consumed_begin.push_back(static_cast<std::uint32_t>(h.consumed.size()));
+  std::uint32_t version = h.made_begin.back();
+  for (const std::uint32_t t : lane.triangles) {
+    if (mesh.origin(3 * t) == kNone) continue;  // deleted by the collapse
+    std::array<std::uint8_t, 3> corners{};
+    for (int k = 0; k < 3; ++k) {
+      const std::uint32_t v = mesh.origin(3 * t + static_cast<std::uint32_t>(k));
+      corners[k] = v == lane.survivor ? new_vertex : chart_index(lane, v);
+    }
+    h.made_corners.push_back(corners);
+    version_[t] = version++;
+  }
+  h.made_begin.push_back(version);
+}
+
 void SurfaceMapTracker::take_points(const CollapseMesh& mesh, Lane& lane) {
   lane.carried.clear();
   for (const std::uint32_t t : lane.triangles) {
@@ -293,6 +343,7 @@ void SurfaceMapTracker::before_collapse(const CollapseMesh& mesh, std::uint32_t 
   else
     chart_one_on_boundary(mesh, on_i ? vi : vj, on_i ? vj : vi, lane);
   take_points(mesh, lane);
+  note_consumed(mesh, lane);
   lane.survivor = vi;
 }
 
@@ -301,6 +352,7 @@ void SurfaceMapTracker::after_collapse(const CollapseMesh& mesh, std::uint32_t s
   assert(survivor == lane.survivor);
   (void)survivor;
   place_points(mesh, lane);
+  record(mesh, lane);
 }
 
 void SurfaceMapTracker::before_flip(const CollapseMesh& mesh, std::uint32_t e, int lane_index) {
@@ -312,16 +364,19 @@ void SurfaceMapTracker::before_flip(const CollapseMesh& mesh, std::uint32_t e, i
   set_lengths(mesh, lane);
   place_on_circle(lane);
   take_points(mesh, lane);
+  note_consumed(mesh, lane);
   lane.survivor = kNone;
 }
 
 void SurfaceMapTracker::after_flip(const CollapseMesh& mesh, std::uint32_t e, int lane_index) {
   (void)e;
-  place_points(mesh, lanes_[static_cast<std::size_t>(lane_index)]);
+  Lane& lane = lanes_[static_cast<std::size_t>(lane_index)];
+  place_points(mesh, lane);
+  record(mesh, lane);
 }
 
 SurfaceMap SurfaceMapTracker::finish(const CollapseMesh& mesh, const std::vector<std::uint32_t>& vertex_map,
-                                     const std::vector<std::uint32_t>& input_of_vertex) const {
+                                     const std::vector<std::uint32_t>& input_of_vertex) {
   SurfaceMap map;
   std::vector<std::uint32_t> compact(mesh.triangle_slots(), kNone);
   for (std::uint32_t t = 0; t < mesh.triangle_slots(); ++t) {
@@ -330,6 +385,12 @@ SurfaceMap SurfaceMapTracker::finish(const CollapseMesh& mesh, const std::vector
     map.triangles.push_back(
         {vertex_map[mesh.origin(3 * t)], vertex_map[mesh.origin(3 * t + 1)], vertex_map[mesh.origin(3 * t + 2)]});
   }
+  history_.base_version.resize(map.triangles.size());
+  for (std::uint32_t t = 0; t < mesh.triangle_slots(); ++t)
+    if (compact[t] != kNone) history_.base_version[compact[t]] = version_[t];
+  for (auto& corners : history_.input_corners)
+    for (std::uint32_t& v : corners) v = input_of_vertex[v];
+  map.history = std::move(history_);
   map.triangle_face.resize(map.triangles.size());
   for (std::uint32_t t = 0; t < map.triangle_face.size(); ++t) map.triangle_face[t] = t;
   map.vertex_triangle.resize(point_triangle_.size());

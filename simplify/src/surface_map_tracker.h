@@ -16,6 +16,10 @@
 // endpoint on the chord between its neighbours, so that the region keeps
 // its shape. A flip's quad lies on the circle: both diagonals embed.
 //
+// The history (SurfaceMapHistory): every operation's chart, the triangles it
+// consumed and those it made, appended under a mutex (one short append per
+// operation); per triangle slot its current version.
+//
 // Storage: per input vertex its triangle slot, barycentric (u, v) and the
 // next vertex of its triangle's list; per triangle slot the first one. Flat
 // arrays: millions of points, and one list per triangle keeps a relocation
@@ -23,6 +27,7 @@
 // lanes' operations touch disjoint triangles, as collapse_inside() ensures.
 #include <array>
 #include <cstdint>
+#include <mutex>
 #include <vector>
 
 #include "isowave/core/vec3.h"
@@ -49,8 +54,9 @@ class SurfaceMapTracker {
   // CollapseMesh::to_polygon_mesh() makes them, `input_of_vertex[k]` the
   // input index of table vertex k; each triangle its own face (edge removal
   // sets triangle_face later). O(vertices + triangles).
+  // Moves the history into the result: call once.
   SurfaceMap finish(const CollapseMesh& mesh, const std::vector<std::uint32_t>& vertex_map,
-                    const std::vector<std::uint32_t>& input_of_vertex) const;
+                    const std::vector<std::uint32_t>& input_of_vertex);
 
  private:
   static constexpr std::uint32_t kNone = CollapseMesh::kNone;
@@ -74,6 +80,8 @@ class SurfaceMapTracker {
     std::vector<std::uint32_t> ring;                        // scratch: a vertex's neighbours
     std::vector<double> weights;                            // scratch: their weights
     std::vector<double> corner_xy;                          // scratch: chart corners of lane.triangles
+    std::vector<std::uint32_t> consumed;                    // versions of lane.triangles before the operation
+    std::vector<std::array<std::uint8_t, 3>> consumed_corners;  // their corners in lane.chart
     std::uint32_t survivor = kNone;                         // the collapse's survivor (kNone for a flip)
   };
 
@@ -109,11 +117,23 @@ class SurfaceMapTracker {
   // nearest to lying (rounding), its barycentric coordinates clamped.
   void place_points(const CollapseMesh& mesh, Lane& lane);
 
+  // Index of vertex v in lane.chart (precondition: present, under 255 vertices).
+  static std::uint8_t chart_index(const Lane& lane, std::uint32_t v);
+  // Notes lane.triangles' versions and chart corners before the operation.
+  void note_consumed(const CollapseMesh& mesh, Lane& lane) const;
+  // Appends the operation to the history: its chart (the survivor's new
+  // position as one more vertex), what it consumed, and the region's live
+  // triangles as new versions.
+  void record(const CollapseMesh& mesh, const Lane& lane);
+
   std::vector<std::uint32_t> point_triangle_;  // per table vertex (input point)
   std::vector<std::array<double, 2>> point_uv_;
   std::vector<std::uint32_t> next_point_;      // list link, kNone at the end
   std::vector<std::uint32_t> first_point_;     // per triangle slot
   std::array<Lane, CollapseMesh::kLanes> lanes_;
+  std::vector<std::uint32_t> version_;  // per triangle slot
+  SurfaceMapHistory history_;
+  std::mutex history_mutex_;
 };
 
 }  // namespace isowave::simplify

@@ -16,6 +16,7 @@
 #include "isowave/extract/builtin_fields.h"
 #include "isowave/extract/isosurface.h"
 #include "isowave/extract/volume_io.h"
+#include "isowave/simplify/collapse_mesh.h"
 #include "isowave/simplify/simplify.h"
 #include "simplify_test_meshes.h"
 
@@ -367,6 +368,26 @@ ErrorKind error_kind_of(const PolygonMesh& mesh, const SimplifyOptions& options 
   return ErrorKind::Io;
 }
 
+// The area budget (SimplifyOptions::max_vertex_area_share): every vertex
+// holds a share of the input's area and the shares sum to the whole, so with
+// no vertex above share * area / target the base keeps at least target /
+// share vertices; without the budget the same collapse reaches the target.
+TEST(SimplifyAreaBudget, KeepsAtLeastTargetOverShareVertices) {
+  IsosurfaceOptions extract;
+  const PolygonMesh input = extract_isosurface(make_builtin_field("mixing", 32), extract).mesh;
+  SimplifyOptions options;
+  options.target_vertices = input.vertex_count() / 20;
+  options.compute_distance = false;
+  const std::size_t free_base = simplify(input, options).base.vertex_count();
+  EXPECT_LT(double(free_base), 1.5 * double(options.target_vertices)) << "the collapse alone nears the target";
+  for (const double share : {0.5, 0.25}) {
+    options.max_vertex_area_share = share;
+    const SimplifyResult result = simplify(input, options);
+    EXPECT_GE(double(result.base.vertex_count()), double(options.target_vertices) / share - 1) << share;
+    EXPECT_GT(result.report.rejected_at_pop[static_cast<int>(Legality::AreaBudget)], 0u) << share;
+  }
+}
+
 TEST(SimplifyBadInput, NonManifoldEdge) {
   PolygonMesh mesh = test::tetrahedron();
   mesh.positions.push_back({0, 0, 5});
@@ -411,6 +432,9 @@ TEST(SimplifyBadInput, OptionsOutOfRange) {
   options.batch_error_factor = 0.5;
   EXPECT_EQ(error_kind_of(test::icosphere(1), options), ErrorKind::InvalidArgument);
   options.batch_error_factor = std::nan("");
+  EXPECT_EQ(error_kind_of(test::icosphere(1), options), ErrorKind::InvalidArgument);
+  options = {};
+  options.max_vertex_area_share = -1;
   EXPECT_EQ(error_kind_of(test::icosphere(1), options), ErrorKind::InvalidArgument);
 }
 

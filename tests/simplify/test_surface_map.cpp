@@ -5,7 +5,11 @@
 // not guaranteed to keep its orientation (each collapse's chart map is
 // piecewise affine, and a thin triangle across one of its kinks can turn
 // over, as in MAPS), so the tests bound the share of input triangles
-// mapped into one base triangle that turn over: kMaxInvertedShare.
+// mapped into one base triangle that turn over: kMaxInvertedShare. The
+// history (SurfaceMapHistory), which the fit inverts exactly, is checked for
+// what makes that inverse a bijection: every operation's consumed triangles
+// tile the same chart polygon as the triangles it made, and every triangle
+// ever made is consumed exactly once or is a base triangle.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -34,6 +38,55 @@ struct MapCheck {
   std::size_t duplicates = 0;     // input vertices sharing a parameter point
   double inverted_share() const { return same_triangle ? double(inverted) / double(same_triangle) : 0.0; }
 };
+
+// Checks the history's invariants (see the top of the file).
+void check_history(const PolygonMesh& input, const SurfaceMap& map) {
+  const SurfaceMapHistory& h = map.history;
+  ASSERT_EQ(h.input_corners.size(), input.face_count());
+  ASSERT_EQ(h.base_version.size(), map.triangle_count());
+  const std::size_t versions = h.made_begin.back();
+  std::vector<int> uses(versions, 0);
+  for (const std::uint32_t v : h.base_version) ++uses.at(v);
+  for (const std::uint32_t v : h.consumed) ++uses.at(v);
+  EXPECT_EQ(std::count(uses.begin(), uses.end(), 1), std::ptrdiff_t(versions)) << "a triangle used twice or never";
+  // The input triangles, as oriented triangles of input vertices (any order).
+  const auto canonical = [](std::array<std::uint32_t, 3> t) {
+    std::rotate(t.begin(), std::min_element(t.begin(), t.end()), t.end());
+    return t;
+  };
+  std::vector<std::array<std::uint32_t, 3>> expected, recorded;
+  for (std::size_t t = 0; t < input.face_count(); ++t) {
+    const std::uint32_t* f = input.face_begin(t);
+    expected.push_back(canonical({f[0], f[1], f[2]}));
+    recorded.push_back(canonical(h.input_corners[t]));
+  }
+  std::sort(expected.begin(), expected.end());
+  std::sort(recorded.begin(), recorded.end());
+  EXPECT_EQ(expected, recorded) << "the history's input triangles are not the input's";
+  std::size_t untiled = 0, flat_made = 0, turned = 0;
+  const auto area = [&](std::size_t r, const std::array<std::uint8_t, 3>& c) {
+    const auto* p = h.chart.data() + h.chart_begin[r];
+    return 0.5 * ((double(p[c[1]][0]) - p[c[0]][0]) * (double(p[c[2]][1]) - p[c[0]][1]) -
+                  (double(p[c[1]][1]) - p[c[0]][1]) * (double(p[c[2]][0]) - p[c[0]][0]));
+  };
+  for (std::size_t r = 0; r < h.operation_count(); ++r) {
+    double before = 0, after = 0;
+    for (std::uint32_t c = h.consumed_begin[r]; c < h.consumed_begin[r + 1]; ++c) {
+      const double a = area(r, h.consumed_corners[c]);
+      turned += a < -1e-7;
+      before += a;
+    }
+    for (std::uint32_t v = h.made_begin[r]; v < h.made_begin[r + 1]; ++v) {
+      const double a = area(r, h.made_corners[v - input.face_count()]);
+      flat_made += !(a > 0);
+      after += a;
+    }
+    untiled += std::abs(before - after) > 1e-5 * std::max(1.0, after);
+  }
+  EXPECT_EQ(untiled, 0u) << "operations whose triangles before and after cover different areas";
+  EXPECT_EQ(flat_made, 0u) << "made triangles without area";
+  EXPECT_EQ(turned, 0u) << "consumed triangles turned over in their chart";
+}
 
 // Checks the map's structure against the base mesh and counts folds.
 MapCheck check_map(const PolygonMesh& input, const SimplifyResult& result, const std::string& name) {
@@ -67,6 +120,7 @@ MapCheck check_map(const PolygonMesh& input, const SimplifyResult& result, const
     EXPECT_TRUE(u >= 0 && w >= 0 && u + w <= 1 + 1e-12) << "vertex " << v << ": " << u << ", " << w;
     if (++seen[{map.vertex_triangle[v], u, w}] > 1) ++check.duplicates;
   }
+  check_history(input, map);
   for (std::size_t f = 0; f < input.face_count(); ++f) {
     const std::uint32_t* corner = input.face_begin(f);
     const std::uint32_t t = map.vertex_triangle[corner[0]];

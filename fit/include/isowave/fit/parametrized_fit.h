@@ -14,12 +14,16 @@
 // vertex of an edge at the mean of its ends, in the chart (the dyadic
 // positions); v vertices keep their parent's position.
 //
-// Inverse map: a parameter point (base triangle T, u, v) is located among the
-// input triangles with a vertex mapped into T or spanning T around one of its
-// corners, unfolded isometrically into T's plane (base_positions' edge
-// lengths); its surface point is the barycentric combination of the input
-// triangle's vertices, so it lies on the surface (fit/src/
-// surface_map_inverse.h). Results are identical for any thread count (TBB).
+// Inverse map: a parameter point (base triangle T, u, v) goes back through
+// the map's history (the simplifier records one: fit/src/history_inverse.h),
+// operation by operation, to the input triangle it comes from: the exact
+// inverse of the map the collapse charts compose, a bijection. A map without
+// a history (built by hand) is inverted approximately instead: the point is
+// located among the input triangles with a vertex mapped into T or spanning
+// T around one of its corners, unfolded isometrically into T's plane
+// (fit/src/surface_map_inverse.h). Either way the surface point is a
+// barycentric combination of an input triangle's vertices, so it lies on the
+// surface. Results are identical for any thread count (TBB).
 #include <cstddef>
 #include <vector>
 
@@ -33,9 +37,10 @@ namespace isowave {
 
 struct ParametrizedFitStatistics {
   std::size_t fine_vertices = 0;    // control points of level L
-  // Parameter points found in no input triangle unfolded into their base
-  // triangle (within a 1e-9 barycentric tolerance); the input triangle whose
-  // smallest barycentric coordinate is largest gave the point, clamped onto it.
+  // Parameter points the inverse found in no triangle (the unfolded input
+  // triangles, or through the history a chart's triangles, beyond rounding);
+  // the triangle whose smallest barycentric coordinate is largest gave the
+  // point, clamped onto it. 0 expected with a history.
   std::size_t fallback_points = 0;
   // Level-L control mesh face areas (vector area of the face) divided by
   // their mean: the parameterization's stretch (issue #33, item 4). Zeros
@@ -58,15 +63,16 @@ struct ParametrizedFitResult {
 // base face of n corners does not have exactly n - 2 triangles that use only
 // its corners (each once per triangle, all of them, positively oriented and
 // tiling its chart), or a barycentric coordinate is not finite or outside
-// [0, 1] by more than 1e-6; or when base_positions has fewer than
+// [0, 1] by more than 1e-6, or its history is inconsistent (check_history); or when base_positions has fewer than
 // vertex_count(0) entries or a non-finite one. Throws Error(Format) for a
 // surface with an index out of range or a non-finite position
 // (validate_indices). Faces of the surface with more than 3 corners are fanned
 // from their first corner. Reports progress as one stage.
-// Cost: O(fine vertices + surface corners) time and memory besides the
-// result: at most about 60 bytes per fine vertex and 60 per surface triangle (a
-// few more for input triangles listed round low-valence or strongly curved
-// base vertices: surface_map_inverse.h).
+// Cost: with a history, O(history) to check it and, per fine vertex, the
+// operations between its base triangle and the input (a few dozen), about 40
+// bytes per fine vertex besides the result; without, O(fine vertices +
+// surface corners), at most about 60 bytes per fine vertex and 60 per surface
+// triangle (surface_map_inverse.h).
 ParametrizedFitResult parametrized_fit(const SubdivisionHierarchy& hierarchy, const std::vector<Vec3>& base_positions,
                                        const PolygonMesh& surface, const simplify::SurfaceMap& map,
                                        ProgressSink& progress = no_progress());

@@ -15,7 +15,6 @@
 #include "isowave/core/volume.h"
 #include "isowave/extract/isosurface.h"
 #include "isowave/fit/fit_quality.h"
-#include "isowave/fit/map_smoothing.h"
 #include "isowave/fit/parametrized_fit.h"
 #include "isowave/fit/shrink_wrap.h"
 #include "isowave/pipeline/prepare.h"
@@ -99,8 +98,6 @@ struct ConvertOptions {
   FinePoints fine_points = FinePoints::OnTrilinearIsosurface;
   // The shrink-wrap (Sec. 4.2); convert_volume() sets `surface` to the extracted mesh.
   ShrinkWrapOptions shrink_wrap;
-  // With the parametrization: the smoothing of the map before the fit reads it.
-  SmoothingOptions map_smoothing;
   // Quantization step in cells (IswEncodeOptions::step / cell size, > 0);
   // the expected RMSE it adds is about half of it.
   double step_cells = 0.01;
@@ -152,6 +149,12 @@ inline constexpr double kCorrectedLevelErrorShare = 1.0;
 // the isosurface's vertices (beyond it, a denser sampling of the same map
 // costs more than it gains).
 inline constexpr double kMaxFineShare = 4.0;
+// The parametrization's base mesh: no base vertex holds more than this
+// multiple of the isosurface's area per target vertex
+// (SimplifyOptions::max_vertex_area_share), so that a uniform refinement of
+// the base faces samples the surface evenly; the base keeps at least the
+// target divided by it.
+inline constexpr double kParametrizationAreaShare = 0.5;
 inline constexpr double kFinePointMoveCells = 0.5;
 // Samples each way for the D convert measures (levels, summary rows):
 // enough for a few per mille of noise where no rare far point dominates.
@@ -167,7 +170,6 @@ struct ConvertResult {
   // With FitMethod::Parametrization: the fit's figures, and D of the fitted
   // fine mesh against the extracted isosurface (cells) for the levels tried.
   ParametrizedFitStatistics parametrization;
-  SmoothingStatistics map_smoothing;
   std::vector<double> level_errors_cells;
   double max_error_cells = 0;  // the bound the automatic levels used
   // The hierarchy over the base mesh: control_mesh(levels, fit.positions) is the fitted fine mesh.

@@ -48,9 +48,10 @@ enum class Legality : std::uint8_t {
   LinkCondition,             // Hoppe / Dey et al.: common neighbours must be exactly a, b
   NormalFlip,                // a ring triangle's normal turns beyond the threshold
   DegenerateTriangle,        // a ring triangle would get zero area
+  AreaBudget,                // the new vertex would hold more surface than CollapseRules::max_vertex_area
 };
 const char* to_string(Legality legality);
-constexpr int kLegalityCount = 10;
+constexpr int kLegalityCount = 11;
 
 struct CollapseRules {
   int max_valence = 8;  // paper: valences 3..8 (2..8 on the boundary)
@@ -64,6 +65,11 @@ struct CollapseRules {
   double min_normal_dot = 0.0;
   // See SimplifyOptions::boundary_curve_error.
   bool boundary_curve_error = true;
+  // Not in the paper (0 reproduces it): each vertex holds a share of the
+  // input's area (a third of each input triangle at its corners; a collapse
+  // adds the removed vertex's to the survivor's), and a collapse whose new
+  // vertex would hold more than this (squared length units) is illegal.
+  double max_vertex_area = 0;
 };
 
 class CollapseMesh;
@@ -320,6 +326,7 @@ class CollapseMesh {
   void build_vertices(const PolygonMesh& mesh, const std::uint32_t* vertex_order);
   void build_corners(const PolygonMesh& mesh, const std::uint32_t* vertex_order,
                      const std::vector<std::uint32_t>& new_index);
+  void share_area();    // vertex_area_ from the triangles (CollapseRules::max_vertex_area)
   void pair_corners();  // opposites, vertex half-edges, valences, boundary flags
   void number_edges();
   void find_boundary_loops();
@@ -352,6 +359,7 @@ class CollapseMesh {
     std::uint8_t region;
   };
   HugePageVector<VertexRecord> vertices_;
+  std::vector<float> vertex_area_;  // with CollapseRules::max_vertex_area > 0: the area each vertex holds
   std::vector<std::uint32_t> loop_size_;  // vertices per boundary loop
   struct CornerRecord {
     std::uint32_t vertex;    // kNone = deleted triangle

@@ -90,6 +90,11 @@ struct SimplifyOptions {
   // admits; they stop early when one gains under 1% of the vertices.
   int max_flip_rounds = 1;
   int max_valence = 8;  // 3..32
+  // Not in the paper (0 reproduces it): no base vertex may hold more than
+  // this multiple of the input's area per target vertex (CollapseRules::
+  // max_vertex_area), so that base faces cover comparable parts of the
+  // surface, as a uniform refinement of them needs; in [0, 1e6].
+  double max_vertex_area_share = 0;
   // How a collapse updates its Fig. 8 stencil. false (the paper): every
   // stencil edge is re-evaluated at once. true (not in the paper): the edges
   // at the new vertex at once, the others keep their queued priority until
@@ -148,7 +153,7 @@ struct SimplifyReport {
   bool target_reached = false;
   std::string stop_reason;  // why collapsing stopped
   // Popped edges rejected by the re-evaluation, by Legality (see collapse_mesh.h).
-  std::array<std::size_t, 10> rejected_at_pop{};
+  std::array<std::size_t, 11> rejected_at_pop{};  // kLegalityCount
   std::vector<std::size_t> face_size_histogram;  // [s] = faces with s sides
   std::vector<std::size_t> valence_histogram;    // [k] = vertices of valence k
   std::size_t vertices_outside_valence_range = 0;
