@@ -17,7 +17,6 @@
 #include "isowave/codec/importance.h"
 #include "isowave/codec/statistics.h"
 #include "isowave/core/error.h"
-#include "isowave/core/mesh_topology.h"
 #include "isowave/core/surface_error.h"
 #include "isowave/fit/signed_distance.h"
 #include "isowave/transform/wavelet_transform.h"
@@ -259,7 +258,6 @@ std::shared_ptr<const SubdivisionHierarchy> fit_surface(PreparedSurface& prepare
   if (options.levels > 0)
     check_memory(double(std::min(target, result.extracted_vertices)) * std::pow(4.0, options.levels),
                  kFitBytesPerFineVertex, std::to_string(options.levels) + " levels");
-  result.max_error_cells = level_error_bound(prepared, options);
   if (options.fit == FitMethod::Parametrization) {
     // Every part of the surface is in the map: no distance field, no growth.
     simplify_options.surface_map = simplify::SurfaceMapping::Build;
@@ -295,8 +293,8 @@ std::shared_ptr<const SubdivisionHierarchy> fit_surface(PreparedSurface& prepare
 //   base mesh or more levels.
 // - Points left off the surface, or over kUncoveredCoarse of the surface
 //   left out: the base mesh spans whole parts of the surface and the folds
-//   are its own, which the pre-filter does not change; a larger base mesh. Not more levels: those make the folds of the next
-//   case worse.
+//   are its own, which the pre-filter does not change; a larger base mesh.
+//   Not more levels: those make the folds of the next case worse.
 // - Otherwise the folds sit on necks, tunnels and specks under a cell across
 //   (noisy scans and fine-grained fields, also where thin features are left
 //   out; more levels fold more there): a one-voxel pre-filter
@@ -450,8 +448,8 @@ void measure_rows(const SubdivisionHierarchy& hierarchy, const IswDecoded& expec
 // as the encoder stored it, without decoding the file again
 // (FileCheck::DecodeAgain does); and each row's D against the extracted isosurface.
 void evaluate(const std::shared_ptr<const SubdivisionHierarchy>& hierarchy, Coded coded,
-              const SurfaceErrorReference& against_surface, const std::string& source, const ConvertOptions& options, ConvertResult& result,
-              ProgressSink& progress) {
+              const SurfaceErrorReference& against_surface, const std::string& source, const ConvertOptions& options,
+              ConvertResult& result, ProgressSink& progress) {
   const auto start = Clock::now();
   progress.begin_stage("evaluate");
   const IswDecoded expected =
@@ -489,9 +487,11 @@ ConvertResult convert_volume(Volume volume, const std::string& source, const Con
   result.seconds.extract = seconds_since(start);
 
   std::size_t target = 0;
-  // D's reference, for the levels and the summary rows (in the fit's time).
+  // D's reference, for the levels and the summary rows, and the levels'
+  // bound (in the fit's time).
   const auto reference_start = Clock::now();
   const SurfaceErrorReference against_surface(prepared.isosurface.mesh, kErrorSamples);
+  result.max_error_cells = level_error_bound(prepared, options);
   result.seconds.fit = seconds_since(reference_start);
   const std::shared_ptr<const SubdivisionHierarchy> hierarchy =
       fit_surface(prepared, against_surface, options, result, target, progress);
