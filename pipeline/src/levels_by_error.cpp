@@ -8,7 +8,11 @@
 #include "isowave/pipeline/prepare.h"
 
 namespace isowave {
+namespace {
 
+// Areas of the faces of `mesh` (vector areas: polygons are not fanned)
+// divided by their mean: min, median, max in report.stretch_*; zeros
+// when the mean is 0. O(faces).
 void measure_stretch(const PolygonMesh& mesh, LevelReport& report) {
   std::vector<double> areas(mesh.face_count());
   double sum = 0;
@@ -28,8 +32,6 @@ void measure_stretch(const PolygonMesh& mesh, LevelReport& report) {
   report.stretch_min = *std::min_element(areas.begin(), areas.end()) / mean;
   report.stretch_max = *std::max_element(areas.begin(), areas.end()) / mean;
 }
-
-namespace {
 
 // D both ways, the folded share and the stretch of one fitted level.
 LevelReport report_level(int levels, const FittedLevel& fitted, const SurfaceErrorReference& reference,

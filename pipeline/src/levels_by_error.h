@@ -39,9 +39,4 @@ FittedLevel fit_levels_by_error(const PolygonMesh& base, const LevelRule& rule, 
                                 double cell_size, const std::function<FittedLevel(int levels)>& fit,
                                 std::vector<LevelReport>& reports);
 
-// Areas of the faces of `mesh` (vector areas: polygons are not fanned)
-// divided by their mean: min, median, max in report.stretch_*; zeros
-// when the mean is 0. O(faces).
-void measure_stretch(const PolygonMesh& mesh, LevelReport& report);
-
 }  // namespace isowave
