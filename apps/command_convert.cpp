@@ -348,7 +348,7 @@ void print_json_result(const JobOutcome& o) {
                 l.seconds);
   }
   std::printf("], ");
-  if (!r.level_reports.empty() && r.parametrization.fine_vertices > 0)
+  if (r.parametrization.fine_vertices > 0)
     std::printf("\"fit_fallback_points\": %zu, ", r.parametrization.fallback_points);
   for (std::size_t k = 0; k < r.warnings.size(); ++k)
     std::printf("%s%s", k ? ", " : "\"warnings\": [", cli::json_string(r.warnings[k]).c_str());
