@@ -100,12 +100,12 @@ cli::CommandSpec convert_spec() {
        "MAPS map of the extracted surface, moved onto the trilinear isosurface)",
        "METHOD"},
       {"levels", true,
-       "subdivision levels 1..6, or 'auto' (default): with the parametrization the fewest within --max-error, with "
-       "the shrink-wrap the fine mesh as large as the isosurface",
+       "subdivision levels 1..6, or 'auto' (default): the fewest whose fitted surface lies within --max-error of "
+       "the isosurface, at most a fine mesh 4 times the isosurface's vertices",
        "L|auto"},
       {"max-error", true,
-       "with --fit parametrization and --levels auto: the bound on the fitted surface's sampling error D, in cells "
-       "(default: the marching-cubes mesh's own distance from the isosurface)",
+       "with --levels auto: the bound on the fitted surface's error D, in cells (default: the marching-cubes "
+       "mesh's own distance from the isosurface)",
        "CELLS"},
       {"base-vertices", true, "base mesh vertex target", "N"},
       {"base-ratio", true,
@@ -326,12 +326,20 @@ void print_json_result(const JobOutcome& o) {
               r.levels, o.load_seconds, r.seconds.extract, r.seconds.simplify, r.seconds.distance, r.seconds.fit,
               r.seconds.analysis, r.seconds.encode, r.seconds.evaluate, r.fit_isosurface.rms, r.fit_isosurface.max,
               r.fit_isosurface.far, r.uncovered_share, r.folded_share(), r.base_attempts);
-  if (!r.level_errors_cells.empty()) {
-    std::printf("\"fit_d_percent_cell_by_level\": [");
-    for (std::size_t k = 0; k < r.level_errors_cells.size(); ++k)
-      std::printf("%s%.6g", k ? ", " : "", 100.0 * r.level_errors_cells[k]);
-    std::printf("], \"fit_fallback_points\": %zu, ", r.parametrization.fallback_points);
+  if (r.max_error_cells > 0) std::printf("\"max_error_percent_cell\": %.6g, ", 100.0 * r.max_error_cells);
+  std::printf("\"fit_levels\": [");
+  for (std::size_t k = 0; k < r.level_reports.size(); ++k) {
+    const LevelReport& l = r.level_reports[k];
+    std::printf("%s{\"levels\": %d, \"fine_vertices\": %zu, \"d_percent_cell\": %.6g, "
+                "\"forward_rms_percent_cell\": %.6g, \"backward_rms_percent_cell\": %.6g, \"folded_share\": %.6g, "
+                "\"stretch_min\": %.6g, \"stretch_median\": %.6g, \"stretch_max\": %.6g, \"seconds\": %.3f}",
+                k ? ", " : "", l.levels, l.fine_vertices, 100.0 * l.d_cells(), 100.0 * l.forward_rms_cells,
+                100.0 * l.backward_rms_cells, l.folded_share, l.stretch_min, l.stretch_median, l.stretch_max,
+                l.seconds);
   }
+  std::printf("], ");
+  if (r.parametrization.fine_vertices > 0)
+    std::printf("\"fit_fallback_points\": %zu, ", r.parametrization.fallback_points);
   for (std::size_t k = 0; k < r.warnings.size(); ++k)
     std::printf("%s%s", k ? ", " : "\"warnings\": [", cli::json_string(r.warnings[k]).c_str());
   std::printf("%s\"rows\": [", r.warnings.empty() ? "" : "], ");
@@ -366,6 +374,21 @@ void print_json(const std::vector<Job>& jobs, const std::vector<JobOutcome>& out
   std::printf("]}\n");
 }
 
+// One line per level the fit tried: D both ways, folds and stretch.
+void print_level_reports(const ConvertResult& r) {
+  for (const LevelReport& l : r.level_reports)
+    std::printf("%-28s level %d (%zu fine vertices): D %.3g%% cell (fitted -> isosurface %.3g, isosurface -> "
+                "fitted %.3g)%s; %.2f%% of the fine faces folded; face areas %.2g..%.2g of their mean (median "
+                "%.2g); %.2f s\n",
+                "", l.levels, l.fine_vertices, 100.0 * l.d_cells(), 100.0 * l.forward_rms_cells,
+                100.0 * l.backward_rms_cells,
+                r.max_error_cells > 0 ? (l.d_cells() <= r.max_error_cells ? ", within the bound" : ", over the bound")
+                                      : "",
+                100.0 * l.folded_share, l.stretch_min, l.stretch_max, l.stretch_median, l.seconds);
+  if (r.max_error_cells > 0)
+    std::printf("%-28s levels by error: the bound on D is %.3g%% cell\n", "", 100.0 * r.max_error_cells);
+}
+
 void print_table_row(const std::string& output, const JobOutcome& o) {
   const ConvertResult& r = o.result;
   std::string errors;
@@ -396,18 +419,10 @@ void print_table_row(const std::string& output, const JobOutcome& o) {
   if (r.base_attempts > 1)
     std::printf("%-28s the base mesh grew from %zu to %zu vertices (%d tries) to cover the isosurface\n", "",
                 r.first_base_vertices, r.base_vertices, r.base_attempts);
-  if (!r.level_errors_cells.empty()) {
-    std::string levels;
-    for (std::size_t k = 0; k < r.level_errors_cells.size(); ++k) {
-      std::snprintf(cell, sizeof cell, "%s%zu: %.3g", k ? ", " : "", r.levels - r.level_errors_cells.size() + k + 1,
-                    100.0 * r.level_errors_cells[k]);
-      levels += cell;
-    }
-    std::printf("%-28s parametrization: D of the fitted surface from the isosurface [%% cell] at levels %s "
-                "(bound %.3g); fine face areas %.2g..%.2g of their mean (median %.2g); %zu points located by the "
-                "nearest input triangle\n",
-                "", levels.c_str(), 100.0 * r.max_error_cells, r.parametrization.stretch_min,
-                r.parametrization.stretch_max, r.parametrization.stretch_median, r.parametrization.fallback_points);
+  print_level_reports(r);
+  if (r.parametrization.fine_vertices > 0) {
+    std::printf("%-28s parametrization: %zu points located by the nearest input triangle\n", "",
+                r.parametrization.fallback_points);
   }
 }
 

@@ -7,6 +7,7 @@
 #include <future>
 #include <iomanip>
 #include <memory>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 
@@ -16,10 +17,10 @@
 #include "isowave/codec/importance.h"
 #include "isowave/codec/statistics.h"
 #include "isowave/core/error.h"
-#include "isowave/core/mesh_topology.h"
 #include "isowave/core/surface_error.h"
 #include "isowave/fit/signed_distance.h"
 #include "isowave/transform/wavelet_transform.h"
+#include "levels_by_error.h"
 
 namespace isowave {
 
@@ -55,23 +56,6 @@ void check_options(const ConvertOptions& options) {
     throw Error(ErrorKind::InvalidArgument, "the quantization step must be positive");
   if (!(options.max_error_cells >= 0) || !std::isfinite(options.max_error_cells))
     throw Error(ErrorKind::InvalidArgument, "the maximum error must be a non-negative number of cells");
-}
-
-// The level whose fine mesh has about as many vertices as the isosurface.
-int automatic_levels(const PolygonMesh& base, std::size_t isosurface_vertices) {
-  int levels = 1;
-  double best = 1e300;
-  const std::vector<LevelCounts> counts = refinement_counts(level_counts(base, summarize_topology(base).edges), 6);
-  for (int l = 1; l <= 6; ++l) {
-    const double fine = std::floor(counts[static_cast<std::size_t>(l)].vertices);
-    const double misfit = std::abs(std::log(fine / static_cast<double>(isosurface_vertices)));
-    if (misfit < best) {
-      best = misfit;
-      levels = l;
-    }
-    if (fine > 4.0 * static_cast<double>(isosurface_vertices)) break;
-  }
-  return levels;
 }
 
 std::size_t base_target(const BaseMeshOptions& base, std::size_t extracted_vertices) {
@@ -129,7 +113,7 @@ void check_fit(const PreparedSurface& prepared, const ConvertOptions& options, C
 }
 
 // One base mesh of `target` vertices (simplify, Sec. 4.1), with the map for
-// the parametrization, and the shrink-wrap's levels.
+// the parametrization.
 simplify::SimplifyResult simplify_base(const PreparedSurface& prepared,
                                        const simplify::SimplifyOptions& simplify_options,
                                        const ConvertOptions& options, ConvertResult& result, ProgressSink& progress) {
@@ -138,19 +122,41 @@ simplify::SimplifyResult simplify_base(const PreparedSurface& prepared,
   result.simplification = simplified.report;
   result.base_vertices = simplified.base.vertex_count();
   if (result.base_attempts == 1) result.first_base_vertices = result.base_vertices;
-  result.levels = options.levels > 0 ? options.levels : automatic_levels(simplified.base, result.extracted_vertices);
   result.seconds.simplify += seconds_since(start);
   return simplified;
 }
 
-// The automatic levels' bound on D, in cells.
+// The automatic levels' bound on D, in cells (0 with fixed levels).
 double level_error_bound(const PreparedSurface& prepared, const ConvertOptions& options) {
+  if (options.levels > 0) return 0;
   if (options.max_error_cells > 0) return options.max_error_cells;
   const SurfaceDeviation deviation =
       extracted_surface_deviation(prepared.isosurface.mesh, prepared.field, options.prepare.extract.iso);
-  const double share =
-      options.fine_points == FinePoints::OnTrilinearIsosurface ? kCorrectedLevelErrorShare : kLevelErrorShare;
-  return std::max(kLevelErrorFloorCells, share * deviation.rms);
+  const bool corrected = options.fit == FitMethod::Parametrization
+                             ? options.fine_points == FinePoints::OnTrilinearIsosurface
+                             : options.shrink_wrap.final_correction;
+  return std::max(kLevelErrorFloorCells, (corrected ? kCorrectedLevelErrorShare : kLevelErrorShare) * deviation.rms);
+}
+
+LevelRule level_rule(const ConvertOptions& options, const ConvertResult& result) {
+  LevelRule rule;
+  rule.fixed_levels = options.levels;
+  rule.max_error_cells = result.max_error_cells;
+  rule.max_fine_vertices = kMaxFineShare * double(result.extracted_vertices);
+  return rule;
+}
+
+void check_level_memory(const PolygonMesh& base, int levels) {
+  check_memory(double(fine_vertex_count(base, levels)), kFitBytesPerFineVertex,
+               std::to_string(levels) + " levels of a " + std::to_string(base.vertex_count()) + "-vertex base mesh");
+}
+
+// The fit's level L (the last tried): levels and fine mesh counts.
+void take_levels(const FittedLevel& fitted, ConvertResult& result) {
+  result.levels = fitted.hierarchy->levels();
+  result.fine_vertices = fitted.hierarchy->fine_vertex_count();
+  // Each parent face of n corners gives n quads.
+  result.fine_faces = fitted.hierarchy->step(result.levels).face_vertices.size();
 }
 
 // FinePoints::OnTrilinearIsosurface: the fitted points move along the field
@@ -168,81 +174,80 @@ void move_onto_isosurface(const WrapLevelMesh& level, const PreparedSurface& pre
     if (!(squared_norm(positions[v] - on_surface[v]) <= reach * reach)) positions[v] = on_surface[v];
 }
 
-// The parametrization-based fit (fit/parametrized_fit.h) of `simplified`: with
-// automatic levels, level after level until the fitted fine mesh lies within
-// the bound of the extracted isosurface (D), at most 6, and not past a fine
-// mesh of kMaxFineShare times the isosurface's vertices.
+// The parametrization-based fit (fit/parametrized_fit.h) of `simplified`, at the
+// levels of fit_levels_by_error(); its points then move onto the trilinear
+// isosurface (FinePoints).
 std::shared_ptr<const SubdivisionHierarchy> fit_parametrized(const simplify::SimplifyResult& simplified,
                                                              const PreparedSurface& prepared,
+                                                             const SurfaceErrorReference& against_surface,
                                                              const ConvertOptions& options, ConvertResult& result,
                                                              ProgressSink& progress) {
   const auto start = Clock::now();
   const PolygonMesh& surface = prepared.isosurface.mesh;
-  result.max_error_cells = level_error_bound(prepared, options);
-  result.level_errors_cells.clear();
-  const SurfaceErrorReference against_surface(surface, kErrorSamples);
-  std::shared_ptr<const SubdivisionHierarchy> hierarchy;
-  for (int levels = options.levels > 0 ? options.levels : 1;; ++levels) {
-    check_memory(double(fine_vertex_count(simplified.base, levels)), kFitBytesPerFineVertex,
-                 std::to_string(levels) + " levels of a " + std::to_string(simplified.base.vertex_count()) +
-                     "-vertex base mesh");
-    hierarchy = std::make_shared<const SubdivisionHierarchy>(simplified.base, levels);
+  const double iso = options.prepare.extract.iso;
+  const Orientation orientation = orientation_from_flip(options.prepare.extract.flip);
+  // One connectivity of level L for the fold counts and the correction.
+  std::optional<WrapLevelMesh> level;
+  const auto fit_level = [&](int levels) {
+    check_level_memory(simplified.base, levels);
+    level.reset();
     result.fit = ShrinkWrapResult{};
+    auto hierarchy = std::make_shared<const SubdivisionHierarchy>(simplified.base, levels);
     ParametrizedFitResult fit = parametrized_fit(*hierarchy, simplified.base.positions, surface, simplified.map, progress);
     result.fit.positions = std::move(fit.positions);
     result.parametrization = fit.statistics;
-    result.levels = levels;
-    const double error =
-        against_surface.measure(hierarchy->control_mesh(levels, result.fit.positions)).d() /
-        result.cell_size;
-    result.level_errors_cells.push_back(error);
-    const double next_fine = fine_vertex_count(simplified.base, levels + 1);
-    if (options.levels > 0 || error <= result.max_error_cells || levels == 6 ||
-        next_fine > kMaxFineShare * double(result.extracted_vertices))
-      break;
-  }
-  result.fine_vertices = hierarchy->fine_vertex_count();
-  result.fine_faces = hierarchy->step(result.levels).face_vertices.size();
-  // One connectivity of level L for the correction and the fold count.
-  const WrapLevelMesh level =
-      make_wrap_level_mesh(*hierarchy, result.levels, result.fit.positions, prepared.field, options.prepare.extract.iso);
-  if (options.fine_points == FinePoints::OnTrilinearIsosurface) move_onto_isosurface(level, prepared, options, result);
-  result.fit.folded_faces = count_folded_faces(level, result.fit.positions, prepared.field,
-                                               orientation_from_flip(options.prepare.extract.flip));
+    level.emplace(make_wrap_level_mesh(*hierarchy, levels, result.fit.positions, prepared.field, iso));
+    const std::size_t folded = count_folded_faces(*level, result.fit.positions, prepared.field, orientation);
+    return FittedLevel{std::move(hierarchy), &result.fit.positions, folded};
+  };
+  const FittedLevel fitted = fit_levels_by_error(simplified.base, level_rule(options, result), against_surface,
+                                                 result.cell_size, fit_level, result.level_reports);
+  take_levels(fitted, result);
+  if (options.fine_points == FinePoints::OnTrilinearIsosurface) move_onto_isosurface(*level, prepared, options, result);
+  result.fit.folded_faces = count_folded_faces(*level, result.fit.positions, prepared.field, orientation);
   check_fit(prepared, options, result);
   result.seconds.fit += seconds_since(start);
-  return hierarchy;
+  return fitted.hierarchy;
 }
 
-// The shrink-wrap of `base` (Sec. 4.2) and the fit against the isosurface,
-// both ways; the error rows, measured against the fit, cannot show what it
-// missed. A base mesh too coarse for the surface leaves parts of it out of
-// the attraction's reach and the fine points there off the isosurface, and
-// parts of the isosurface no fine point comes near (thin features the base
-// mesh spans; every stride-th isosurface vertex, at most 100,000).
+// The shrink-wrap of `base` (Sec. 4.2) at the levels of
+// fit_levels_by_error(), and the fit against the isosurface, both ways; the
+// error rows, measured against the fit, cannot show what it missed. A base
+// mesh too coarse for the surface leaves parts of it out of the attraction's
+// reach and the fine points there off the isosurface, and parts of the
+// isosurface no fine point comes near (thin features the base mesh spans;
+// every stride-th isosurface vertex, at most 100,000).
 std::shared_ptr<const SubdivisionHierarchy> fit_base(const PolygonMesh& base, const PreparedSurface& prepared,
+                                                     const SurfaceErrorReference& against_surface,
                                                      const ConvertOptions& options, ConvertResult& result,
                                                      ProgressSink& progress) {
   const auto start = Clock::now();
-  auto hierarchy = std::make_shared<const SubdivisionHierarchy>(base, result.levels);
-  result.fine_vertices = hierarchy->fine_vertex_count();
-  // Each parent face of n corners gives n quads.
-  result.fine_faces = result.levels > 0 ? hierarchy->step(result.levels).face_vertices.size() : base.face_count();
   ShrinkWrapOptions wrap_options = options.shrink_wrap;
   wrap_options.surface = &prepared.isosurface.mesh;
-  result.fit = shrink_wrap(*hierarchy, base.positions, prepared.distance, prepared.field, wrap_options, progress);
+  const auto fit_level = [&](int levels) {
+    check_level_memory(base, levels);
+    result.fit = ShrinkWrapResult{};
+    auto hierarchy = std::make_shared<const SubdivisionHierarchy>(base, levels);
+    result.fit = shrink_wrap(*hierarchy, base.positions, prepared.distance, prepared.field, wrap_options, progress);
+    return FittedLevel{std::move(hierarchy), &result.fit.positions, result.fit.folded_faces};
+  };
+  result.level_reports.clear();
+  const FittedLevel fitted = fit_levels_by_error(base, level_rule(options, result), against_surface, result.cell_size,
+                                                 fit_level, result.level_reports);
+  take_levels(fitted, result);
   check_fit(prepared, options, result);
   result.seconds.fit += seconds_since(start);
-  return hierarchy;
+  return fitted.hierarchy;
 }
 
 // Base mesh, levels, shrink-wrap and the fit check; with
 // BaseGrowth::UntilCovered, again from a base mesh twice as large while more
 // than kUncoveredWarning of the isosurface is left out. Returns the last
 // fit's hierarchy and, in `target`, the last base mesh's target.
-std::shared_ptr<const SubdivisionHierarchy> fit_surface(PreparedSurface& prepared, const ConvertOptions& options,
-                                                        ConvertResult& result, std::size_t& target,
-                                                        ProgressSink& progress) {
+std::shared_ptr<const SubdivisionHierarchy> fit_surface(PreparedSurface& prepared,
+                                                        const SurfaceErrorReference& against_surface,
+                                                        const ConvertOptions& options, ConvertResult& result,
+                                                        std::size_t& target, ProgressSink& progress) {
   simplify::SimplifyOptions simplify_options = options.base.simplify;
   simplify_options.target_vertices = target = base_target(options.base, result.extracted_vertices);
   simplify_options.compute_distance = false;
@@ -256,7 +261,7 @@ std::shared_ptr<const SubdivisionHierarchy> fit_surface(PreparedSurface& prepare
     simplify_options.surface_map = simplify::SurfaceMapping::Build;
     simplify_options.max_vertex_area_share = kParametrizationAreaShare;
     simplify::SimplifyResult simplified = simplify_base(prepared, simplify_options, options, result, progress);
-    return fit_parametrized(simplified, prepared, options, result, progress);
+    return fit_parametrized(simplified, prepared, against_surface, options, result, progress);
   }
   BackgroundDistance distance(prepared, options.prepare);
   simplify_options.serial_phase_begins = [&distance] { distance.start(); };
@@ -264,13 +269,11 @@ std::shared_ptr<const SubdivisionHierarchy> fit_surface(PreparedSurface& prepare
   for (result.base_attempts = 1;; ++result.base_attempts) {
     const PolygonMesh base = simplify_base(prepared, simplify_options, options, result, progress).base;
     simplify_options.serial_phase_begins = nullptr;  // the distance field is on its way
-    check_memory(double(fine_vertex_count(base, result.levels)), kFitBytesPerFineVertex,
-                 std::to_string(result.levels) + " levels of a " + std::to_string(base.vertex_count()) +
-                     "-vertex base mesh");
+    if (options.levels > 0) check_level_memory(base, options.levels);  // before the wait
     result.seconds.distance += distance.wait(progress);
     result.fit = ShrinkWrapResult{};  // the previous try's, before the next one's peak
     hierarchy.reset();
-    hierarchy = fit_base(base, prepared, options, result, progress);
+    hierarchy = fit_base(base, prepared, against_surface, options, result, progress);
     // With the levels fixed, a larger base multiplies the fine mesh: it grows
     // only when the levels follow it.
     const std::size_t grown = 2 * base.vertex_count();
@@ -289,9 +292,8 @@ std::shared_ptr<const SubdivisionHierarchy> fit_surface(PreparedSurface& prepare
 //   base mesh or more levels.
 // - Points left off the surface, or over kUncoveredCoarse of the surface
 //   left out: the base mesh spans whole parts of the surface and the folds
-//   are its own, which the pre-filter does not change; a larger base mesh. Not more levels: the automatic levels already give
-//   about as many fine points as the isosurface has vertices, and more make
-//   the folds of the next case worse.
+//   are its own, which the pre-filter does not change; a larger base mesh.
+//   Not more levels: those make the folds of the next case worse.
 // - Otherwise the folds sit on necks, tunnels and specks under a cell across
 //   (noisy scans and fine-grained fields, also where thin features are left
 //   out; more levels fold more there): a one-voxel pre-filter
@@ -429,12 +431,11 @@ Coded analyze_and_encode(const SubdivisionHierarchy& hierarchy, IswMetadata meta
 // D (surface_error.h) of the decoded surface of each summary row against
 // the extracted isosurface, in cells; rows keeping the same coefficients
 // share one. Rows in parallel: each one's distance bins are built serially.
-void measure_rows(const SubdivisionHierarchy& hierarchy, const IswDecoded& expected, const PolygonMesh& extracted,
-                  ConvertResult& result) {
+void measure_rows(const SubdivisionHierarchy& hierarchy, const IswDecoded& expected,
+                  const SurfaceErrorReference& against_surface, ConvertResult& result) {
   const std::vector<RateDistortionRow>& rows = result.summary;
   std::vector<double>& errors = result.summary_surface_error;
   errors.assign(rows.size(), 0.0);
-  const SurfaceErrorReference against_surface(extracted, kErrorSamples);
   const auto repeats = [&](std::size_t k) { return k > 0 && rows[k].kept == rows[k - 1].kept; };
   tbb::parallel_for(std::size_t{0}, rows.size(), [&](std::size_t k) {
     if (repeats(k)) return;
@@ -447,10 +448,10 @@ void measure_rows(const SubdivisionHierarchy& hierarchy, const IswDecoded& expec
 
 // Error summary (error_table, as stats makes it), from what the file holds
 // as the encoder stored it, without decoding the file again
-// (FileCheck::DecodeAgain does); and each row's D against `extracted`.
-void evaluate(const std::shared_ptr<const SubdivisionHierarchy>& hierarchy, Coded coded, const PolygonMesh& extracted,
-              const std::string& source, const ConvertOptions& options, ConvertResult& result,
-              ProgressSink& progress) {
+// (FileCheck::DecodeAgain does); and each row's D against the extracted isosurface.
+void evaluate(const std::shared_ptr<const SubdivisionHierarchy>& hierarchy, Coded coded,
+              const SurfaceErrorReference& against_surface, const std::string& source, const ConvertOptions& options,
+              ConvertResult& result, ProgressSink& progress) {
   const auto start = Clock::now();
   progress.begin_stage("evaluate");
   const IswDecoded expected =
@@ -466,7 +467,7 @@ void evaluate(const std::shared_ptr<const SubdivisionHierarchy>& hierarchy, Code
   ErrorTable errors = error_table(expected, options.summary_percents, &coded.full_decode);
   result.summary = std::move(errors.rows);
   result.quantization = errors.quantization;
-  measure_rows(*hierarchy, expected, extracted, result);
+  measure_rows(*hierarchy, expected, against_surface, result);
   if (decodes_as_expected.valid() && !decodes_as_expected.get())
     throw std::logic_error(source + ": the file written does not decode to the coefficients it was coded from");
   progress.end_stage();
@@ -488,19 +489,25 @@ ConvertResult convert_volume(Volume volume, const std::string& source, const Con
   result.seconds.extract = seconds_since(start);
 
   std::size_t target = 0;
-  const std::shared_ptr<const SubdivisionHierarchy> hierarchy = fit_surface(prepared, options, result, target, progress);
+  // D's reference, for the levels and the summary rows, and the levels'
+  // bound (in the fit's time).
+  const auto reference_start = Clock::now();
+  const SurfaceErrorReference against_surface(prepared.isosurface.mesh, kErrorSamples);
+  result.max_error_cells = level_error_bound(prepared, options);
+  result.seconds.fit = seconds_since(reference_start);
+  const std::shared_ptr<const SubdivisionHierarchy> hierarchy =
+      fit_surface(prepared, against_surface, options, result, target, progress);
   result.hierarchy = hierarchy;
   add_fit_warnings(options, target, result);
   refuse_unusable_fit(source, options, result);
   IswMetadata metadata = metadata_of(prepared.field, source, options, result);
 
   // What the coding stages no longer need goes before their peak.
-  PolygonMesh extracted = std::move(prepared.isosurface.mesh);
+  if (options.keep_extracted_mesh) result.extracted_mesh = std::move(prepared.isosurface.mesh);
   prepared = PreparedSurface{};
 
   Coded coded = analyze_and_encode(*hierarchy, std::move(metadata), options, result, progress);
-  evaluate(hierarchy, std::move(coded), extracted, source, options, result, progress);
-  if (options.keep_extracted_mesh) result.extracted_mesh = std::move(extracted);
+  evaluate(hierarchy, std::move(coded), against_surface, source, options, result, progress);
   return result;
 }
 

@@ -66,12 +66,12 @@ TEST(ConvertParametrization, DecodedTorusIsAsNearTheTrueSurfaceAsMarchingCubes) 
   EXPECT_EQ(topology.boundary_loops, 0u);
   // The levels stop at the first whose D meets the bound, or before a fine
   // mesh beyond kMaxFineShare times the isosurface.
-  ASSERT_FALSE(result.level_errors_cells.empty());
+  ASSERT_FALSE(result.level_reports.empty());
   const SubdivisionHierarchy next(result.hierarchy->base(), result.levels + 1);
   if (double(next.fine_vertex_count()) <= kMaxFineShare * double(result.extracted_vertices))
-    EXPECT_LE(result.level_errors_cells.back(), result.max_error_cells);
-  for (std::size_t k = 0; k + 1 < result.level_errors_cells.size(); ++k)
-    EXPECT_GT(result.level_errors_cells[k], result.max_error_cells);
+    EXPECT_LE(result.level_reports.back().d_cells(), result.max_error_cells);
+  for (std::size_t k = 0; k + 1 < result.level_reports.size(); ++k)
+    EXPECT_GT(result.level_reports[k].d_cells(), result.max_error_cells);
   // The summary's D is measured on the decoded surface against the extracted one.
   ASSERT_EQ(result.summary_surface_error.size(), result.summary.size());
   const double d = surface_error(fine, result.extracted_mesh).d() / result.cell_size;

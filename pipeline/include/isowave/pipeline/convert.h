@@ -82,17 +82,17 @@ struct ConvertOptions {
   // Isovalue, orientation, clean-up, pre-filter and the distance band.
   PrepareOptions prepare;
   BaseMeshOptions base;
-  // Subdivision levels 1..6; 0 picks them: with the parametrization, the
-  // fewest levels whose fitted fine mesh lies within max_error_cells of the
-  // extracted isosurface (D, surface_error.h); with the shrink-wrap, the level
-  // whose fine mesh has about as many vertices as the extracted isosurface
-  // (the paper: 1.19 M fine control points for a 0.98 M-vertex isosurface).
+  // Subdivision levels 1..6; 0 picks them, for both fits: the fewest levels
+  // whose fitted fine mesh lies within max_error_cells of the extracted
+  // isosurface (D, surface_error.h), or the most before a fine mesh of more
+  // than kMaxFineShare times the isosurface's vertices.
   int levels = 0;
   // The automatic levels' bound on D in cells (>= 0); 0: kLevelErrorShare
-  // (kCorrectedLevelErrorShare with FinePoints::OnTrilinearIsosurface) of the
-  // marching-cubes mesh's own distance from the trilinear isosurface
+  // (kCorrectedLevelErrorShare where the fine points end on the trilinear
+  // isosurface: the shrink-wrap's correction, FinePoints::OnTrilinearIsosurface)
+  // of the marching-cubes mesh's own distance from the trilinear isosurface
   // (extracted_surface_deviation), at least kLevelErrorFloorCells. D is
-  // measured against the extracted mesh before any correction.
+  // measured against the extracted mesh, on the fit as LevelReport says.
   double max_error_cells = 0;
   FitMethod fit = FitMethod::ShrinkWrap;
   FinePoints fine_points = FinePoints::OnTrilinearIsosurface;
@@ -146,8 +146,8 @@ inline constexpr int kBaseAttempts = 3;
 inline constexpr double kLevelErrorShare = 0.75;
 inline constexpr double kCorrectedLevelErrorShare = 1.0;
 // The automatic levels stop before a fine mesh of more than this many times
-// the isosurface's vertices (beyond it, a denser sampling of the same map
-// costs more than it gains).
+// the isosurface's vertices (beyond it, more levels cost more than they
+// gain).
 inline constexpr double kMaxFineShare = 4.0;
 // The parametrization's base mesh: no base vertex holds more than this
 // multiple of the isosurface's area per target vertex
@@ -161,17 +161,36 @@ inline constexpr double kFinePointMoveCells = 0.5;
 inline constexpr std::size_t kErrorSamples = 50000;
 inline constexpr double kLevelErrorFloorCells = 0.01;
 
+// One level a fit tried (issue #33, item 4): its fitted fine mesh before
+// quantization (the parametrization's before its points move onto the
+// trilinear isosurface; the shrink-wrap's after its own correction) against
+// the extracted isosurface.
+struct LevelReport {
+  int levels = 0;
+  std::size_t fine_vertices = 0;
+  // RMS distances of D (surface_error.h, kErrorSamples each way), cells:
+  // fine mesh -> isosurface and isosurface -> fine mesh.
+  double forward_rms_cells = 0, backward_rms_cells = 0;
+  double d_cells() const { return forward_rms_cells > backward_rms_cells ? forward_rms_cells : backward_rms_cells; }
+  // Share of the fine faces folded against the field gradient, as the fit
+  // counts them (count_folded_faces; the shrink-wrap's ShrinkWrapResult::folded_faces).
+  double folded_share = 0;
+  // Fine face areas (vector areas) over their mean.
+  double stretch_min = 0, stretch_median = 0, stretch_max = 0;
+  double seconds = 0;  // wall clock: the level's fit and these figures
+};
+
 struct ConvertResult {
   std::string bytes;  // the .isw file
   PolygonMesh extracted_mesh;  // with keep_extracted_mesh
   IsosurfaceReport extraction;
   simplify::SimplifyReport simplification;
   ShrinkWrapResult fit;  // positions: the fitted fine control points (both fits)
-  // With FitMethod::Parametrization: the fit's figures, and D of the fitted
-  // fine mesh against the extracted isosurface (cells) for the levels tried.
+  // With FitMethod::Parametrization: the fit's figures.
   ParametrizedFitStatistics parametrization;
-  std::vector<double> level_errors_cells;
-  double max_error_cells = 0;  // the bound the automatic levels used
+  // Every level the fit tried on the last base mesh, in order; the last is `levels`.
+  std::vector<LevelReport> level_reports;
+  double max_error_cells = 0;  // the bound the automatic levels used (0 with fixed levels)
   // The hierarchy over the base mesh: control_mesh(levels, fit.positions) is the fitted fine mesh.
   std::shared_ptr<const SubdivisionHierarchy> hierarchy;
   int levels = 0;
