@@ -138,11 +138,20 @@ double level_error_bound(const PreparedSurface& prepared, const ConvertOptions& 
   return std::max(kLevelErrorFloorCells, (corrected ? kCorrectedLevelErrorShare : kLevelErrorShare) * deviation.rms);
 }
 
+}  // namespace
+
+double max_auto_fine_vertices(FitMethod fit, std::size_t extracted_vertices) {
+  const double share = fit == FitMethod::Parametrization ? kParametrizationMaxFineShare : kMaxFineShare;
+  return std::min(share * double(extracted_vertices), kMaxAutoFineVertices);
+}
+
+namespace {
+
 LevelRule level_rule(const ConvertOptions& options, const ConvertResult& result) {
   LevelRule rule;
   rule.fixed_levels = options.levels;
   rule.max_error_cells = result.max_error_cells;
-  rule.max_fine_vertices = kMaxFineShare * double(result.extracted_vertices);
+  rule.max_fine_vertices = max_auto_fine_vertices(options.fit, result.extracted_vertices);
   return rule;
 }
 

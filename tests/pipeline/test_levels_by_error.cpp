@@ -69,8 +69,8 @@ TEST_P(LevelsByError, ATighterBoundPicksMoreLevels) {
   EXPECT_GT(tight.levels, loose.levels);
   // No fit comes within 0.001 cell: the levels stop at the cap on the fine mesh.
   EXPECT_GT(double(fine_vertex_count(tight.hierarchy->base(), tight.levels + 1)),
-            kMaxFineShare * double(tight.extracted_vertices));
-  EXPECT_LE(double(tight.fine_vertices), kMaxFineShare * double(tight.extracted_vertices));
+            max_auto_fine_vertices(o.fit, tight.extracted_vertices));
+  EXPECT_LE(double(tight.fine_vertices), max_auto_fine_vertices(o.fit, tight.extracted_vertices));
 }
 
 TEST_P(LevelsByError, PicksTheSmallestLevelWithinTheBound) {

@@ -84,8 +84,8 @@ struct ConvertOptions {
   BaseMeshOptions base;
   // Subdivision levels 1..6; 0 picks them, for both fits: the fewest levels
   // whose fitted fine mesh lies within max_error_cells of the extracted
-  // isosurface (D, surface_error.h), or the most before a fine mesh of more
-  // than kMaxFineShare times the isosurface's vertices.
+  // isosurface (D, surface_error.h), or the most before a fine mesh beyond
+  // max_auto_fine_vertices().
   int levels = 0;
   // The automatic levels' bound on D in cells (>= 0); 0: kLevelErrorShare
   // (kCorrectedLevelErrorShare where the fine points end on the trilinear
@@ -146,9 +146,13 @@ inline constexpr int kBaseAttempts = 3;
 inline constexpr double kLevelErrorShare = 0.75;
 inline constexpr double kCorrectedLevelErrorShare = 1.0;
 // The automatic levels stop before a fine mesh of more than this many times
-// the isosurface's vertices (beyond it, more levels cost more than they
-// gain).
+// the isosurface's vertices: the shrink-wrap's D stalls beyond it, while each
+// level of the parametrization about halves its D (docs/MEASUREMENTS.md);
+// and, for both, before one of more than kMaxAutoFineVertices (about 2.4 GB
+// for the fit, kFitBytesPerFineVertex).
 inline constexpr double kMaxFineShare = 4.0;
+inline constexpr double kParametrizationMaxFineShare = 16.0;
+inline constexpr double kMaxAutoFineVertices = 8e6;
 // The parametrization's base mesh: no base vertex holds more than this
 // multiple of the isosurface's area per target vertex
 // (SimplifyOptions::max_vertex_area_share), so that a uniform refinement of
@@ -179,6 +183,10 @@ struct LevelReport {
   double stretch_min = 0, stretch_median = 0, stretch_max = 0;
   double seconds = 0;  // wall clock: the level's fit and these figures
 };
+
+// The largest fine mesh the automatic levels may reach for `fit` on an
+// isosurface of `extracted_vertices` (the constants above).
+double max_auto_fine_vertices(FitMethod fit, std::size_t extracted_vertices);
 
 struct ConvertResult {
   std::string bytes;  // the .isw file
