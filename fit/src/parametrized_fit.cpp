@@ -270,45 +270,6 @@ MapPoint to_map_point(const PolygonMesh& base, const simplify::SurfaceMap& map, 
   return {};
 }
 
-// Fine face areas relative to their mean: min, median, max.
-void measure_stretch(const SubdivisionHierarchy& hierarchy, const std::vector<Vec3>& p, ParametrizedFitStatistics& s) {
-  const int level = hierarchy.levels();
-  std::vector<double> areas;
-  if (level == 0) {
-    const PolygonMesh& base = hierarchy.base();
-    for (std::size_t f = 0; f < base.face_count(); ++f) {
-      Vec3 area;
-      const std::uint32_t* v = base.face_begin(f);
-      for (std::uint32_t k = 0; k < base.face_size(f); ++k) area += cross(p[v[k]], p[v[(k + 1) % base.face_size(f)]]);
-      areas.push_back(0.5 * norm(area));
-    }
-  } else {
-    const RefinementStep& step = hierarchy.step(level);
-    areas.resize(step.face_vertices.size());
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, step.parent_face_count, 1024), [&](const auto& r) {
-      for (std::size_t f = r.begin(); f < r.end(); ++f) {
-        const std::uint32_t first = step.face_offsets[f], n = step.face_offsets[f + 1] - first;
-        const Vec3& center = p[step.first_face_vertex() + f];
-        for (std::uint32_t k = 0; k < n; ++k) {  // child quad (v_k, e_k, f, e_k-1)
-          const Vec3& corner = p[step.face_vertices[first + k]];
-          const Vec3 diagonal = cross(center - corner, p[step.face_edges[first + (k + n - 1) % n]] -
-                                                           p[step.face_edges[first + k]]);
-          areas[first + k] = 0.5 * norm(diagonal);
-        }
-      }
-    });
-  }
-  double mean = 0;
-  for (const double a : areas) mean += a;
-  mean /= static_cast<double>(areas.size());
-  if (!(mean > 0)) return;
-  auto middle = areas.begin() + static_cast<std::ptrdiff_t>(areas.size() / 2);
-  std::nth_element(areas.begin(), middle, areas.end());
-  s.stretch_median = *middle / mean;
-  s.stretch_min = *std::min_element(areas.begin(), areas.end()) / mean;
-  s.stretch_max = *std::max_element(areas.begin(), areas.end()) / mean;
-}
-
 // The map's triangles by base face (rows in triangle order).
 IndexRows triangles_by_face(const simplify::SurfaceMap& map, std::size_t face_count) {
   std::vector<std::uint32_t> ids(map.triangle_count());
@@ -365,7 +326,6 @@ ParametrizedFitResult parametrized_fit(const SubdivisionHierarchy& hierarchy, co
   result.positions = std::move(points.points);
   result.statistics.fine_vertices = result.positions.size();
   result.statistics.fallback_points = points.fallback_points;
-  measure_stretch(hierarchy, result.positions, result.statistics);
   result.statistics.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   progress.update(1.0);
   progress.end_stage();

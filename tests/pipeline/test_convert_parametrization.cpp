@@ -68,8 +68,9 @@ TEST(ConvertParametrization, DecodedTorusIsAsNearTheTrueSurfaceAsMarchingCubes) 
   // mesh beyond max_auto_fine_vertices().
   ASSERT_FALSE(result.level_reports.empty());
   const SubdivisionHierarchy next(result.hierarchy->base(), result.levels + 1);
-  if (double(next.fine_vertex_count()) <= max_auto_fine_vertices(options.fit, result.extracted_vertices))
+  if (double(next.fine_vertex_count()) <= max_auto_fine_vertices(options.fit, result.extracted_vertices)) {
     EXPECT_LE(result.level_reports.back().d_cells(), result.max_error_cells);
+  }
   for (std::size_t k = 0; k + 1 < result.level_reports.size(); ++k)
     EXPECT_GT(result.level_reports[k].d_cells(), result.max_error_cells);
   // The summary's D is measured on the decoded surface against the extracted one.

@@ -42,10 +42,6 @@ struct ParametrizedFitStatistics {
   // the triangle whose smallest barycentric coordinate is largest gave the
   // point, clamped onto it. 0 expected with a history.
   std::size_t fallback_points = 0;
-  // Level-L control mesh face areas (vector area of the face) divided by
-  // their mean: the parameterization's stretch (issue #33, item 4). Zeros
-  // when the mean area is 0.
-  double stretch_min = 0, stretch_median = 0, stretch_max = 0;
   double seconds = 0;  // wall clock
 };
 
