@@ -17,6 +17,8 @@
 
 #include "isowave/core/error.h"
 #include "isowave/core/mesh_topology.h"
+#include "isowave/fit/fold_repair.h"
+#include "isowave/fit/wrap_level_mesh.h"
 #include "isowave/pipeline/prepare.h"
 #include "isowave/transform/hierarchy.h"
 
@@ -296,6 +298,13 @@ Surfaces extract_surfaces(const BenchOptions& o) {
   std::printf("marching cubes: %zu vertices; reference (%zu x %zu x %zu upsample): %zu vertices, in %.1f s\n",
               s.marching_cubes.vertex_count(), fine.dims[0], fine.dims[1], fine.dims[2], s.reference.vertex_count(),
               seconds_since(start));
+  // The marching-cubes mesh by the fits' fold test (face normal against the field gradient at its centroid).
+  const SubdivisionHierarchy as_base(s.marching_cubes, 0);
+  const WrapLevelMesh level = make_wrap_level_mesh(as_base, 0, s.marching_cubes.positions, prepared.field, o.extract.iso);
+  const std::size_t folded = count_folded_faces(level, s.marching_cubes.positions, prepared.field,
+                                                orientation_from_flip(o.extract.flip));
+  std::printf("marching cubes: %.3f%% of its faces folded by the fits' test\n",
+              100.0 * double(folded) / double(std::max<std::size_t>(1, s.marching_cubes.face_count())));
   return s;
 }
 

@@ -39,7 +39,7 @@ Vec3 walk(const simplify::SurfaceMapHistory& h, const std::vector<Vec3>& positio
     const std::size_t r =
         static_cast<std::size_t>(std::upper_bound(h.made_begin.begin(), h.made_begin.end(), version) -
                                  h.made_begin.begin()) - 1;
-    const std::array<float, 2>* chart = h.chart.data() + h.chart_begin[r];
+    const std::array<double, 2>* chart = h.chart.data() + h.chart_begin[r];
     const auto& made = h.made_corners[version - inputs];
     Vec2 p;
     for (int k = 0; k < 3; ++k) p = p + w[k] * Vec2{chart[made[k]][0], chart[made[k]][1]};

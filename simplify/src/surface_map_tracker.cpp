@@ -240,9 +240,9 @@ void SurfaceMapTracker::record(const CollapseMesh& mesh, const Lane& lane) {
   const auto new_vertex = static_cast<std::uint8_t>(lane.chart.size());
   const std::lock_guard<std::mutex> lock(history_mutex_);
   SurfaceMapHistory& h = history_;
-  for (const ChartVertex& c : lane.chart) h.chart.push_back({static_cast<float>(c.x), static_cast<float>(c.y)});
+  for (const ChartVertex& c : lane.chart) h.chart.push_back({c.x, c.y});
   if (lane.survivor != kNone)
-    h.chart.push_back({static_cast<float>(lane.new_vertex[0]), static_cast<float>(lane.new_vertex[1])});
+    h.chart.push_back(lane.new_vertex);
   h.chart_begin.push_back(static_cast<std::uint32_t>(h.chart.size()));
   h.consumed.insert(h.consumed.end(), lane.consumed.begin(), lane.consumed.end());
   h.consumed_corners.insert(h.consumed_corners.end(), lane.consumed_corners.begin(), lane.consumed_corners.end());

@@ -26,18 +26,18 @@ namespace isowave::simplify {
 // Operation r (a collapse or a flip, in the order they were applied to the
 // region, any order across disjoint regions):
 // - its chart vertices: chart[chart_begin[r] .. chart_begin[r + 1]), planar
-//   positions (the tracker's convex chart; float: about 8 bytes a vertex);
+//   positions (the tracker's convex chart, 16 bytes a vertex);
 // - the triangles it consumed: consumed[consumed_begin[r] .. [r + 1]), with
 //   their corners as indices into the operation's chart vertices;
 // - the triangles it made: versions made_begin[r] .. made_begin[r + 1] - 1,
 //   their corners made_corners[version - input triangles], likewise.
 // Both triangle sets tile the same convex polygon of the chart, so each
-// operation is a bijection. Memory: about 150 bytes per collapse.
+// operation is a bijection. Memory: about 300 bytes per collapse.
 struct SurfaceMapHistory {
   std::vector<std::array<std::uint32_t, 3>> input_corners;  // input vertex indices per input triangle
   std::vector<std::uint32_t> base_version;                  // per base triangle (SurfaceMap::triangles)
   std::vector<std::uint32_t> chart_begin, consumed_begin, made_begin;  // per operation, plus one
-  std::vector<std::array<float, 2>> chart;
+  std::vector<std::array<double, 2>> chart;
   std::vector<std::uint32_t> consumed;
   std::vector<std::array<std::uint8_t, 3>> consumed_corners, made_corners;
 
