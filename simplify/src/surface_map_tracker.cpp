@@ -237,12 +237,12 @@ void SurfaceMapTracker::note_consumed(const CollapseMesh& mesh, Lane& lane) cons
 }
 
 void SurfaceMapTracker::record(const CollapseMesh& mesh, const Lane& lane) {
+  assert(lane.chart.size() < 255);  // regions are bounded by kMaxRing
   const auto new_vertex = static_cast<std::uint8_t>(lane.chart.size());
   const std::lock_guard<std::mutex> lock(history_mutex_);
   SurfaceMapHistory& h = history_;
   for (const ChartVertex& c : lane.chart) h.chart.push_back({c.x, c.y});
-  if (lane.survivor != kNone)
-    h.chart.push_back(lane.new_vertex);
+  if (lane.survivor != kNone) h.chart.push_back(lane.new_vertex);
   h.chart_begin.push_back(static_cast<std::uint32_t>(h.chart.size()));
   h.consumed.insert(h.consumed.end(), lane.consumed.begin(), lane.consumed.end());
   h.consumed_corners.insert(h.consumed_corners.end(), lane.consumed_corners.begin(), lane.consumed_corners.end());
