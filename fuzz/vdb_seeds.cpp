@@ -1,7 +1,7 @@
 // Writes the .vdb seeds into the directory argv[1] (run by make_seeds.py):
 // one small grid per compression, a double grid, an instance, and the shapes
 // of finding 4 (a topology chunk that does not decompress, two root children
-// at one origin).
+// at one origin, a half grid whose half flag is renamed).
 #include <openvdb/io/File.h>
 #include <openvdb/openvdb.h>
 
@@ -42,7 +42,13 @@ int main(int argc, char** argv) {
   write(dir + "/blosc_mask.vdb", {density()}, openvdb::io::COMPRESS_BLOSC | openvdb::io::COMPRESS_ACTIVE_MASK);
   auto half = density();
   half->setSaveFloatAsHalf(true);
-  write(dir + "/zip_half.vdb", {half}, openvdb::io::COMPRESS_ZIP);
+  std::string half_bytes = write(dir + "/zip_half.vdb", {half}, openvdb::io::COMPRESS_ZIP);
+  // The campaign's leak: the half flag's metadata entry renamed (OpenVDB then
+  // reads the halves as floats).
+  const auto flag = half_bytes.find(openvdb::GridBase::META_SAVE_HALF_FLOAT);
+  if (flag == std::string::npos) return 1;
+  half_bytes[flag] = 'X';
+  save(dir + "/half_flag_renamed.vdb", half_bytes);
   auto d = openvdb::DoubleGrid::create(0.25);
   d->setName("d");
   d->tree().setValue(openvdb::Coord(-3, 2, 9), 1.5);

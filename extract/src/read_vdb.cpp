@@ -335,12 +335,23 @@ void pack_grid(Walker& w, const GridEntry& g, const std::string& path, std::vect
     const bool is_fixed = fixed_size_metadata(type, fixed);
     if (is_fixed && bytes != fixed) c.fail("corrupt metadata '" + name + "'");
     if (type == "bool" && value[0] > 1) c.fail("corrupt metadata '" + name + "'");
+    if (name == openvdb::GridBase::META_SAVE_HALF_FLOAT) continue;  // written below
     if (is_fixed || type == "string") {
       kept.insert(kept.end(), data.begin() + static_cast<std::ptrdiff_t>(start_pos), data.begin() + static_cast<std::ptrdiff_t>(c.pos()));
       ++kept_count;
     }
   }
-  put_u32(out, kept_count);
+  // OpenVDB reads the values as halves when this entry says so, whatever the
+  // grid type: it gets the type's _HalfFloat suffix, which the walk follows.
+  const auto put_string = [&](const std::string& s) {
+    put_u32(kept, static_cast<std::uint32_t>(s.size()));
+    kept.insert(kept.end(), s.begin(), s.end());
+  };
+  put_string(openvdb::GridBase::META_SAVE_HALF_FLOAT);
+  put_string("bool");
+  put_u32(kept, 1);
+  kept.push_back(g.half ? 1 : 0);
+  put_u32(out, kept_count + 1);
   out.insert(out.end(), kept.begin(), kept.end());
 
   // Transform: a registered map type and its fixed-size parameters.

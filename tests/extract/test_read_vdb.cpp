@@ -329,6 +329,33 @@ TEST(VolumeIo, VdbRepeatedRootOriginRejected) {
   expect_error(path, {}, "two entries at one origin", "repeated root origin");
 }
 
+// OpenVDB reads values as halves when the grid's is_saved_as_half_float
+// entry says so; the walk follows the grid type's _HalfFloat suffix. A file
+// where the two disagree reads as the type says (it used to reach OpenVDB's
+// failing decompression, which leaked, or to read garbage).
+TEST(VolumeIo, VdbHalfFlagFollowsTheGridType) {
+  TempDir dir;
+  const std::string path = dir.file("flag.vdb");
+  for (const bool half : {true, false}) {
+    SCOPED_TRACE(half);
+    auto grid = float_grid({openvdb::Coord(1, 2, 3), openvdb::Coord(2, 2, 3)});
+    grid->setSaveFloatAsHalf(half);
+    write_grid(path, grid, openvdb::io::COMPRESS_ZIP);
+    const Volume expected = read_volume(path);
+    Bytes bytes = read_file(path);
+    // The entry: name, "bool", size 1, value. A half grid's loses its name, a full one's says true.
+    const std::string entry = std::string(openvdb::GridBase::META_SAVE_HALF_FLOAT) + std::string("\x04\0\0\0bool\x01\0\0\0", 12);
+    const auto at = std::search(bytes.begin(), bytes.end(), entry.begin(), entry.end());
+    ASSERT_NE(at, bytes.end());
+    if (half) at[0] = 'X';
+    else at[static_cast<long>(entry.size())] = 1;
+    write_file(path, bytes);
+    const Volume read = read_volume(path);
+    EXPECT_EQ(read.dims, expected.dims);
+    EXPECT_EQ(read.values, expected.values);
+  }
+}
+
 TEST(VolumeIoSweep, Vdb) {
   // The smallest useful VDB file (one leaf, ~10 kB: the internal nodes' masks).
   init_vdb();
