@@ -8,6 +8,16 @@ if(ISOWAVE_SANITIZE)
   target_compile_options(isowave_build_settings INTERFACE -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined)
   target_link_options(isowave_build_settings INTERFACE -fsanitize=address,undefined)
 endif()
+if(ISOWAVE_FUZZ)
+  # Coverage for libFuzzer plus ASan and UBSan, every UB report fatal; the
+  # harnesses in fuzz/ link libFuzzer itself.
+  if(NOT CMAKE_CXX_COMPILER_ID STREQUAL "Clang")
+    message(FATAL_ERROR "ISOWAVE_FUZZ needs clang (libFuzzer): configure with -DCMAKE_CXX_COMPILER=clang++")
+  endif()
+  target_compile_options(isowave_build_settings INTERFACE
+    -fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer)
+  target_link_options(isowave_build_settings INTERFACE -fsanitize=address,undefined)
+endif()
 
 # isowave_add_stage(NAME SOURCES... LINKS ...): one library per pipeline stage
 # with its public headers in NAME/include/isowave/NAME/.

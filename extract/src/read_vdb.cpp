@@ -11,6 +11,14 @@
 // grid is then handed to openvdb::io::Stream, re-packed in memory (file
 // metadata and the grid's non-essential metadata dropped) behind a stream
 // that throws on any read past the end.
+//
+// OpenVDB 10's RootNode::readTopology leaks the child it is reading (a
+// 32^3 internal node and its subtree, ~300 KB) when that read throws, and the
+// child it replaces when two children share an origin. So the walk also
+// decompresses every topology chunk as io::readData() will and rejects
+// repeated root origins: what is left to throw (leaf value chunks, read by
+// readBuffers into a tree the grid owns) leaks nothing.
+#include <openvdb/io/Compression.h>
 #include <openvdb/io/Stream.h>
 #include <openvdb/openvdb.h>
 
@@ -35,8 +43,14 @@ namespace {
 constexpr std::uint32_t kMinFileVersion = 222;  // per-grid compression flags (OpenVDB >= 2.0)
 constexpr std::uint32_t kMaxFileVersion = openvdb::OPENVDB_FILE_VERSION;
 // Dense copies are limited to 2^31 samples and, beyond 2^24, to 64 times the
-// active voxel count: a few corrupted bytes must not ask for terabytes.
+// active voxel count: a few corrupted bytes must not ask for terabytes. (A
+// valid file of a few KB with large active tiles may still ask for 8 GiB; fuzz
+// builds, whose memory limit is 2 GiB, allow 2^27 samples.)
+#ifdef FUZZING_BUILD_MODE_UNSAFE_FOR_PRODUCTION
+constexpr std::uint64_t kMaxDenseSamples = std::uint64_t{1} << 27;
+#else
 constexpr std::uint64_t kMaxDenseSamples = std::uint64_t{1} << 31;
+#endif
 
 void initialize_openvdb() {
   static std::once_flag once;
@@ -144,6 +158,7 @@ class Cursor {
     pos_ += n;
     return p;
   }
+  std::string bytes_since(std::size_t begin) const { return std::string(data_.data() + begin, data_.data() + pos_); }
   template <typename T>
   T get(const char* what) {
     T v;
@@ -171,9 +186,31 @@ struct TreeFormat {
   bool half = false;              // values saved as 16-bit halves
 };
 
+// How much of a value chunk the walk checks: its layout, or also that it
+// decompresses as io::readData() will (topology chunks: see the top).
+enum class ChunkCheck { Layout, Decode };
+
+// Decompresses the compressed chunk at [begin, c.pos()) with OpenVDB's own
+// reader; `bytes` is its decompressed size.
+void decode_chunk(Cursor& c, std::size_t begin, std::uint64_t bytes, const TreeFormat& f) {
+  std::istringstream in(c.bytes_since(begin));
+  in.exceptions(std::ios_base::failbit | std::ios_base::badbit);
+  std::vector<char> out(std::max<std::size_t>(static_cast<std::size_t>(bytes), 1));  // non-null: decode, not skip
+  try {
+    if (f.compression & openvdb::io::COMPRESS_BLOSC) {
+      openvdb::io::bloscFromStream(in, out.data(), static_cast<std::size_t>(bytes));
+    } else {
+      openvdb::io::unzipFromStream(in, out.data(), static_cast<std::size_t>(bytes));
+    }
+  } catch (const std::exception& e) {
+    c.fail(std::string("a topology chunk does not decompress (") + e.what() + ")");
+  }
+}
+
 // One value chunk as io::readData() reads it.
-void check_chunk(Cursor& c, std::uint64_t bytes, const TreeFormat& f) {
+void check_chunk(Cursor& c, std::uint64_t bytes, const TreeFormat& f, ChunkCheck check) {
   if (f.compression & (openvdb::io::COMPRESS_BLOSC | openvdb::io::COMPRESS_ZIP)) {
+    const std::size_t begin = c.pos();
     const auto n = c.get<std::int64_t>("chunk size");
     if (n <= 0) {
       if (n == std::numeric_limits<std::int64_t>::min() || static_cast<std::uint64_t>(-n) != bytes)
@@ -191,6 +228,7 @@ void check_chunk(Cursor& c, std::uint64_t bytes, const TreeFormat& f) {
       std::memcpy(&cbytes, chunk + 12, 4);
       if (nbytes != bytes || cbytes != static_cast<std::uint64_t>(n)) c.fail("corrupt blosc chunk header");
     }
+    if (check == ChunkCheck::Decode) decode_chunk(c, begin, bytes, f);
     return;
   }
   c.take(static_cast<std::size_t>(bytes), "values");
@@ -198,7 +236,7 @@ void check_chunk(Cursor& c, std::uint64_t bytes, const TreeFormat& f) {
 
 // io::readCompressedValues() for a node of `count` values with `mask_bytes`-byte masks.
 void check_values(Cursor& c, std::size_t count, const std::uint8_t* value_mask, std::size_t mask_bytes,
-                  const TreeFormat& f) {
+                  const TreeFormat& f, ChunkCheck check) {
   const auto metadata = c.get<std::int8_t>("value metadata");
   if (metadata == 2 || metadata == 4 || metadata == 5) c.take(f.value_size, "inactive value");
   if (metadata == 5) c.take(f.value_size, "inactive value");
@@ -206,7 +244,7 @@ void check_values(Cursor& c, std::size_t count, const std::uint8_t* value_mask, 
   std::size_t stored = count;
   if ((f.compression & openvdb::io::COMPRESS_ACTIVE_MASK) && metadata != 6) stored = count_on(value_mask, mask_bytes);
   if (f.half && stored == 0) return;  // io::HalfReader reads nothing for no values
-  check_chunk(c, static_cast<std::uint64_t>(stored) * (f.half ? 2 : f.value_size), f);
+  check_chunk(c, static_cast<std::uint64_t>(stored) * (f.half ? 2 : f.value_size), f, check);
 }
 
 // InternalNode::readTopology(); returns the number of leaves below.
@@ -215,7 +253,7 @@ std::uint64_t check_internal_topology(Cursor& c, int log2dim, const TreeFormat& 
   const std::size_t mask_bytes = values / 8;
   const std::uint8_t* child_mask = c.take(mask_bytes, "child mask");
   const std::uint8_t* value_mask = c.take(mask_bytes, "value mask");
-  check_values(c, values, value_mask, mask_bytes, f);
+  check_values(c, values, value_mask, mask_bytes, f, ChunkCheck::Decode);
   const std::size_t children = count_on(child_mask, mask_bytes);
   if (log2dim == 4) {
     c.take(children * 64, "leaf value masks");  // LeafNode::readTopology(): the value mask
@@ -241,7 +279,7 @@ void check_tree(Cursor& c, std::size_t topology_end, std::size_t end, const Tree
     std::memcpy(key.data(), c.take(12, "tile"), 12);
     c.take(f.value_size, "tile value");
     if (c.get<std::uint8_t>("tile state") > 1) c.fail("corrupt root tile");
-    table[key] = 0;
+    if (!table.emplace(key, 0).second) c.fail("corrupt root node (two entries at one origin)");
   }
   for (std::uint32_t n = 0; n < children; ++n) {
     std::array<std::int32_t, 3> key;
@@ -249,7 +287,8 @@ void check_tree(Cursor& c, std::size_t topology_end, std::size_t end, const Tree
     for (std::int32_t v : key) {
       if (v % 4096 != 0) c.fail("corrupt root child origin");
     }
-    table[key] = check_internal_topology(c, 5, f);
+    if (!table.emplace(key, check_internal_topology(c, 5, f)).second)
+      c.fail("corrupt root node (two entries at one origin)");
   }
   if (c.pos() != topology_end) c.fail("corrupt topology (it does not end where the grid's data blocks start)");
   std::uint64_t leaves = 0;
@@ -257,7 +296,7 @@ void check_tree(Cursor& c, std::size_t topology_end, std::size_t end, const Tree
   if (leaves > c.remaining() / (64 + 1)) c.fail("truncated or corrupt leaf data");
   for (std::uint64_t l = 0; l < leaves; ++l) {
     const std::uint8_t* mask = c.take(64, "leaf value mask");
-    check_values(c, 512, mask, 64, f);
+    check_values(c, 512, mask, 64, f, ChunkCheck::Layout);
   }
   if (c.pos() != end) c.fail("corrupt data blocks (they do not end where the grid ends)");
 }
@@ -296,12 +335,23 @@ void pack_grid(Walker& w, const GridEntry& g, const std::string& path, std::vect
     const bool is_fixed = fixed_size_metadata(type, fixed);
     if (is_fixed && bytes != fixed) c.fail("corrupt metadata '" + name + "'");
     if (type == "bool" && value[0] > 1) c.fail("corrupt metadata '" + name + "'");
+    if (name == openvdb::GridBase::META_SAVE_HALF_FLOAT) continue;  // written below
     if (is_fixed || type == "string") {
       kept.insert(kept.end(), data.begin() + static_cast<std::ptrdiff_t>(start_pos), data.begin() + static_cast<std::ptrdiff_t>(c.pos()));
       ++kept_count;
     }
   }
-  put_u32(out, kept_count);
+  // OpenVDB reads the values as halves when this entry says so, whatever the
+  // grid type: it gets the type's _HalfFloat suffix, which the walk follows.
+  const auto put_string = [&](const std::string& s) {
+    put_u32(kept, static_cast<std::uint32_t>(s.size()));
+    kept.insert(kept.end(), s.begin(), s.end());
+  };
+  put_string(openvdb::GridBase::META_SAVE_HALF_FLOAT);
+  put_string("bool");
+  put_u32(kept, 1);
+  kept.push_back(g.half ? 1 : 0);
+  put_u32(out, kept_count + 1);
   out.insert(out.end(), kept.begin(), kept.end());
 
   // Transform: a registered map type and its fixed-size parameters.
