@@ -101,7 +101,8 @@ cli::CommandSpec convert_spec() {
        "METHOD"},
       {"levels", true,
        "subdivision levels 1..6, or 'auto' (default): the fewest whose fitted surface lies within --max-error of "
-       "the isosurface, at most a fine mesh 4 times the isosurface's vertices",
+       "the isosurface, with a fine mesh of at most 4 times the isosurface's vertices (16 with the "
+       "parametrization) and 8 million",
        "L|auto"},
       {"max-error", true,
        "with --levels auto: the bound on the fitted surface's error D, in cells (default: the marching-cubes "

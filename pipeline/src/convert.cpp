@@ -212,8 +212,11 @@ std::shared_ptr<const SubdivisionHierarchy> fit_parametrized(const simplify::Sim
   const FittedLevel fitted = fit_levels_by_error(simplified.base, level_rule(options, result), against_surface,
                                                  result.cell_size, fit_level, result.level_reports);
   take_levels(fitted, result);
-  if (options.fine_points == FinePoints::OnTrilinearIsosurface) move_onto_isosurface(*level, prepared, options, result);
-  result.fit.folded_faces = count_folded_faces(*level, result.fit.positions, prepared.field, orientation);
+  result.fit.folded_faces = fitted.folded_faces;
+  if (options.fine_points == FinePoints::OnTrilinearIsosurface) {
+    move_onto_isosurface(*level, prepared, options, result);
+    result.fit.folded_faces = count_folded_faces(*level, result.fit.positions, prepared.field, orientation);
+  }
   check_fit(prepared, options, result);
   result.seconds.fit += seconds_since(start);
   return fitted.hierarchy;
