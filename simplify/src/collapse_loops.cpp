@@ -108,6 +108,9 @@ class EdgePops {
   std::uint32_t threshold_ = 0;
 };
 
+static_assert(std::tuple_size_v<decltype(SimplifyReport::rejected_at_pop)> == kLegalityCount,
+              "SimplifyReport::rejected_at_pop holds one count per Legality");
+
 // What a collapse loop did, added to the report once it ends.
 struct LoopCounters {
   std::size_t collapses = 0, collapses_after_flips = 0, flips = 0, flips_undone = 0, flip_attempts_failed = 0;

@@ -59,8 +59,9 @@ struct ParametrizedFitResult {
 // base face of n corners does not have exactly n - 2 triangles that use only
 // its corners (each once per triangle, all of them, positively oriented and
 // tiling its chart), or a barycentric coordinate is not finite or outside
-// [0, 1] by more than 1e-6, or its history is inconsistent (check_history); or when base_positions has fewer than
-// vertex_count(0) entries or a non-finite one. Throws Error(Format) for a
+// [0, 1] by more than 1e-6, or its history is inconsistent (check_history);
+// or when base_positions has fewer than vertex_count(0) entries or a
+// non-finite one. Throws Error(Format) for a
 // surface with an index out of range or a non-finite position
 // (validate_indices). Faces of the surface with more than 3 corners are fanned
 // from their first corner. Reports progress as one stage.
