@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cassert>
 #include <cmath>
 #include <string>
 
@@ -19,6 +20,13 @@ constexpr double kOutside = -1e-6;
 
 [[noreturn]] void invalid(const std::string& what) {
   throw Error(ErrorKind::InvalidArgument, "surface map history: " + what);
+}
+
+// Whether chart triangle `corners` of an operation's chart has positive area.
+bool has_area(const std::array<double, 2>* chart, const std::array<std::uint8_t, 3>& corners) {
+  Corners tri;
+  for (int k = 0; k < 3; ++k) tri[k] = {chart[corners[k]][0], chart[corners[k]][1]};
+  return cross(tri[1] - tri[0], tri[2] - tri[0]) > 0;
 }
 
 bool offsets_valid(const std::vector<std::uint32_t>& begin, std::size_t operations, std::size_t size) {
@@ -49,10 +57,10 @@ Vec3 walk(const simplify::SurfaceMapHistory& h, const std::vector<Vec3>& positio
     std::array<double, 3> best_w{};
     for (std::uint32_t c = h.consumed_begin[r]; c < h.consumed_begin[r + 1]; ++c) {
       const auto& corners = h.consumed_corners[c];
+      if (!has_area(chart, corners)) continue;  // flattened onto a chord
       Corners tri;
       for (int k = 0; k < 3; ++k) tri[k] = {chart[corners[k]][0], chart[corners[k]][1]};
-      if (!(cross(tri[1] - tri[0], tri[2] - tri[0]) > 0)) continue;  // flattened onto a chord
-      std::array<double, 3> b;
+      std::array<double, 3> b{};
       barycentric(tri, p, b);
       const double smallest = std::min({b[0], b[1], b[2]});
       if (smallest > best_min) {
@@ -62,7 +70,7 @@ Vec3 walk(const simplify::SurfaceMapHistory& h, const std::vector<Vec3>& positio
       }
       if (smallest >= 0) break;
     }
-    if (best == version) break;  // no consumed triangle with area: keep the last point
+    assert(best != version && "check_history: every operation consumed a triangle with area");
     // Step 3: clamp what rounding put outside, and go on from there.
     outside = outside || best_min < kOutside;
     double sum = 0;
@@ -71,7 +79,6 @@ Vec3 walk(const simplify::SurfaceMapHistory& h, const std::vector<Vec3>& positio
     w = best_w;
     version = best;
   }
-  if (version >= inputs) return Vec3{0, 0, 0};  // unreachable for a tracker-built history
   const auto& corners = h.input_corners[version];
   return w[0] * positions[corners[0]] + w[1] * positions[corners[1]] + w[2] * positions[corners[2]];
 }
@@ -101,9 +108,13 @@ void check_history(const simplify::SurfaceMapHistory& h, std::size_t map_triangl
     const auto within = [&](const std::array<std::uint8_t, 3>& corners) {
       return corners[0] < chart_size && corners[1] < chart_size && corners[2] < chart_size;
     };
-    for (std::uint32_t c = h.consumed_begin[r]; c < h.consumed_begin[r + 1]; ++c)
+    bool any_area = false;
+    for (std::uint32_t c = h.consumed_begin[r]; c < h.consumed_begin[r + 1]; ++c) {
       if (h.consumed[c] >= h.made_begin[r] || !within(h.consumed_corners[c]))
         invalid("a consumed triangle is not older than its operation or not in its chart");
+      any_area = any_area || has_area(h.chart.data() + h.chart_begin[r], h.consumed_corners[c]);
+    }
+    if (!any_area) invalid("an operation consumed no triangle with area");
     for (std::uint32_t v = h.made_begin[r]; v < h.made_begin[r + 1]; ++v)
       if (!within(h.made_corners[v - inputs])) invalid("a made triangle is not in its chart");
   }

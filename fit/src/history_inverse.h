@@ -21,8 +21,9 @@ namespace isowave {
 // Throws Error(InvalidArgument) unless `history` is consistent: offsets
 // non-decreasing and in range, chart corners within their operation's chart,
 // every consumed triangle older than the operation's own (so that every walk
-// ends), input corners below `surface_vertices`, finite chart positions,
-// one base version per map triangle. O(history size).
+// ends), every operation with a consumed triangle of positive area (so that
+// every step lands somewhere), input corners below `surface_vertices`, finite
+// chart positions, one base version per map triangle. O(history size).
 void check_history(const simplify::SurfaceMapHistory& history, std::size_t map_triangles,
                    std::size_t surface_vertices);
 

@@ -152,6 +152,9 @@ TEST(HistoryInverse, RejectsAnInconsistentHistory) {
   ASSERT_GT(map.history.operation_count(), 0u);
   rejects([](auto& h) { h.consumed[0] = h.made_begin.back() - 1; });  // a walk that would loop
   rejects([](auto& h) { h.consumed_corners[0][1] = 255; });
+  rejects([](auto& h) {  // the first operation's consumed triangles flattened to a point
+    for (std::uint32_t c = h.consumed_begin[0]; c < h.consumed_begin[1]; ++c) h.consumed_corners[c] = {0, 0, 0};
+  });
   rejects([](auto& h) { h.chart[0][0] = std::nan(""); });
   rejects([&](auto& h) { h.input_corners[0][2] = static_cast<std::uint32_t>(input.vertex_count()); });
   rejects([](auto& h) { h.base_version.pop_back(); });
