@@ -442,4 +442,27 @@ std::size_t count_folded_faces(const WrapLevelMesh& mesh, const std::vector<Vec3
   return wrap::find_folded_faces(mesh, TrilinearGrid(field), orientation, positions, folded);
 }
 
+std::size_t take_back_folding_moves(const WrapLevelMesh& mesh, const Volume& field, Orientation orientation,
+                                    const std::vector<Vec3>& before, std::vector<Vec3>& positions) {
+  const TrilinearGrid grid(field);
+  HugePageVector<std::uint8_t> folded_before, folded_now;
+  wrap::find_folded_faces(mesh, grid, orientation, before, folded_before);
+  std::size_t taken_back = 0;
+  for (;;) {
+    wrap::find_folded_faces(mesh, grid, orientation, positions, folded_now);
+    std::size_t taken_this_round = 0;
+    for (std::size_t f = 0; f < mesh.face_count(); ++f) {
+      if (!folded_now[f] || folded_before[f]) continue;
+      for (std::uint32_t k = mesh.face_offsets[f]; k < mesh.face_offsets[f + 1]; ++k) {
+        const std::uint32_t v = mesh.face_vertices[k];
+        if (positions[v] == before[v]) continue;
+        positions[v] = before[v];
+        ++taken_this_round;
+      }
+    }
+    if (taken_this_round == 0) return taken_back;
+    taken_back += taken_this_round;
+  }
+}
+
 }  // namespace isowave

@@ -171,7 +171,8 @@ void take_levels(const FittedLevel& fitted, ConvertResult& result) {
 // FinePoints::OnTrilinearIsosurface: the fitted points move along the field
 // gradient onto the trilinear isosurface; a point the correction took
 // farther than kFinePointMoveCells (its fallbacks: a neighbours' centroid, a
-// wide search) goes back onto the extracted surface, where it was.
+// wide search) goes back onto the extracted surface, where it was, and so
+// does every corner of a face the moves fold (take_back_folding_moves).
 void move_onto_isosurface(const WrapLevelMesh& level, const PreparedSurface& prepared, const ConvertOptions& options,
                           ConvertResult& result) {
   std::vector<Vec3>& positions = result.fit.positions;
@@ -181,6 +182,8 @@ void move_onto_isosurface(const WrapLevelMesh& level, const PreparedSurface& pre
   const double reach = kFinePointMoveCells * result.cell_size;
   for (std::size_t v = 0; v < positions.size(); ++v)
     if (!(squared_norm(positions[v] - on_surface[v]) <= reach * reach)) positions[v] = on_surface[v];
+  take_back_folding_moves(level, prepared.field, orientation_from_flip(options.prepare.extract.flip), on_surface,
+                          positions);
 }
 
 // The parametrization-based fit (fit/parametrized_fit.h) of `simplified`, at the

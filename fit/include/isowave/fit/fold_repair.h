@@ -64,4 +64,14 @@ UnfoldStatistics unfold(const WrapLevelMesh& mesh, const Volume& field, double i
 std::size_t count_folded_faces(const WrapLevelMesh& mesh, const std::vector<Vec3>& positions, const Volume& field,
                                Orientation orientation);
 
+// Takes back the moves from `before` to `positions` (both at least
+// mesh.vertex_count) of the corners of every face folded (count_folded_faces'
+// test) at `positions` but not at `before`, round after round until no such
+// face is left, so that a pass moving points folds no face it did not find
+// folded. Returns the number of vertices taken back. Each round one parallel
+// scan of the faces; a round takes back at least one move, and in practice
+// 2-4 rounds suffice.
+std::size_t take_back_folding_moves(const WrapLevelMesh& mesh, const Volume& field, Orientation orientation,
+                                    const std::vector<Vec3>& before, std::vector<Vec3>& positions);
+
 }  // namespace isowave
