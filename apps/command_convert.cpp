@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <glob.h>
 #include <mutex>
+#include <set>
 #include <thread>
 
 #include "cli.h"
@@ -249,41 +250,84 @@ void run_job(const Job& job, const RunSettings& settings, JobOutcome& outcome, c
   outcome.ok = true;
 }
 
-// Runs the jobs on `threads` threads; each reports one line as it ends ("k
-// of N" in its label), a failure with its error, once.
+// The batch's time left, estimated as the wall-clock time per finished job
+// so far times the jobs not finished (with --jobs N the time per job is
+// already shared among the threads).
+class TimeLeft {
+ public:
+  explicit TimeLeft(std::size_t jobs) : jobs_(jobs) {}
+  // Returns the jobs finished so far, this one included.
+  std::size_t job_finished() { return ++finished_; }
+  std::size_t finished() const { return finished_; }
+  // "about 40 s left" ("12 min", "1.5 h") with `finished` jobs done; empty
+  // before the first job has finished and after the last.
+  std::string text(std::size_t finished) const {
+    if (finished == 0 || finished >= jobs_) return {};
+    const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+    const double left = elapsed / double(finished) * double(jobs_ - finished);
+    char text[48];
+    if (left < 90) std::snprintf(text, sizeof text, "about %.0f s left", std::ceil(left));
+    else if (left < 5400) std::snprintf(text, sizeof text, "about %.0f min left", left / 60);
+    else std::snprintf(text, sizeof text, "about %.1f h left", left / 3600);
+    return text;
+  }
+
+ private:
+  const std::size_t jobs_;
+  const std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
+  std::atomic<std::size_t> finished_{0};
+};
+
+// Runs one job under its progress line and reports how it ended: "wrote
+// OUT (bytes, s)" or its error, once (a line of its own when quiet); when
+// the lines are written whole, the batch's time left after it.
+void run_and_report(const Job& job, const RunSettings& settings, JobOutcome& outcome, cli::ConsoleProgress& progress,
+                    TimeLeft& time_left, std::mutex& print_mutex) {
+  std::string ending;
+  try {
+    run_job(job, settings, outcome, progress);
+    char done[64];
+    std::snprintf(done, sizeof done, " (%zu bytes, %.1f s)", outcome.result.bytes.size(),
+                  outcome.load_seconds + outcome.result.seconds.total());
+    ending = "wrote " + job.output + done;
+  } catch (const std::exception& error) {
+    outcome.error = error.what();
+    const auto* isowave_error = dynamic_cast<const Error*>(&error);
+    outcome.usage_error = isowave_error && isowave_error->kind() == ErrorKind::InvalidArgument;
+    // Most errors from reading name the input already.
+    if (outcome.error.rfind(job.input + ":", 0) != 0) outcome.error = job.input + ": " + outcome.error;
+    ending = "FAILED: " + outcome.error + " (skipped)";
+  }
+  // Under the lock, so that the lines come in the order the jobs finished.
+  std::lock_guard<std::mutex> lock(print_mutex);
+  const std::size_t finished = time_left.job_finished();
+  const std::string left = settings.mode == cli::ProgressMode::BufferedLine ? time_left.text(finished) : std::string();
+  if (!outcome.ok && settings.mode == cli::ProgressMode::Quiet)
+    std::fprintf(stderr, "isowave convert: %s (skipped)\n", outcome.error.c_str());
+  progress.finish(ending + (left.empty() ? "" : "; " + left));
+  if (outcome.ok && settings.warn)
+    for (const std::string& warning : outcome.result.warnings)
+      std::fprintf(stderr, "isowave convert: warning: %s: %s\n", job.input.c_str(), warning.c_str());
+}
+
+// Runs the jobs on `threads` threads; each reports one line ("k of N" in its
+// label), a failure with its error, once. With several jobs a line tells
+// the batch's time left: before its job's stages when it is written as they
+// run, after its job when written whole (jobs side by side).
 std::vector<JobOutcome> run_jobs(const std::vector<Job>& jobs, const RunSettings& settings, int threads) {
   std::vector<JobOutcome> outcomes(jobs.size());
   std::atomic<std::size_t> next{0};
   std::mutex print_mutex;
+  TimeLeft time_left(jobs.size());
   const auto worker = [&] {
     for (std::size_t j = next++; j < jobs.size(); j = next++) {
       const Job& job = jobs[j];
-      JobOutcome& outcome = outcomes[j];
       const std::string label = "[" + std::to_string(j + 1) + "/" + std::to_string(jobs.size()) + "] " +
                                 stem_of(job.input) + (settings.label_iso ? " @" + iso_text(job.iso) : "");
       cli::ConsoleProgress progress(label, settings.mode);
-      try {
-        run_job(job, settings, outcome, progress);
-        char done[64];
-        std::snprintf(done, sizeof done, " (%zu bytes, %.1f s)", outcome.result.bytes.size(),
-                      outcome.load_seconds + outcome.result.seconds.total());
-        std::lock_guard<std::mutex> lock(print_mutex);
-        progress.finish("wrote " + job.output + done);
-        if (settings.warn)
-          for (const std::string& warning : outcome.result.warnings)
-            std::fprintf(stderr, "isowave convert: warning: %s: %s\n", job.input.c_str(), warning.c_str());
-      } catch (const std::exception& error) {
-        outcome.error = error.what();
-        const auto* isowave_error = dynamic_cast<const Error*>(&error);
-        outcome.usage_error = isowave_error && isowave_error->kind() == ErrorKind::InvalidArgument;
-        // Most errors from reading name the input already.
-        if (outcome.error.rfind(job.input + ":", 0) != 0) outcome.error = job.input + ": " + outcome.error;
-        std::lock_guard<std::mutex> lock(print_mutex);
-        if (settings.mode == cli::ProgressMode::Quiet)
-          std::fprintf(stderr, "isowave convert: %s (skipped)\n", outcome.error.c_str());
-        else
-          progress.finish("FAILED: " + outcome.error + " (skipped)");
-      }
+      const std::string left = time_left.text(time_left.finished());
+      if (settings.mode != cli::ProgressMode::BufferedLine && !left.empty()) progress.note(left);
+      run_and_report(job, settings, outcomes[j], progress, time_left, print_mutex);
       release_freed_memory();  // what this input left must not stay under the next one
     }
   };
@@ -296,22 +340,32 @@ std::vector<JobOutcome> run_jobs(const std::vector<Job>& jobs, const RunSettings
 
 double rmse_percent(const ConvertResult& r, double value) { return 100.0 * value / r.cell_size; }
 
-// The batch's totals: inputs, failures, bytes in (the volumes' samples as
-// their inputs store them) and out, their ratio and the wall-clock time.
+// The batch's totals: inputs (volume files, builtin fields, or arguments
+// that gave none), jobs (inputs times isovalues), failed jobs, bytes in (the
+// samples, as their inputs store them, of each volume converted at least
+// once; counted once however many isovalues) and out (the files written),
+// their ratio and the wall-clock time.
 struct Totals {
-  std::size_t inputs = 0, failed = 0, bytes_in = 0, bytes_out = 0;
+  std::size_t inputs = 0, jobs = 0, failed = 0, bytes_in = 0, bytes_out = 0;
   double seconds = 0;
   double ratio() const { return bytes_out ? double(bytes_in) / double(bytes_out) : 0.0; }
 };
 
-Totals totals_of(const std::vector<JobOutcome>& outcomes, double seconds) {
+Totals totals_of(const std::vector<Job>& jobs, const std::vector<JobOutcome>& outcomes, double seconds) {
   Totals t;
-  t.inputs = outcomes.size();
+  t.jobs = jobs.size();
   t.seconds = seconds;
-  for (const JobOutcome& o : outcomes) {
-    t.failed += o.ok ? 0 : 1;
-    if (o.ok) t.bytes_in += o.volume_bytes, t.bytes_out += o.result.bytes.size();
+  std::set<std::string> inputs, converted;
+  for (std::size_t j = 0; j < jobs.size(); ++j) {
+    inputs.insert(jobs[j].input);
+    if (!outcomes[j].ok) {
+      ++t.failed;
+      continue;
+    }
+    t.bytes_out += outcomes[j].result.bytes.size();
+    if (converted.insert(jobs[j].input).second) t.bytes_in += outcomes[j].volume_bytes;
   }
+  t.inputs = inputs.size();
   return t;
 }
 
@@ -357,9 +411,10 @@ void print_json_result(const JobOutcome& o) {
 }
 
 void print_json(const std::vector<Job>& jobs, const std::vector<JobOutcome>& outcomes, const Totals& totals) {
-  std::printf("{\"converted\": %zu, \"failed\": %zu, \"volume_bytes\": %zu, \"bytes\": %zu, \"seconds\": %.3f, "
-              "\"results\": [",
-              totals.inputs - totals.failed, totals.failed, totals.bytes_in, totals.bytes_out, totals.seconds);
+  std::printf("{\"inputs\": %zu, \"jobs\": %zu, \"converted\": %zu, \"failed\": %zu, \"volume_bytes\": %zu, "
+              "\"bytes\": %zu, \"ratio\": %.6g, \"seconds\": %.3f, \"results\": [",
+              totals.inputs, totals.jobs, totals.jobs - totals.failed, totals.failed, totals.bytes_in,
+              totals.bytes_out, totals.ratio(), totals.seconds);
   for (std::size_t j = 0; j < jobs.size(); ++j) {
     const JobOutcome& o = outcomes[j];
     if (jobs[j].problem.empty())
@@ -436,7 +491,9 @@ void print_table(const std::vector<Job>& jobs, const std::vector<JobOutcome>& ou
     if (outcomes[j].ok) print_table_row(jobs[j].output, outcomes[j]);
     else std::printf("%-28s FAILED (the error is above)\n", (jobs[j].problem.empty() ? jobs[j].output : jobs[j].input).c_str());
   }
-  std::printf("\n%zu input%s, %zu failed", totals.inputs, totals.inputs == 1 ? "" : "s", totals.failed);
+  std::printf("\n%zu input%s", totals.inputs, totals.inputs == 1 ? "" : "s");
+  if (totals.jobs != totals.inputs) std::printf(", %zu jobs", totals.jobs);
+  std::printf(", %zu failed", totals.failed);
   if (totals.bytes_out > 0)
     std::printf("; volumes %.3g MB in, %.3g MB out (%.1f : 1)", 1e-6 * double(totals.bytes_in),
                 1e-6 * double(totals.bytes_out), totals.ratio());
@@ -485,7 +542,7 @@ int convert(const Args& raw) {
   const auto start = std::chrono::steady_clock::now();
   const std::vector<JobOutcome> outcomes = run_jobs(jobs, settings, threads);
   const Totals totals =
-      totals_of(outcomes, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+      totals_of(jobs, outcomes, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
   if (json) print_json(jobs, outcomes, totals);
   else if (!quiet) print_table(jobs, outcomes, totals);
   return exit_code(outcomes);

@@ -3,15 +3,7 @@ find_package(Threads REQUIRED)
 find_package(TBB REQUIRED)
 find_package(Eigen3 3.3 REQUIRED NO_MODULE)
 
-# Debian's OpenSubdivConfig.cmake names a static library that is not shipped,
-# so locate the shared CPU library and the headers directly.
-find_path(ISOWAVE_OPENSUBDIV_INCLUDE_DIR opensubdiv/far/topologyRefiner.h REQUIRED)
-find_library(ISOWAVE_OPENSUBDIV_LIBRARY NAMES osdCPU REQUIRED)
-if(NOT TARGET isowave_opensubdiv)
-  add_library(isowave_opensubdiv INTERFACE IMPORTED)
-  target_include_directories(isowave_opensubdiv SYSTEM INTERFACE "${ISOWAVE_OPENSUBDIV_INCLUDE_DIR}")
-  target_link_libraries(isowave_opensubdiv INTERFACE "${ISOWAVE_OPENSUBDIV_LIBRARY}")
-endif()
+include(IsowaveOpenSubdiv)
 
 find_package(OpenMesh REQUIRED)
 find_package(ZLIB REQUIRED)
@@ -22,7 +14,8 @@ find_package(CGAL REQUIRED)
 
 # Debian ships FindOpenVDB.cmake outside the default module path; it needs
 # Boost iostreams.
-list(APPEND CMAKE_MODULE_PATH "/usr/lib/x86_64-linux-gnu/cmake/OpenVDB")
+set(ISOWAVE_OPENVDB_MODULE_DIR "/usr/lib/x86_64-linux-gnu/cmake/OpenVDB")
+list(APPEND CMAKE_MODULE_PATH "${ISOWAVE_OPENVDB_MODULE_DIR}")
 find_package(Boost REQUIRED COMPONENTS iostreams)
 find_package(OpenVDB REQUIRED)
 

@@ -20,12 +20,23 @@ if(ISOWAVE_FUZZ)
 endif()
 
 # isowave_add_stage(NAME SOURCES... LINKS ...): one library per pipeline stage
-# with its public headers in NAME/include/isowave/NAME/.
+# with its public headers in NAME/include/isowave/NAME/; installed (with
+# ISOWAVE_INSTALL) as isowave::NAME, see cmake/IsowavePackage.cmake. The
+# stages are recorded in pipeline order in the global property ISOWAVE_STAGES.
 function(isowave_add_stage name)
   cmake_parse_arguments(ARG "" "" "SOURCES;LINKS;PRIVATE_LINKS" ${ARGN})
   add_library(isowave_${name} STATIC ${ARG_SOURCES})
   add_library(isowave::${name} ALIAS isowave_${name})
-  target_include_directories(isowave_${name} PUBLIC "${CMAKE_CURRENT_SOURCE_DIR}/include")
-  target_link_libraries(isowave_${name} PUBLIC ${ARG_LINKS} PRIVATE isowave_build_settings ${ARG_PRIVATE_LINKS})
+  target_include_directories(isowave_${name} PUBLIC
+    "$<BUILD_INTERFACE:${CMAKE_CURRENT_SOURCE_DIR}/include>" "$<INSTALL_INTERFACE:${CMAKE_INSTALL_INCLUDEDIR}>")
+  # The build settings are not part of the package (warnings, sanitizers).
+  target_link_libraries(isowave_${name} PUBLIC ${ARG_LINKS}
+    PRIVATE $<BUILD_INTERFACE:isowave_build_settings> ${ARG_PRIVATE_LINKS})
   target_compile_features(isowave_${name} PUBLIC cxx_std_17)
+  set_target_properties(isowave_${name} PROPERTIES EXPORT_NAME ${name})
+  set_property(GLOBAL APPEND PROPERTY ISOWAVE_STAGES ${name})
+  if(ISOWAVE_INSTALL)
+    install(TARGETS isowave_${name} EXPORT isowaveTargets ARCHIVE DESTINATION "${CMAKE_INSTALL_LIBDIR}")
+    install(DIRECTORY include/ DESTINATION "${CMAKE_INSTALL_INCLUDEDIR}")
+  endif()
 endfunction()

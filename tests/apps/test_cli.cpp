@@ -390,7 +390,8 @@ TEST_F(CliTest, BadInputGivesOneLineAndANonZeroExitCode) {
 }
 
 // Without a terminal a batch prints one line per input, "k of N" in it, the
-// stages and their seconds, then what it wrote or why it failed; a failed
+// batch's time left from the second on, the stages and their seconds, then
+// what it wrote or why it failed; a failed
 // input's error appears once (before, it came again in the summary table,
 // and every stage had a "done in" line of its own). The summary ends with the
 // totals.
@@ -405,7 +406,7 @@ TEST_F(CliTest, BatchPrintsOneLinePerInputAnErrorOnceAndTotals) {
   EXPECT_EQ(r.err.find("done in"), std::string::npos) << r.err;
   std::istringstream lines(r.err);
   std::string line;
-  for (const char* expected : {"[1/3] a @0: load ", "[2/3] b @0: load ", "[3/3] broken @0: FAILED: "}) {
+  for (const char* expected : {"[1/3] a @0: load ", "[2/3] b @0: about ", "[3/3] broken @0: about "}) {
     ASSERT_TRUE(std::getline(lines, line)) << r.err;
     EXPECT_EQ(line.rfind(expected, 0), 0u) << line;
     // The value range loaded is part of the input's line, not a line of its own.
