@@ -172,18 +172,21 @@ void take_levels(const FittedLevel& fitted, ConvertResult& result) {
 // gradient onto the trilinear isosurface; a point the correction took
 // farther than kFinePointMoveCells (its fallbacks: a neighbours' centroid, a
 // wide search) goes back onto the extracted surface, where it was, and so
-// does every corner of a face the moves fold (take_back_folding_moves).
+// does every corner of a face the moves fold (take_back_folding_moves). Then
+// the corners of the faces still folded move to unfold them (unfold()).
 void move_onto_isosurface(const WrapLevelMesh& level, const PreparedSurface& prepared, const ConvertOptions& options,
                           ConvertResult& result) {
   std::vector<Vec3>& positions = result.fit.positions;
+  const double iso = options.prepare.extract.iso;
+  const Orientation orientation = orientation_from_flip(options.prepare.extract.flip);
   const std::vector<Vec3> on_surface = positions;
-  result.fit.correction =
-      correct_to_isosurface(level, prepared.field, options.prepare.extract.iso, kFinePointMoveCells, positions);
+  result.fit.correction = correct_to_isosurface(level, prepared.field, iso, kFinePointMoveCells, positions);
   const double reach = kFinePointMoveCells * result.cell_size;
   for (std::size_t v = 0; v < positions.size(); ++v)
     if (!(squared_norm(positions[v] - on_surface[v]) <= reach * reach)) positions[v] = on_surface[v];
-  take_back_folding_moves(level, prepared.field, orientation_from_flip(options.prepare.extract.flip), on_surface,
-                          positions);
+  take_back_folding_moves(level, prepared.field, orientation, on_surface, positions);
+  result.fit.unfold = unfold(level, prepared.field, iso, orientation, kFineUnfoldRounds, kFinePointMoveCells, positions);
+  result.fit.folded_faces = result.fit.unfold.folded_after;
 }
 
 // The parametrization-based fit (fit/parametrized_fit.h) of `simplified`, at the
@@ -218,7 +221,6 @@ std::shared_ptr<const SubdivisionHierarchy> fit_parametrized(const simplify::Sim
   result.fit.folded_faces = fitted.folded_faces;
   if (options.fine_points == FinePoints::OnTrilinearIsosurface) {
     move_onto_isosurface(*level, prepared, options, result);
-    result.fit.folded_faces = count_folded_faces(*level, result.fit.positions, prepared.field, orientation);
   }
   check_fit(prepared, options, result);
   result.seconds.fit += seconds_since(start);

@@ -410,7 +410,9 @@ TEST_F(CliTest, BatchPrintsOneLinePerInputAnErrorOnceAndTotals) {
     ASSERT_TRUE(std::getline(lines, line)) << r.err;
     EXPECT_EQ(line.rfind(expected, 0), 0u) << line;
     // The value range loaded is part of the input's line, not a line of its own.
-    if (line.find("FAILED") == std::string::npos) EXPECT_NE(line.find(" s, values "), std::string::npos) << line;
+    if (line.find("FAILED") == std::string::npos) {
+      EXPECT_NE(line.find(" s, values "), std::string::npos) << line;
+    }
   }
   EXPECT_EQ(r.out.find("values "), std::string::npos) << r.out;
   const std::string error = "broken.nrrd: ";

@@ -74,7 +74,9 @@ enum class FinePoints {
   OnExtractedSurface,     // the map's points, on the marching-cubes triangles
   // Those moved along the field gradient onto the isosurface of the trilinear
   // field (correct_to_isosurface, within kFinePointMoveCells): off the
-  // marching-cubes mesh's own error, nearer the isosurface than it.
+  // marching-cubes mesh's own error, nearer the isosurface than it. A move
+  // that folds a face is taken back, and the corners of faces still folded
+  // move to unfold them (unfold(), kFineUnfoldRounds).
   OnTrilinearIsosurface,
 };
 
@@ -160,6 +162,7 @@ inline constexpr double kMaxAutoFineVertices = 8e6;
 // target divided by it.
 inline constexpr double kParametrizationAreaShare = 0.5;
 inline constexpr double kFinePointMoveCells = 0.5;
+inline constexpr int kFineUnfoldRounds = 10;  // FinePoints::OnTrilinearIsosurface's unfold()
 // Samples each way for the D convert measures (levels, summary rows):
 // enough for a few per mille of noise where no rare far point dominates.
 inline constexpr std::size_t kErrorSamples = 50000;
