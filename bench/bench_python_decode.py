@@ -4,10 +4,11 @@
 The target (issue #36): the Python decode at 100% returns its arrays within 1.2x the C++ decode's time. Both sides do
 the same work: read and decode the file, synthesize the fine control points and build the fine control mesh
 (bench_codec --decode-only FILE PERCENT, "with the fine control mesh"); Python also wraps the buffers as NumPy arrays
-(no copy). Best of five each, in fresh processes, taking turns twice: the C++ bench (whose malloc keeps freed memory
+(no copy). Best of five each, in fresh processes, taking turns (--rounds, default 3): the C++ bench (whose malloc keeps freed memory
 for reuse, as the CLI's does), Python as it comes, and Python after isowave.keep_freed_memory_for_reuse().
 
-usage: PYTHONPATH=build/python /usr/bin/python3 bench/bench_python_decode.py FILE.isw [PERCENT] [--bench-codec PATH]
+usage: PYTHONPATH=build/python /usr/bin/python3 bench/bench_python_decode.py FILE.isw [PERCENT] [--rounds N]
+       [--bench-codec PATH]
 """
 import argparse
 import os
@@ -49,6 +50,7 @@ def main():
     parser.add_argument("file")
     parser.add_argument("percent", nargs="?", type=float, default=100.0)
     parser.add_argument("--bench-codec", default=os.path.join(here, "..", "build", "bench", "bench_codec"))
+    parser.add_argument("--rounds", type=int, default=3)
     parser.add_argument("--worker", action="store_true", help=argparse.SUPPRESS)
     parser.add_argument("--keep-freed-memory", action="store_true", help=argparse.SUPPRESS)
     args = parser.parse_args()
@@ -58,11 +60,11 @@ def main():
              "isowave.decode()": lambda: python_seconds(args.file, args.percent, False),
              "isowave.decode(), memory kept": lambda: python_seconds(args.file, args.percent, True)}
     times = {name: [] for name in sides}
-    for _ in range(2):
+    for _ in range(args.rounds):
         for name, measure in sides.items():
             times[name].append(measure())
     cpp = min(times["C++ decode with the control mesh"])
-    print(f"{args.file} at {args.percent:g}%, best of 5 per round, 2 rounds:")
+    print(f"{args.file} at {args.percent:g}%, best of 5 per round, {args.rounds} rounds:")
     for name, rounds in times.items():
         print(f"  {name:34s} best {min(rounds):.3f} s (rounds {', '.join(f'{t:.3f}' for t in rounds)}), "
               f"{min(rounds) / cpp:.3f}x C++")
