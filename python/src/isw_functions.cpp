@@ -108,6 +108,14 @@ py::dict summary_of(const ConvertResult& r, const std::string& path, const Conve
                          py::arg("base") = row.is_base));
   }
   s["rows"] = rows;
+  py::list levels;
+  for (const LevelReport& l : r.level_reports)
+    levels.append(py::dict(py::arg("levels") = l.levels, py::arg("fine_vertices") = l.fine_vertices,
+                           py::arg("d_percent_cell") = 100.0 * l.d_cells(),
+                           py::arg("forward_rms_percent_cell") = 100.0 * l.forward_rms_cells,
+                           py::arg("backward_rms_percent_cell") = 100.0 * l.backward_rms_cells,
+                           py::arg("folded_share") = l.folded_share, py::arg("seconds") = l.seconds));
+  s["fit_levels"] = levels;
   s["quantization_rmse_percent_cell"] = percent_cell(r.quantization.rms);
   s["quantization_max_percent_cell"] = percent_cell(r.quantization.max);
   s["warnings"] = py::cast(r.warnings);

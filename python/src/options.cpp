@@ -37,7 +37,7 @@ VolumeReadOptions take_read_options(py::dict& kwargs) {
     const Vec3 d = vec3_from(dims, "dims");
     std::array<std::size_t, 3> counts{};
     for (int i = 0; i < 3; ++i) {
-      if (!(d[i] >= 1 && d[i] == static_cast<double>(static_cast<std::size_t>(d[i]))))
+      if (!(d[i] >= 1 && d[i] <= 1e9 && d[i] == static_cast<double>(static_cast<std::size_t>(d[i]))))
         throw py::value_error("dims must be three positive integers (x, y, z)");
       counts[static_cast<std::size_t>(i)] = static_cast<std::size_t>(d[i]);
     }

@@ -2,8 +2,8 @@
 // Keyword arguments of the isowave module's functions, turned into the
 // library's option structs. Keywords are the CLI's option names with '_' for
 // '-' (base_ratio for --base-ratio) and take typed values (dims=(64, 64, 32),
-// levels="auto" or 3, flip=True); the library checks the ranges and raises
-// isowave.Error with the messages the CLI prints for it.
+// levels="auto" or 3, flip=True); the library checks most ranges itself
+// (isowave::Error, so isowave.Error with the CLI's message).
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 

@@ -43,6 +43,10 @@ def test_convert_summary_has_the_cli_json_figures(sphere_isw, tmp_path):
         for key in ("percent", "rmse_percent_cell", "d_percent_cell"):
             assert ours[key] == pytest.approx(theirs[key], rel=1e-4, abs=1e-6), key
     assert set(summary["seconds"]) == set(cli_result["seconds"])
+    assert [level["fine_vertices"] for level in summary["fit_levels"]] == \
+        [level["fine_vertices"] for level in cli_result["fit_levels"]]
+    for ours, theirs in zip(summary["fit_levels"], cli_result["fit_levels"]):
+        assert ours["d_percent_cell"] == pytest.approx(theirs["d_percent_cell"], rel=1e-4)
 
 
 def test_convert_of_an_array_decodes_to_the_cli_mesh(sphere_isw, tmp_path):
@@ -100,3 +104,21 @@ def test_read_volume_gives_the_samples_extract_contours(cli, tmp_path):
     vertices, faces = isowave.extract(field, 0.0, spacing, origin)
     np.testing.assert_allclose(vertices, cli_vertices, rtol=1e-7, atol=1e-7)
     np.testing.assert_array_equal(faces, cli_faces)
+
+
+def test_a_cut_file_decodes_what_it_holds_with_the_cli_warning(cli, sphere_isw, tmp_path):
+    cli_path, _ = sphere_isw
+    data = cli_path.read_bytes()
+    cut = tmp_path / "cut.isw"
+    cut.write_bytes(data[: len(data) * 3 // 4])
+    obj = tmp_path / "cut.obj"
+    warning = cli("decode", cut, "--percent", 100, "-o", obj, "--quiet").stderr.strip()
+    prefix = "isowave decode: warning: "
+    assert warning.startswith(prefix)
+    cli_vertices, cli_faces = read_obj(obj)
+    with pytest.warns(UserWarning) as caught:
+        vertices, faces = isowave.decode(cut)
+    assert str(caught[0].message) == warning[len(prefix):]
+    np.testing.assert_allclose(vertices, cli_vertices, rtol=1e-7, atol=1e-7)
+    np.testing.assert_array_equal(faces, cli_faces)
+    assert not np.array_equal(vertices, isowave.decode(cli_path)[0])
