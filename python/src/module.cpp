@@ -27,7 +27,7 @@ field: float32 array of shape (nz, ny, nx), owning the samples read (no copy); s
 endian='little'|'big', spacing=(sx, sy, sz), origin=(ox, oy, oz) (override the file's), field='NAME'
 (.vtk/.vti array), grid='NAME' (.vdb grid).)";
 
-constexpr const char* kExtractDoc = R"(extract(field, iso, spacing=(1, 1, 1), origin=(0, 0, 0), flip=False, min_component_vertices=0, smooth=0) -> (vertices, faces)
+constexpr const char* kExtractDoc = R"(extract(field, iso, spacing=(1, 1, 1), origin=(0, 0, 0), *, flip=False, min_component_vertices=0, smooth=0) -> (vertices, faces)
 
 The manifold isosurface of field (3-D, indexed [z, y, x]) at iso, as `isowave extract`: vertices
 (n, 3) float64 world coordinates, faces (m, 3) uint32 triangles with normals toward lower values
@@ -48,7 +48,7 @@ file's metadata, default 'numpy array'). Returns the result `isowave convert --j
 (bytes, vertex counts, levels, seconds per stage, fit quality, the rate-distortion rows with D, the
 quantization error, warnings).)";
 
-constexpr const char* kDecodeDoc = R"(decode(path, percent=None, coefficients=None, max_error=None, bytes=None, level=None, limit=False, triangulate=False) -> (vertices, faces)
+constexpr const char* kDecodeDoc = R"(decode(path, *, percent=None, coefficients=None, max_error=None, bytes=None, level=None, limit=False, triangulate=False) -> (vertices, faces)
 
 Rebuilds the surface of an .isw file as `isowave decode`: the base mesh and the most important
 wavelet coefficients, at most one of percent (0..100 of full resolution, counted as the paper does;
