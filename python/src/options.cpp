@@ -1,0 +1,99 @@
+#include "options.h"
+
+#include <string>
+
+#include "arrays.h"
+#include "isowave/core/error.h"
+
+namespace isowave::python {
+namespace {
+
+// Removes `name` from `kwargs`; None when it was not given.
+py::object take(py::dict& kwargs, const char* name) {
+  if (!kwargs.contains(name)) return py::none();
+  return kwargs.attr("pop")(name);
+}
+
+template <typename T>
+T cast_as(const py::object& value, const char* name) {
+  try {
+    return value.cast<T>();
+  } catch (const py::cast_error&) {
+    throw py::type_error(std::string(name) + "=" + py::repr(value).cast<std::string>() + " has the wrong type");
+  }
+}
+
+template <typename T>
+T take_as(py::dict& kwargs, const char* name, T fallback) {
+  const py::object value = take(kwargs, name);
+  return value.is_none() ? fallback : cast_as<T>(value, name);
+}
+
+}  // namespace
+
+VolumeReadOptions take_read_options(py::dict& kwargs) {
+  VolumeReadOptions options;
+  if (const py::object dims = take(kwargs, "dims"); !dims.is_none()) {
+    const Vec3 d = vec3_from(dims, "dims");
+    std::array<std::size_t, 3> counts{};
+    for (int i = 0; i < 3; ++i) {
+      if (!(d[i] >= 1 && d[i] <= 1e9 && d[i] == static_cast<double>(static_cast<std::size_t>(d[i]))))
+        throw py::value_error("dims must be three positive integers (x, y, z)");
+      counts[static_cast<std::size_t>(i)] = static_cast<std::size_t>(d[i]);
+    }
+    options.dims = counts;
+  }
+  if (const py::object type = take(kwargs, "type"); !type.is_none())
+    options.type = parse_scalar_type(py::str(type).cast<std::string>());
+  const std::string endian = take_as<std::string>(kwargs, "endian", "little");
+  if (endian != "little" && endian != "big") throw py::value_error("endian must be 'little' or 'big', got '" + endian + "'");
+  options.big_endian = endian == "big";
+  if (const py::object spacing = take(kwargs, "spacing"); !spacing.is_none()) {
+    options.spacing = vec3_from(spacing, "spacing");
+    if (!(options.spacing->x > 0 && options.spacing->y > 0 && options.spacing->z > 0) || !is_finite(*options.spacing))
+      throw py::value_error("spacing must be three positive finite numbers (x, y, z)");
+  }
+  if (const py::object origin = take(kwargs, "origin"); !origin.is_none()) options.origin = vec3_from(origin, "origin");
+  options.field = take_as<std::string>(kwargs, "field", "");
+  options.grid = take_as<std::string>(kwargs, "grid", "");
+  return options;
+}
+
+ConvertOptions take_convert_options(py::dict& kwargs) {
+  ConvertOptions options;
+  const py::object levels = take(kwargs, "levels");
+  if (!levels.is_none() && !(py::isinstance<py::str>(levels) && levels.cast<std::string>() == "auto"))
+    options.levels = cast_as<int>(levels, "levels");
+  const std::string fit = take_as<std::string>(kwargs, "fit", "shrink-wrap");
+  if (fit == "parametrization") options.fit = FitMethod::Parametrization;
+  else if (fit != "shrink-wrap")
+    throw Error(ErrorKind::InvalidArgument, "fit must be 'shrink-wrap' or 'parametrization', not '" + fit + "'");
+  options.max_error_cells = take_as<double>(kwargs, "max_error", 0.0);
+  const py::object base_vertices = take(kwargs, "base_vertices");
+  const py::object base_ratio = take(kwargs, "base_ratio");
+  if (!base_vertices.is_none() && !base_ratio.is_none())
+    throw Error(ErrorKind::InvalidArgument, "give at most one of base_vertices and base_ratio");
+  if (!base_vertices.is_none()) {
+    options.base.vertices = cast_as<std::size_t>(base_vertices, "base_vertices");
+    if (options.base.vertices < 4) throw Error(ErrorKind::InvalidArgument, "base_vertices must be at least 4");
+  }
+  if (!base_ratio.is_none()) options.base.ratio = cast_as<double>(base_ratio, "base_ratio");
+  // As the CLI: without an explicit size the base grows until it covers the isosurface.
+  options.base.growth = base_vertices.is_none() && base_ratio.is_none() ? BaseGrowth::UntilCovered : BaseGrowth::Fixed;
+  options.step_cells = take_as<double>(kwargs, "step", options.step_cells);
+  IsosurfaceOptions& extract = options.prepare.extract;
+  extract.smooth_sigma = take_as<double>(kwargs, "smooth", 0.0);
+  extract.min_component_vertices = take_as<std::size_t>(kwargs, "min_component_vertices", 0);
+  extract.flip = take_as<bool>(kwargs, "flip", false);
+  options.file_check = take_as<bool>(kwargs, "verify", false) ? FileCheck::DecodeAgain : FileCheck::None;
+  options.folded_fit = take_as<bool>(kwargs, "allow_folded", false) ? FoldedFit::Keep : FoldedFit::Refuse;
+  return options;
+}
+
+void reject_unknown_keywords(const py::dict& kwargs, const char* function) {
+  for (const auto& item : kwargs)
+    throw py::type_error(std::string(function) + "() got an unexpected keyword argument '" +
+                         py::str(item.first).cast<std::string>() + "'");
+}
+
+}  // namespace isowave::python

@@ -1,0 +1,124 @@
+"""The module against the CLI's outputs on the same inputs (the CLI is the reference)."""
+import json
+
+import numpy as np
+import pytest
+
+import isowave
+
+
+def read_obj(path):
+    """Vertices and faces (0-based) of an ASCII OBJ file."""
+    vertices, faces = [], []
+    with open(path) as f:
+        for line in f:
+            fields = line.split()
+            if fields and fields[0] == "v":
+                vertices.append([float(x) for x in fields[1:4]])
+            elif fields and fields[0] == "f":
+                faces.append([int(x.split("/")[0]) - 1 for x in fields[1:]])
+    return np.array(vertices), np.array(faces)
+
+
+def test_convert_of_a_path_writes_the_cli_bytes(cli, sphere_isw, tmp_path):
+    cli_path, _ = sphere_isw
+    summary = isowave.convert("builtin:sphere:32", 0.0, tmp_path / "sphere.isw", levels=3)
+    assert (tmp_path / "sphere.isw").read_bytes() == cli_path.read_bytes()
+    assert summary["output"] == str(tmp_path / "sphere.isw")
+    assert summary["bytes"] == cli_path.stat().st_size
+
+
+def test_convert_summary_has_the_cli_json_figures(sphere_isw, tmp_path):
+    _, cli_result = sphere_isw
+    summary = isowave.convert("builtin:sphere:32", 0.0, tmp_path / "sphere.isw", levels=3)
+    for key in ("bytes", "volume_bytes", "extracted_vertices", "base_vertices", "fine_vertices", "levels",
+                "fit_points_beyond_one_cell", "base_attempts"):
+        assert summary[key] == cli_result[key], key
+    for key in ("cell_size", "fit_isosurface_rms_cells", "quantization_rmse_percent_cell"):
+        assert summary[key] == pytest.approx(cli_result[key], rel=1e-5), key
+    assert len(summary["rows"]) == len(cli_result["rows"])
+    for ours, theirs in zip(summary["rows"], cli_result["rows"]):
+        assert ours["coefficients"] == theirs["coefficients"] and ours["bytes"] == theirs["bytes"]
+        assert ours["base"] == theirs["base"]
+        for key in ("percent", "rmse_percent_cell", "d_percent_cell"):
+            assert ours[key] == pytest.approx(theirs[key], rel=1e-4, abs=1e-6), key
+    assert set(summary["seconds"]) == set(cli_result["seconds"])
+    assert [level["fine_vertices"] for level in summary["fit_levels"]] == \
+        [level["fine_vertices"] for level in cli_result["fit_levels"]]
+    for ours, theirs in zip(summary["fit_levels"], cli_result["fit_levels"]):
+        assert ours["d_percent_cell"] == pytest.approx(theirs["d_percent_cell"], rel=1e-4)
+
+
+def test_convert_of_an_array_decodes_to_the_cli_mesh(sphere_isw, tmp_path):
+    """The same field as an array (read_volume's) gives the CLI file's surface; only the metadata's source differs."""
+    cli_path, _ = sphere_isw
+    field, spacing, origin = isowave.read_volume("builtin:sphere:32")
+    isowave.convert(field, 0.0, tmp_path / "array.isw", levels=3, spacing=spacing, origin=origin)
+    for percent in (100, 10):
+        ours = isowave.decode(tmp_path / "array.isw", percent=percent)
+        theirs = isowave.decode(cli_path, percent=percent)
+        np.testing.assert_array_equal(ours[0], theirs[0])
+        np.testing.assert_array_equal(ours[1], theirs[1])
+
+
+@pytest.mark.parametrize("percent,level", [(100, None), (5, None), (20, 1)])
+def test_decode_gives_the_cli_decode_mesh(cli, sphere_isw, tmp_path, percent, level):
+    cli_path, _ = sphere_isw
+    obj = tmp_path / "decoded.obj"
+    cli("decode", cli_path, "--percent", percent, "-o", obj, "--quiet",
+        *(["--level", level] if level is not None else []))
+    cli_vertices, cli_faces = read_obj(obj)
+    vertices, faces = isowave.decode(cli_path, percent=percent, level=level)
+    np.testing.assert_allclose(vertices, cli_vertices, rtol=1e-7, atol=1e-7)
+    np.testing.assert_array_equal(faces, cli_faces)
+
+
+def test_decode_by_coefficients_limit_and_triangulate_match_the_cli(cli, sphere_isw, tmp_path):
+    cli_path, _ = sphere_isw
+    obj = tmp_path / "decoded.obj"
+    cli("decode", cli_path, "--coefficients", 300, "--limit", "--triangulate", "-o", obj, "--quiet")
+    cli_vertices, cli_faces = read_obj(obj)
+    vertices, faces = isowave.decode(cli_path, coefficients=300, limit=True, triangulate=True)
+    assert faces.shape[1] == 3
+    np.testing.assert_allclose(vertices, cli_vertices, rtol=1e-7, atol=1e-7)
+    np.testing.assert_array_equal(faces, cli_faces)
+
+
+def test_stats_rows_are_the_cli_json_rows(cli, sphere_isw):
+    cli_path, _ = sphere_isw
+    theirs = json.loads(cli("stats", cli_path, "--json", "--percents", "100,20,10,5,2").stdout)["rows"]
+    ours = isowave.stats(cli_path, [100, 20, 10, 5, 2])
+    assert len(ours) == len(theirs)
+    for row, reference in zip(ours, theirs):
+        assert set(row) == set(reference)
+        for key, value in reference.items():
+            assert row[key] == pytest.approx(value, rel=1e-4, abs=1e-6), key
+
+
+def test_read_volume_gives_the_samples_extract_contours(cli, tmp_path):
+    """read_volume's array, extracted, gives the CLI's extract mesh (same surface, same vertex order)."""
+    field, spacing, origin = isowave.read_volume("builtin:torus:24")
+    obj = tmp_path / "torus.obj"
+    cli("extract", "builtin:torus:24", "--iso", 0, "-o", obj, "--quiet")
+    cli_vertices, cli_faces = read_obj(obj)
+    vertices, faces = isowave.extract(field, 0.0, spacing, origin)
+    np.testing.assert_allclose(vertices, cli_vertices, rtol=1e-7, atol=1e-7)
+    np.testing.assert_array_equal(faces, cli_faces)
+
+
+def test_a_cut_file_decodes_what_it_holds_with_the_cli_warning(cli, sphere_isw, tmp_path):
+    cli_path, _ = sphere_isw
+    data = cli_path.read_bytes()
+    cut = tmp_path / "cut.isw"
+    cut.write_bytes(data[: len(data) * 3 // 4])
+    obj = tmp_path / "cut.obj"
+    warning = cli("decode", cut, "--percent", 100, "-o", obj, "--quiet").stderr.strip()
+    prefix = "isowave decode: warning: "
+    assert warning.startswith(prefix)
+    cli_vertices, cli_faces = read_obj(obj)
+    with pytest.warns(UserWarning) as caught:
+        vertices, faces = isowave.decode(cut)
+    assert str(caught[0].message) == warning[len(prefix):]
+    np.testing.assert_allclose(vertices, cli_vertices, rtol=1e-7, atol=1e-7)
+    np.testing.assert_array_equal(faces, cli_faces)
+    assert not np.array_equal(vertices, isowave.decode(cli_path)[0])
