@@ -1,6 +1,6 @@
 // NetCDF (.nc, classic, 64-bit offset, CDF-5 or NetCDF-4) through
 // libnetcdf: one numeric variable, 3-D (z, y, x) or 4-D (time, z, y, x) with
-// a time index.
+// a time index. A classic header is checked here before libnetcdf parses it.
 #include <netcdf.h>
 
 #include <algorithm>
@@ -189,11 +189,129 @@ void read_block(int file, const VolumeVariable& v, std::vector<std::size_t> star
   }
 }
 
+// A walk over a classic (CDF-1, CDF-2, CDF-5) header that checks every count
+// and length against the bytes left, before libnetcdf parses it: libnetcdf
+// 4.9.0 crashes on some corrupt counts (SIGSEGV in nc_open for a dimension
+// count of 0x40000004). Other files (NetCDF-4 is HDF5) are left to the library.
+class ClassicHeaderCheck {
+ public:
+  // Thrown when the header runs past `bytes`, a prefix of the file.
+  struct NeedMoreBytes {};
+
+  ClassicHeaderCheck(const std::vector<char>& bytes, std::uint64_t file_size, const std::string& path)
+      : bytes_(bytes), truncated_window_(bytes.size() < file_size), path_(path) {}
+
+  void run() {
+    if (bytes_.size() < 4 || bytes_[0] != 'C' || bytes_[1] != 'D' || bytes_[2] != 'F') return;  // not classic
+    const int version = bytes_[3];
+    if (version != 1 && version != 2 && version != 5) return;  // libnetcdf names the problem
+    wide_ = version == 5;
+    at_ = 4;
+    count(0);  // numrecs
+    const std::uint64_t dims = list(kDimension, 4 + (wide_ ? 16 : 8));
+    for (std::uint64_t d = 0; d < dims; ++d) name(), count(0);
+    attributes();
+    const std::uint64_t variables = list(kVariable, 4 + (wide_ ? 32 : 20));
+    for (std::uint64_t v = 0; v < variables; ++v) {
+      name();
+      const std::uint64_t rank = count(wide_ ? 8 : 4);
+      if (rank > NC_MAX_VAR_DIMS) fail("a variable has " + std::to_string(rank) + " dimensions");
+      for (std::uint64_t r = 0; r < rank; ++r)
+        if (count(0) >= dims) fail("a variable names dimension " + std::to_string(r) + " that does not exist");
+      attributes();
+      type();
+      count(0);                             // vsize
+      skip(version == 1 ? 4 : 8, "begin");  // the data's offset
+    }
+  }
+
+ private:
+  static constexpr std::uint32_t kDimension = 0x0a, kVariable = 0x0b, kAttribute = 0x0c;
+
+  [[noreturn]] void fail(const std::string& what) const {
+    format_error(path_, "corrupt NetCDF header: " + what);
+  }
+  void skip(std::uint64_t n, const char* what) {
+    if (n > bytes_.size() - at_) {
+      if (truncated_window_) throw NeedMoreBytes{};
+      fail(std::string("the file ends within ") + what);
+    }
+    at_ += static_cast<std::size_t>(n);
+  }
+  std::uint64_t word(std::size_t size, const char* what) {
+    const std::size_t start = at_;
+    skip(size, what);
+    std::uint64_t value = 0;
+    for (std::size_t i = 0; i < size; ++i) value = value << 8 | static_cast<unsigned char>(bytes_[start + i]);
+    return value;
+  }
+  // A count (nelems, a length) whose items take at least `item_bytes` each.
+  std::uint64_t count(std::size_t item_bytes) {
+    const std::uint64_t n = word(wide_ ? 8 : 4, "a count");
+    if (item_bytes > 0 && n > (bytes_.size() - at_) / item_bytes) {
+      if (truncated_window_) throw NeedMoreBytes{};
+      fail("a count of " + std::to_string(n) + " is more than the file holds");
+    }
+    return n;
+  }
+  // ABSENT (two zero words) or TAG and a count of items of at least `item_bytes`.
+  std::uint64_t list(std::uint32_t tag, std::size_t item_bytes) {
+    const std::uint64_t found = word(4, "a list tag");
+    if (found != 0 && found != tag) fail("a list tag " + std::to_string(found) + " where " + std::to_string(tag) + " belongs");
+    const std::uint64_t n = count(item_bytes);
+    if (found == 0 && n != 0) fail("an absent list with " + std::to_string(n) + " items");
+    return n;
+  }
+  void name() {
+    const std::uint64_t length = count(1);
+    if (length == 0 || length > NC_MAX_NAME) fail("a name of " + std::to_string(length) + " bytes");
+    skip((length + 3) / 4 * 4, "a name");
+  }
+  std::size_t type() {
+    const std::uint64_t t = word(4, "a type");
+    static constexpr std::size_t kSizes[] = {0, 1, 1, 2, 4, 4, 8, 1, 2, 4, 8, 8};  // NC_BYTE .. NC_UINT64
+    if (t < 1 || t > (wide_ ? 11u : 6u)) fail("unknown type " + std::to_string(t));
+    return kSizes[t];
+  }
+  void attributes() {
+    const std::uint64_t n = list(kAttribute, wide_ ? 24 : 16);
+    for (std::uint64_t a = 0; a < n; ++a) {
+      name();
+      const std::size_t size = type();
+      const std::uint64_t values = count(size);
+      skip((values * size + 3) / 4 * 4, "attribute values");
+    }
+  }
+
+  const std::vector<char>& bytes_;
+  bool truncated_window_;
+  const std::string& path_;
+  bool wide_ = false;
+  std::size_t at_ = 0;
+};
+
+// Reads as much of the file as the header needs (64 KiB, 1 MiB, ... the whole
+// file), so that the check costs next to nothing on large files.
+void check_classic_header(const std::string& path) {
+  InputFile file(path);
+  for (std::uint64_t window = 64 << 10;; window *= 16) {
+    std::vector<char> head(static_cast<std::size_t>(std::min(file.size(), window)));
+    file.seek(0);
+    file.read_exact(head.data(), head.size(), "NetCDF header");
+    try {
+      ClassicHeaderCheck(head, file.size(), path).run();
+      return;
+    } catch (const ClassicHeaderCheck::NeedMoreBytes&) {
+    }
+  }
+}
+
 }  // namespace
 
 Volume read_netcdf(const std::string& path, const std::string& selection, const VolumeReadOptions& options) {
   const std::uint64_t file_bytes = InputFile(path).size();  // a missing or special file fails here, plainly
   const Selection selected = parse_selection(selection, path);
+  check_classic_header(path);
   const std::lock_guard<std::mutex> lock(library_mutex());
   const NcFile file(path);
   const VolumeVariable v = choose_variable(file.id(), selected.name, path);

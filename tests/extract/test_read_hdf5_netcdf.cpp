@@ -329,17 +329,32 @@ TEST(ReadNetcdf, TimeIndexSelectsTheStep) {
   }
 }
 
-// Every prefix; random corruption only of the samples: libnetcdf 4.9.0
-// crashes (SIGSEGV in nc_open) on some corrupt classic headers, e.g. a
-// dimension count of 0x40000004, before isowave sees anything.
-TEST(ReadNetcdf, TruncationSweepAndCorruptSamples) {
+// Every prefix, random corruption anywhere in a classic file (whose header
+// isowave checks before libnetcdf 4.9.0, which crashes on some corrupt
+// counts), and of the samples only in a NetCDF-4 file (HDF5: libhdf5 fails
+// on some corrupt metadata, see ReadHdf5.TruncationSweepAndCorruption).
+TEST(ReadNetcdf, TruncationAndCorruptionSweep) {
   TempDir dir;
   const std::string path = dir.file("sweep.nc");
   for (const int format : {0, NC_NETCDF4}) {
-    const Samples s = make_samples(ScalarType::Int16, 60, 6);
-    write_netcdf(path, format, {{"v", ScalarType::Int16, {s.little}}});
-    sweep(path, {}, format ? "nc4" : "nc classic", "", find_bytes(path, s.bytes(format == 0)));
+    const Samples s = make_samples(ScalarType::Int16, 60, 6), w = make_samples(ScalarType::Float32, 60, 7);
+    write_netcdf(path, format, {{"v", ScalarType::Int16, {s.little}, false}, {"w", ScalarType::Float32, {w.little}, true}});
+    VolumeReadOptions options;
+    options.field = "v";
+    sweep(path, options, format ? "nc4" : "nc classic", "", format ? find_bytes(path, s.little) : ByteRange{});
   }
+}
+
+// The dimension count that crashed libnetcdf 4.9.0's nc_open is refused first.
+TEST(ReadNetcdf, ClassicHeaderCountsBeyondTheFileAreRefused) {
+  TempDir dir;
+  const std::string path = dir.file("counts.nc");
+  write_netcdf(path, 0, {{"v", ScalarType::Int16, {make_samples(ScalarType::Int16, 60, 6).little}}});
+  Bytes file = read_file(path);
+  ASSERT_EQ(file[11], 0x0a);  // NC_DIMENSION, then the 4-byte count
+  file[12] = 0x40;
+  write_file(path, file);
+  expect_error(path, {}, "corrupt NetCDF header", "dimension count 0x40000004");
 }
 
 }  // namespace
