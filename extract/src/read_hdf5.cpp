@@ -64,16 +64,19 @@ bool is_ieee_float(hid_t type, std::size_t size) {
 }
 
 // The dataset's sample type, or nothing if it is not a number (compound,
-// string, enum, ...) of a standard layout: integers of 1, 2, 4 or 8 bytes
-// using every bit, IEEE floats of 2, 4 or 8 bytes.
+// string, enum, ...) of a standard layout: little- or big-endian integers of
+// 1, 2, 4 or 8 bytes using every bit, IEEE floats of 2, 4 or 8 bytes.
 std::optional<ScalarType> sample_type(hid_t dataset) {
   const Hid type(H5Dget_type(dataset), H5Tclose);
   if (!type.valid()) return std::nullopt;
   const H5T_class_t type_class = H5Tget_class(type.get());
   const std::size_t size = H5Tget_size(type.get());
+  const H5T_order_t order = H5Tget_order(type.get());
   if ((size != 1 && size != 2 && size != 4 && size != 8) || H5Tget_precision(type.get()) != 8 * size ||
-      H5Tget_offset(type.get()) != 0)
+      H5Tget_offset(type.get()) != 0 || (size > 1 && order != H5T_ORDER_LE && order != H5T_ORDER_BE)) {
+    H5Eclear2(H5E_DEFAULT);
     return std::nullopt;
+  }
   if (type_class == H5T_FLOAT && size > 1 && is_ieee_float(type.get(), size)) {
     if (size == 2) return ScalarType::Float16;
     if (size == 4) return ScalarType::Float32;
