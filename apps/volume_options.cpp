@@ -45,11 +45,11 @@ Vec3 parse_vec3(const std::string& option, const std::string& text, bool positiv
 
 void add_volume_options(std::vector<OptionSpec>& options) {
   options.push_back({"dims", true, "raw input: samples along x, y, z (with --type, any file name is raw)", "X,Y,Z"});
-  options.push_back({"type", true, "raw input: uint8|int8|uint16|int16|uint32|int32|float32|float64", "T"});
+  options.push_back({"type", true, "raw input: [u]int8|16|32|64 or float16|32|64 (e.g. uint16, float32)", "T"});
   options.push_back({"endian", true, "raw input: little (default) or big", "E"});
   options.push_back({"spacing", true, "world units between samples (overrides the file)", "SX,SY,SZ"});
   options.push_back({"origin", true, "world position of the first sample (overrides the file)", "OX,OY,OZ"});
-  options.push_back({"field", true, ".vtk/.vti input: the point-data array to read", "NAME"});
+  options.push_back({"field", true, ".vtk/.vti: the point-data array; .h5: the dataset; .nc: the variable[@TIME]", "NAME"});
   options.push_back({"grid", true, ".vdb input: the grid to read", "NAME"});
 }
 

@@ -19,6 +19,13 @@ list(APPEND CMAKE_MODULE_PATH "${ISOWAVE_OPENVDB_MODULE_DIR}")
 find_package(Boost REQUIRED COMPONENTS iostreams)
 find_package(OpenVDB REQUIRED)
 
+# The HDF5 and NetCDF volume readers (extract/src/read_hdf5.cpp,
+# read_netcdf.cpp). Through pkg-config: FindHDF5 needs the C language, which
+# this C++ project does not enable.
+find_package(PkgConfig REQUIRED)
+pkg_check_modules(ISOWAVE_HDF5 REQUIRED IMPORTED_TARGET hdf5)
+pkg_check_modules(ISOWAVE_NETCDF REQUIRED IMPORTED_TARGET netcdf)
+
 if(ISOWAVE_BUILD_TESTS)
   find_package(GTest REQUIRED)
 endif()

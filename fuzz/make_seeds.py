@@ -89,6 +89,20 @@ def isw():
                 os.path.join(CORPUS, "isw", "golden_1_0.isw"))
 
 
+def npy():
+    def file(descr, fortran, shape, data, major=1):
+        header = "{'descr': '%s', 'fortran_order': %s, 'shape': %s, }" % (descr, fortran, shape)
+        prefix = 10 if major == 1 else 12
+        header += " " * (-(prefix + len(header) + 1) % 64) + "\n"
+        length = struct.pack("<H" if major == 1 else "<I", len(header))
+        return b"\x93NUMPY" + bytes([major, 0]) + length + header.encode("latin-1") + data
+    write("npy", "f4_c.npy", file("<f4", False, "(2, 2, 2)", floats("<")))
+    write("npy", "i2_be_fortran.npy", file(">i2", True, "(3, 2, 1)", struct.pack(">6h", *range(-3, 3))))
+    write("npy", "f8_v2.npy", file("<f8", False, "(1, 1, 2)", struct.pack("<2d", 0.5, -1e300), 2))
+    write("npy", "u1_v3.npy", file("|u1", False, "(2, 2, 2)", bytes(range(8)), 3))
+    write("npy", "f2.npy", file("<f2", False, "(1, 2, 2)", struct.pack("<4e", 1.0, -2.0, 65504.0, 6e-8)))
+
+
 def vdb():
     with tempfile.TemporaryDirectory() as tmp:
         exe = os.path.join(tmp, "vdb_seeds")
@@ -98,7 +112,7 @@ def vdb():
 
 
 if __name__ == "__main__":
-    for make in (raw, nrrd, vtk, vti, mesh, isw, vdb):
+    for make in (raw, nrrd, vtk, vti, npy, mesh, isw, vdb):
         os.makedirs(os.path.join(CORPUS, make.__name__), exist_ok=True)
         make()
     sys.exit(0)

@@ -14,6 +14,9 @@ const char* to_string(ScalarType type) {
     case ScalarType::Int32: return "int32";
     case ScalarType::Float32: return "float32";
     case ScalarType::Float64: return "float64";
+    case ScalarType::Int64: return "int64";
+    case ScalarType::UInt64: return "uint64";
+    case ScalarType::Float16: return "float16";
   }
   return "unknown";
 }
@@ -21,9 +24,9 @@ const char* to_string(ScalarType type) {
 std::size_t scalar_type_size(ScalarType type) {
   switch (type) {
     case ScalarType::UInt8: case ScalarType::Int8: return 1;
-    case ScalarType::UInt16: case ScalarType::Int16: return 2;
+    case ScalarType::UInt16: case ScalarType::Int16: case ScalarType::Float16: return 2;
     case ScalarType::UInt32: case ScalarType::Int32: case ScalarType::Float32: return 4;
-    case ScalarType::Float64: return 8;
+    case ScalarType::Float64: case ScalarType::Int64: case ScalarType::UInt64: return 8;
   }
   return 1;
 }

@@ -107,6 +107,17 @@ std::size_t checked_sample_count(const std::array<std::size_t, 3>& dims, std::si
   return count;
 }
 
+std::size_t checked_stored_count(const std::string& path, const std::string& what, const std::array<std::size_t, 3>& dims,
+                                 std::size_t bytes_per_sample, std::uint64_t file_bytes) {
+  const std::size_t count = checked_sample_count(dims, bytes_per_sample, path);
+  const std::uint64_t bytes = static_cast<std::uint64_t>(count) * bytes_per_sample;
+  if (bytes > max_inflated_size(file_bytes))
+    format_error(path, what + " declares " + std::to_string(dims[0]) + " x " + std::to_string(dims[1]) + " x " +
+                           std::to_string(dims[2]) + " samples (" + std::to_string(bytes) + " bytes), more than a " +
+                           std::to_string(file_bytes) + "-byte file can hold even compressed");
+  return count;
+}
+
 namespace {
 
 constexpr bool host_is_big_endian() {
@@ -146,6 +157,25 @@ void decode_typed(const std::uint8_t* src, std::size_t count, bool swap, float* 
   }
 }
 
+// IEEE 754 binary16 to float (exact: every half is a float).
+float half_to_float(std::uint16_t h) {
+  const int exponent = (h >> 10) & 0x1f;
+  const int mantissa = h & 0x3ff;
+  float magnitude;
+  if (exponent == 0) magnitude = std::ldexp(static_cast<float>(mantissa), -24);
+  else if (exponent == 31) magnitude = mantissa ? std::numeric_limits<float>::quiet_NaN() : std::numeric_limits<float>::infinity();
+  else magnitude = std::ldexp(static_cast<float>(mantissa | 0x400), exponent - 25);
+  return (h & 0x8000) ? -magnitude : magnitude;
+}
+
+void decode_half(const std::uint8_t* src, std::size_t count, bool swap, float* dst) {
+  for (std::size_t i = 0; i < count; ++i) {
+    std::uint16_t bits;
+    std::memcpy(&bits, src + i * 2, 2);
+    dst[i] = half_to_float(swap ? byte_swap(bits) : bits);
+  }
+}
+
 }  // namespace
 
 void decode_samples(const std::uint8_t* src, std::size_t count, ScalarType type, bool big_endian, float* dst) {
@@ -159,6 +189,9 @@ void decode_samples(const std::uint8_t* src, std::size_t count, ScalarType type,
     case ScalarType::Int32: decode_typed<std::int32_t, std::uint32_t>(src, count, swap, dst); break;
     case ScalarType::Float32: decode_typed<float, std::uint32_t>(src, count, swap, dst); break;
     case ScalarType::Float64: decode_typed<double, std::uint64_t>(src, count, swap, dst); break;
+    case ScalarType::Int64: decode_typed<std::int64_t, std::uint64_t>(src, count, swap, dst); break;
+    case ScalarType::UInt64: decode_typed<std::uint64_t, std::uint64_t>(src, count, swap, dst); break;
+    case ScalarType::Float16: decode_half(src, count, swap, dst); break;
   }
 }
 
@@ -374,8 +407,12 @@ ScalarType parse_scalar_type(const std::string& name) {
   if (n == "int32" || n == "int") return ScalarType::Int32;
   if (n == "float32" || n == "float") return ScalarType::Float32;
   if (n == "float64" || n == "double") return ScalarType::Float64;
-  throw Error(ErrorKind::InvalidArgument, "unknown sample type '" + name +
-                                              "' (expected uint8, int8, uint16, int16, uint32, int32, float32 or float64)");
+  if (n == "int64") return ScalarType::Int64;
+  if (n == "uint64") return ScalarType::UInt64;
+  if (n == "float16" || n == "half") return ScalarType::Float16;
+  throw Error(ErrorKind::InvalidArgument,
+              "unknown sample type '" + name +
+                  "' (expected uint8, int8, uint16, int16, uint32, int32, int64, uint64, float16, float32 or float64)");
 }
 
 namespace {
@@ -395,6 +432,24 @@ Volume read_builtin(const std::string& spec) {
   }
   if (rest.empty()) throw Error(ErrorKind::InvalidArgument, spec + ": missing field name (expected builtin:NAME[:N])");
   return make_builtin_field(rest, n);
+}
+
+// "FILE.h5:/group/data" -> {"FILE.h5", "/group/data"} (also .hdf5 and .nc);
+// a path naming an existing file, or without such a ':', is kept whole.
+struct SelectedPath {
+  std::string file, selection;
+};
+
+SelectedPath split_selection(const std::string& path) {
+  const std::string lower = detail::to_lower(path);
+  std::size_t colon = std::string::npos;
+  for (const char* ext : {".h5:", ".hdf5:", ".nc:"}) {
+    const std::size_t at = lower.find(ext);
+    if (at != std::string::npos) colon = std::min(colon, at + std::strlen(ext) - 1);
+  }
+  struct stat info {};
+  if (colon == std::string::npos || (::stat(path.c_str(), &info) == 0 && S_ISREG(info.st_mode))) return {path, ""};
+  return {path.substr(0, colon), path.substr(colon + 1)};
 }
 
 std::string extension_of(const std::string& path) {
@@ -419,11 +474,27 @@ void check_option_vec(const Vec3& v, bool positive, const char* what) {
     }
 }
 
+bool is_dataset_container(const std::string& file) {
+  const std::string ext = extension_of(file);
+  return ext == ".h5" || ext == ".hdf5" || ext == ".nc";
+}
+
+// HDF5 and NetCDF: the dataset or variable named in the path or by --field.
+Volume read_dataset(const SelectedPath& selected, const VolumeReadOptions& options) {
+  if (!selected.selection.empty() && !options.field.empty())
+    throw Error(ErrorKind::InvalidArgument, selected.file + ": the dataset is named twice ('" + selected.selection +
+                                                "' in the path and '" + options.field + "' by --field)");
+  const std::string& name = selected.selection.empty() ? options.field : selected.selection;
+  if (extension_of(selected.file) == ".nc") return detail::read_netcdf(selected.file, name, options);
+  return detail::read_hdf5(selected.file, name, options);
+}
+
 }  // namespace
 
 bool has_volume_extension(const std::string& path) {
   const std::string ext = extension_of(path);
-  return ext == ".raw" || ext == ".nrrd" || ext == ".nhdr" || ext == ".vtk" || ext == ".vti" || ext == ".vdb";
+  return ext == ".raw" || ext == ".nrrd" || ext == ".nhdr" || ext == ".vtk" || ext == ".vti" || ext == ".vdb" ||
+         ext == ".npy" || ext == ".h5" || ext == ".hdf5" || ext == ".nc";
 }
 
 Volume read_volume(const std::string& path, const VolumeReadOptions& options) {
@@ -433,6 +504,8 @@ Volume read_volume(const std::string& path, const VolumeReadOptions& options) {
   Volume volume;
   if (path.rfind("builtin:", 0) == 0) {
     volume = read_builtin(path);
+  } else if (const SelectedPath selected = split_selection(path); is_dataset_container(selected.file)) {
+    volume = read_dataset(selected, options);
   } else {
     const std::string ext = extension_of(path);
     // Given the raw geometry, a file of no other known format is raw samples (.bin, .dat, .f32, ...).
@@ -446,6 +519,8 @@ Volume read_volume(const std::string& path, const VolumeReadOptions& options) {
       volume = detail::read_vti(path, options);
     } else if (ext == ".vdb") {
       volume = detail::read_vdb(path, options);
+    } else if (ext == ".npy") {
+      volume = detail::read_npy(path, options);
     } else {
       // A missing file says so, rather than that its name has no known ending.
       struct stat info {};
@@ -453,7 +528,8 @@ Volume read_volume(const std::string& path, const VolumeReadOptions& options) {
       if (!S_ISREG(info.st_mode)) detail::io_error(path, "cannot read: not a regular file");
       throw Error(ErrorKind::InvalidArgument,
                   path + ": unknown volume format '" + ext +
-                      "' (use .raw, .nrrd, .nhdr, .vtk, .vti, .vdb or builtin:NAME[:N]; --dims and --type read any file as raw)");
+                      "' (use .raw, .nrrd, .nhdr, .vtk, .vti, .vdb, .npy, .h5, .hdf5, .nc or builtin:NAME[:N]; "
+                      "--dims and --type read any file as raw)");
     }
   }
 

@@ -125,5 +125,17 @@ Volume read_nrrd(const std::string& path, const VolumeReadOptions& options);
 Volume read_vtk_legacy(const std::string& path, const VolumeReadOptions& options);
 Volume read_vti(const std::string& path, const VolumeReadOptions& options);
 Volume read_vdb(const std::string& path, const VolumeReadOptions& options);
+Volume read_npy(const std::string& path, const VolumeReadOptions& options);
+// `selection` is the dataset (HDF5) or variable[@time] (NetCDF) named after
+// the file's ':' or by options.field; empty: the file's only candidate.
+Volume read_hdf5(const std::string& path, const std::string& selection, const VolumeReadOptions& options);
+Volume read_netcdf(const std::string& path, const std::string& selection, const VolumeReadOptions& options);
+
+// The sample count of a dataset (HDF5, NetCDF) in a `file_bytes`-byte file;
+// Error(Format) naming `what` when it is empty, overflows, or holds more
+// bytes (`bytes_per_sample` each) than max_inflated_size(file_bytes): chunks
+// may be deflated, but no file justifies more.
+std::size_t checked_stored_count(const std::string& path, const std::string& what, const std::array<std::size_t, 3>& dims,
+                                 std::size_t bytes_per_sample, std::uint64_t file_bytes);
 
 }  // namespace isowave::detail

@@ -53,7 +53,8 @@ void push_value(Samples& s, T value) {
 template <typename T>
 void fill_integers(Samples& s, std::size_t count, std::mt19937& rng) {
   const T lo = std::numeric_limits<T>::min(), hi = std::numeric_limits<T>::max();
-  std::uniform_int_distribution<long long> dist(static_cast<long long>(lo), static_cast<long long>(hi));
+  using Wide = std::conditional_t<std::is_signed_v<T>, long long, unsigned long long>;
+  std::uniform_int_distribution<Wide> dist(static_cast<Wide>(lo), static_cast<Wide>(hi));
   for (std::size_t i = 0; i < count; ++i) {
     T v = i == 0 ? lo : i == 1 ? hi : i == 2 ? T(0) : static_cast<T>(dist(rng));
     push_value<T>(s, v);
@@ -129,6 +130,31 @@ Samples make_samples(ScalarType type, std::size_t count, std::uint32_t seed, boo
         if (nonfinite && i == 5) v = std::numeric_limits<float>::infinity();
         if (nonfinite && i == 6) v = -std::numeric_limits<float>::infinity();
         push_value<float>(s, v);
+      }
+      break;
+    }
+    case ScalarType::Int64: fill_integers<std::int64_t>(s, count, rng); break;
+    case ScalarType::UInt64: fill_integers<std::uint64_t>(s, count, rng); break;
+    case ScalarType::Float16: {
+      // The compiler's _Float16 is the reference for the expected floats.
+      for (std::size_t i = 0; i < count; ++i) {
+        std::uint16_t bits = static_cast<std::uint16_t>(rng());
+        if ((bits & 0x7c00) == 0x7c00) bits &= 0xbfff;  // finite unless asked
+        if (i == 1) bits = 0x7bff;                        // 65504, the largest half
+        if (i == 2) bits = 0x8001;                        // -2^-24, the smallest subnormal
+        if (i == 3) bits = 0x3555;                        // 0.333251953125
+        if (nonfinite && i == 4) bits = 0x7e00;
+        if (nonfinite && i == 5) bits = 0x7c00;
+        if (nonfinite && i == 6) bits = 0xfc00;
+        _Float16 half;
+        std::memcpy(&half, &bits, 2);
+        s.little.push_back(static_cast<std::uint8_t>(bits));
+        s.little.push_back(static_cast<std::uint8_t>(bits >> 8));
+        const float value = static_cast<float>(half);
+        char buffer[32];
+        std::snprintf(buffer, sizeof buffer, "%.9g", static_cast<double>(value));
+        s.text.emplace_back(buffer);
+        s.expected.push_back(value);
       }
       break;
     }
@@ -219,9 +245,10 @@ std::string replace(std::string text, const std::string& from, const std::string
 std::string as_string(const Bytes& b) { return std::string(b.begin(), b.end()); }
 
 void sweep(const std::string& path, const VolumeReadOptions& options, const std::string& label,
-           const std::string& extra_file) {
+           const std::string& extra_file, ByteRange mutable_bytes) {
   const Bytes original = read_file(path);
   ASSERT_FALSE(original.empty()) << label;
+  mutable_bytes.end = std::min(mutable_bytes.end, original.size());
   {
     // The untouched file loads.
     const Volume v = read_volume(path, options);
@@ -250,12 +277,13 @@ void sweep(const std::string& path, const VolumeReadOptions& options, const std:
   // ISOWAVE_SWEEP_MUTATIONS raises the number of random mutations (default 400).
   int trials = 400;
   if (const char* env = std::getenv("ISOWAVE_SWEEP_MUTATIONS")) trials = std::max(1, std::atoi(env));
+  if (mutable_bytes.begin >= mutable_bytes.end) trials = 0;
   std::mt19937 rng(1234);
   for (int trial = 0; trial < trials; ++trial) {
     Bytes mutated = original;
     const int flips = 1 + trial % 3;
     for (int f = 0; f < flips; ++f) {
-      const std::size_t at = std::uniform_int_distribution<std::size_t>(0, mutated.size() - 1)(rng);
+      const std::size_t at = std::uniform_int_distribution<std::size_t>(mutable_bytes.begin, mutable_bytes.end - 1)(rng);
       mutated[at] = trial % 2 ? static_cast<std::uint8_t>(mutated[at] ^ (1u << (rng() % 8)))
                               : static_cast<std::uint8_t>(rng());
     }

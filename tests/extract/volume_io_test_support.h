@@ -19,6 +19,10 @@ using Bytes = std::vector<std::uint8_t>;
 
 constexpr ScalarType kAllTypes[] = {ScalarType::UInt8,  ScalarType::Int8,  ScalarType::UInt16,  ScalarType::Int16,
                                     ScalarType::UInt32, ScalarType::Int32, ScalarType::Float32, ScalarType::Float64};
+// Every sample type (the NumPy, HDF5 and NetCDF readers take them all).
+constexpr ScalarType kEveryType[] = {ScalarType::UInt8,  ScalarType::Int8,    ScalarType::UInt16,  ScalarType::Int16,
+                                     ScalarType::UInt32, ScalarType::Int32,   ScalarType::Int64,   ScalarType::UInt64,
+                                     ScalarType::Float16, ScalarType::Float32, ScalarType::Float64};
 // The dimensions of the generated test volumes.
 constexpr std::array<std::size_t, 3> kDims{5, 4, 3};
 
@@ -82,8 +86,13 @@ std::string as_string(const Bytes& b);
 
 // Reads every proper prefix of the file at `path` and random byte flips of it:
 // each must load or throw an isowave::Error naming `path` (or `extra_file`),
-// and at least one must throw. Restores the file.
+// and at least one must throw. Restores the file. Mutations touch only the
+// bytes in `mutable_bytes`, none if it is empty (for libraries that crash on
+// corrupt metadata; see docs/CLI.md).
+struct ByteRange {
+  std::size_t begin = 0, end = SIZE_MAX;
+};
 void sweep(const std::string& path, const VolumeReadOptions& options, const std::string& label,
-           const std::string& extra_file = "");
+           const std::string& extra_file = "", ByteRange mutable_bytes = {});
 
 }  // namespace isowave::volume_io_test

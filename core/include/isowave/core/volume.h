@@ -13,7 +13,9 @@
 
 namespace isowave {
 
-enum class ScalarType : std::uint8_t { UInt8, Int8, UInt16, Int16, UInt32, Int32, Float32, Float64 };
+// Float16 is IEEE 754 binary16; Int64/UInt64 samples beyond float's 24-bit
+// mantissa are rounded to the nearest float like every other type.
+enum class ScalarType : std::uint8_t { UInt8, Int8, UInt16, Int16, UInt32, Int32, Float32, Float64, Int64, UInt64, Float16 };
 
 const char* to_string(ScalarType type);
 std::size_t scalar_type_size(ScalarType type);

@@ -1,6 +1,7 @@
 #pragma once
 // Volume input: raw, NRRD (.nrrd/.nhdr), legacy VTK (.vtk), VTK XML ImageData
-// (.vti), OpenVDB (.vdb), and generated fields named builtin:NAME[:N].
+// (.vti), OpenVDB (.vdb), NumPy (.npy), HDF5 (.h5/.hdf5), NetCDF (.nc), and
+// generated fields named builtin:NAME[:N].
 //
 // Every reader treats the file as hostile: sizes are checked against the file
 // (or, for compressed data, against the most the compressed bytes can inflate
@@ -27,6 +28,19 @@
 //   .vdb         a float or double grid, densified over its active bounding
 //                box (inactive voxels read as the background); the transform
 //                must be linear and axis-aligned.
+//   .npy         NumPy format 1.0-3.0, a 3-D array of dtype i1 u1 i2 u2 i4 u4
+//                i8 u8 f2 f4 f8, either byte order, C or Fortran order.
+//   .h5/.hdf5    "FILE.h5:/group/dataset" (or options.field): a 3-D integer
+//                or float dataset, contiguous or chunked with any filter
+//                libhdf5 decodes; unnamed, the file's only such dataset.
+//   .nc          "FILE.nc:variable[@T]" (or options.field): a numeric
+//                variable (z, y, x), or (time, z, y, x) read at time step T;
+//                unnamed, the file's only such variable. Classic or NetCDF-4.
+//                For these three the axis that varies fastest in the file is
+//                x (C order: shape (nz, ny, nx)); spacing 1 and origin 0.
+//                HDF5 and NetCDF datasets larger than 1032 x the file (what
+//                deflate can reach) are refused before allocating; libhdf5 and
+//                libnetcdf themselves are not hardened (docs/CLI.md).
 // Axes with a negative step (NRRD space directions, VTI Direction, VDB
 // transforms) are reversed so that the spacing is positive and every sample
 // keeps its world position.
@@ -50,14 +64,16 @@ struct VolumeReadOptions {
   // .vtk / .vti: the point-data array to read by name. Default: .vtk the first
   // SCALARS array of the point data; .vti the PointData's Scalars array, else
   // its first DataArray. A .vtk FIELD array with one component also qualifies
-  // when named. The array must have one component.
+  // when named. The array must have one component. .h5: the dataset; .nc:
+  // the variable, "NAME@T" for time step T (an InvalidArgument error when the
+  // path names one too).
   std::string field;
   // .vdb: the grid to read by name (default: the first float or double grid).
   std::string grid;
 };
 
 // True if `path` ends (case-insensitively) in an extension with a reader of
-// its own: .raw, .nrrd, .nhdr, .vtk, .vti, .vdb.
+// its own: .raw, .nrrd, .nhdr, .vtk, .vti, .vdb, .npy, .h5, .hdf5, .nc.
 bool has_volume_extension(const std::string& path);
 
 // Reads a volume. builtin:NAME[:N] calls make_builtin_field(NAME, N), N
