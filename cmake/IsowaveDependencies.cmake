@@ -19,6 +19,19 @@ list(APPEND CMAKE_MODULE_PATH "${ISOWAVE_OPENVDB_MODULE_DIR}")
 find_package(Boost REQUIRED COMPONENTS iostreams)
 find_package(OpenVDB REQUIRED)
 
+# MPI is optional: without it isowave convert runs its batches on one machine.
+# Its C API (FindMPI's C component needs the C language).
+if(ISOWAVE_MPI)
+  enable_language(C)
+  find_package(MPI COMPONENTS C)
+  if(MPI_C_FOUND)
+    message(STATUS "isowave: MPI ${MPI_C_VERSION} found: isowave convert spreads batches over mpirun's ranks")
+  else()
+    message(STATUS "isowave: MPI not found: isowave convert runs batches on one machine "
+                   "(install libopenmpi-dev for batches over mpirun's ranks, or -DISOWAVE_MPI=OFF to skip the search)")
+  endif()
+endif()
+
 if(ISOWAVE_BUILD_TESTS)
   find_package(GTest REQUIRED)
 endif()
