@@ -10,8 +10,10 @@
 #include <cassert>
 #include <climits>
 #include <cstdint>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <exception>
 #include <numeric>
 #include <string>
 #include <thread>
@@ -167,9 +169,16 @@ std::vector<JobReport> run_on_ranks(const MpiSession& mpi, const std::vector<dou
   {
     const tbb::global_control share(tbb::global_control::max_allowed_parallelism,
                                     static_cast<std::size_t>(thread_share()));
-    const std::vector<JobReport> reports = run(mine);
-    assert(reports.size() == mine.size());
-    bytes = serialize(mine, reports);
+    try {
+      const std::vector<JobReport> reports = run(mine);
+      assert(reports.size() == mine.size());
+      bytes = serialize(mine, reports);
+    } catch (const std::exception& error) {
+      // Not a job's failure (those are reports) but the rank's: the others
+      // would wait for it forever.
+      std::fprintf(stderr, "isowave convert: rank %d: %s\n", mpi.rank(), error.what());
+      MPI_Abort(MPI_COMM_WORLD, 1);
+    }
   }
   const std::string all = gather_to_root(mpi, bytes);
   std::vector<JobReport> reports(mpi.rank() == 0 ? costs.size() : 0);

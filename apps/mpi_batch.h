@@ -45,7 +45,8 @@ std::vector<std::vector<std::size_t>> assign_largest_first(const std::vector<dou
 // / ranks on the node, at least 1) while `run` runs this rank's jobs and
 // returns their reports in the order given. Returns on rank 0 every job's
 // report in job order, elsewhere nothing. `run` must report each job it is
-// given (a failed job is a report, not an exception).
+// given (a failed job is a report); an exception from it aborts every rank
+// (MPI_Abort) after printing it.
 std::vector<JobReport> run_on_ranks(const MpiSession& mpi, const std::vector<double>& costs,
                                     const std::function<std::vector<JobReport>(const std::vector<std::size_t>&)>& run);
 
