@@ -4,7 +4,10 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <cstdarg>
 #include <cstdio>
+#include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <glob.h>
 #include <mutex>
@@ -14,6 +17,7 @@
 #include "cli.h"
 #include "commands.h"
 #include "console_progress.h"
+#include "job_report.h"
 #include "isowave/pipeline/convert.h"
 #include "isowave/pipeline/prepare.h"
 #include "isowave/codec/isw_format.h"
@@ -21,6 +25,9 @@
 #include "isowave/core/huge_page_vector.h"
 #include "isowave/extract/volume_io.h"
 #include "volume_options.h"
+#ifdef ISOWAVE_WITH_MPI
+#include "mpi_batch.h"
+#endif
 
 namespace isowave::commands {
 namespace {
@@ -310,35 +317,54 @@ void run_and_report(const Job& job, const RunSettings& settings, JobOutcome& out
       std::fprintf(stderr, "isowave convert: warning: %s: %s\n", job.input.c_str(), warning.c_str());
 }
 
-// Runs the jobs on `threads` threads; each reports one line ("k of N" in its
-// label), a failure with its error, once. With several jobs a line tells
-// the batch's time left: before its job's stages when it is written as they
-// run, after its job when written whole (jobs side by side).
-std::vector<JobOutcome> run_jobs(const std::vector<Job>& jobs, const RunSettings& settings, int threads) {
-  std::vector<JobOutcome> outcomes(jobs.size());
+// Runs the jobs `order` names (indices into `jobs`, in that order) on
+// `threads` threads; each reports one line ("k of N" in its label, k and N
+// of the whole batch), a failure with its error, once. With several jobs a
+// line tells the time left of the jobs in `order`: before its job's stages
+// when it is written as they run, after its job when written whole (jobs
+// side by side). Returns the outcomes in the order of `order`.
+std::vector<JobOutcome> run_jobs(const std::vector<Job>& jobs, const std::vector<std::size_t>& order,
+                                 const RunSettings& settings, int threads) {
+  std::vector<JobOutcome> outcomes(order.size());
   std::atomic<std::size_t> next{0};
   std::mutex print_mutex;
-  TimeLeft time_left(jobs.size());
+  TimeLeft time_left(order.size());
   const auto worker = [&] {
-    for (std::size_t j = next++; j < jobs.size(); j = next++) {
+    for (std::size_t i = next++; i < order.size(); i = next++) {
+      const std::size_t j = order[i];
       const Job& job = jobs[j];
       const std::string label = "[" + std::to_string(j + 1) + "/" + std::to_string(jobs.size()) + "] " +
                                 stem_of(job.input) + (settings.label_iso ? " @" + iso_text(job.iso) : "");
       cli::ConsoleProgress progress(label, settings.mode);
       const std::string left = time_left.text(time_left.finished());
       if (settings.mode != cli::ProgressMode::BufferedLine && !left.empty()) progress.note(left);
-      run_and_report(job, settings, outcomes[j], progress, time_left, print_mutex);
+      run_and_report(job, settings, outcomes[i], progress, time_left, print_mutex);
       release_freed_memory();  // what this input left must not stay under the next one
     }
   };
   std::vector<std::thread> pool;
-  for (int t = 1; t < std::min<int>(threads, static_cast<int>(jobs.size())); ++t) pool.emplace_back(worker);
+  for (int t = 1; t < std::min<int>(threads, static_cast<int>(order.size())); ++t) pool.emplace_back(worker);
   worker();
   for (std::thread& t : pool) t.join();
   return outcomes;
 }
 
 double rmse_percent(const ConvertResult& r, double value) { return 100.0 * value / r.cell_size; }
+
+// printf onto the end of `text`.
+__attribute__((format(printf, 2, 3))) void appendf(std::string& text, const char* format, ...) {
+  std::va_list arguments;
+  va_start(arguments, format);
+  std::va_list again;
+  va_copy(again, arguments);
+  const int length = std::vsnprintf(nullptr, 0, format, arguments);
+  va_end(arguments);
+  const std::size_t size = text.size();
+  text.resize(size + static_cast<std::size_t>(length) + 1);
+  std::vsnprintf(text.data() + size, static_cast<std::size_t>(length) + 1, format, again);
+  va_end(again);
+  text.resize(size + static_cast<std::size_t>(length));
+}
 
 // The batch's totals: inputs (volume files, builtin fields, or arguments
 // that gave none), jobs (inputs times isovalues), failed jobs, bytes in (the
@@ -351,146 +377,170 @@ struct Totals {
   double ratio() const { return bytes_out ? double(bytes_in) / double(bytes_out) : 0.0; }
 };
 
-Totals totals_of(const std::vector<Job>& jobs, const std::vector<JobOutcome>& outcomes, double seconds) {
+Totals totals_of(const std::vector<Job>& jobs, const std::vector<cli::JobReport>& reports, double seconds) {
   Totals t;
   t.jobs = jobs.size();
   t.seconds = seconds;
   std::set<std::string> inputs, converted;
   for (std::size_t j = 0; j < jobs.size(); ++j) {
     inputs.insert(jobs[j].input);
-    if (!outcomes[j].ok) {
+    if (!reports[j].ok) {
       ++t.failed;
       continue;
     }
-    t.bytes_out += outcomes[j].result.bytes.size();
-    if (converted.insert(jobs[j].input).second) t.bytes_in += outcomes[j].volume_bytes;
+    t.bytes_out += reports[j].bytes_out;
+    if (converted.insert(jobs[j].input).second) t.bytes_in += reports[j].volume_bytes;
   }
   t.inputs = inputs.size();
   return t;
 }
 
-void print_json_result(const JobOutcome& o) {
+void render_json_result(std::string& out, const JobOutcome& o) {
   const ConvertResult& r = o.result;
-  std::printf(", \"bytes\": %zu, \"volume_bytes\": %zu, \"cell_size\": %.9g, \"extracted_vertices\": %zu, "
-              "\"base_vertices\": %zu, \"fine_vertices\": %zu, \"levels\": %d, \"seconds\": {\"load\": %.3f, "
-              "\"extract\": %.3f, \"simplify\": %.3f, \"distance\": %.3f, \"fit\": %.3f, \"analysis\": %.3f, "
-              "\"encode\": %.3f, \"evaluate\": %.3f}, \"fit_isosurface_rms_cells\": %.6g, "
-              "\"fit_isosurface_max_cells\": %.6g, \"fit_points_beyond_one_cell\": %zu, "
-              "\"isosurface_uncovered_share\": %.6g, \"fit_folded_share\": %.6g, \"base_attempts\": %d, ",
-              r.bytes.size(), o.volume_bytes, r.cell_size, r.extracted_vertices, r.base_vertices, r.fine_vertices,
-              r.levels, o.load_seconds, r.seconds.extract, r.seconds.simplify, r.seconds.distance, r.seconds.fit,
-              r.seconds.analysis, r.seconds.encode, r.seconds.evaluate, r.fit_isosurface.rms, r.fit_isosurface.max,
-              r.fit_isosurface.far, r.uncovered_share, r.folded_share(), r.base_attempts);
-  if (r.max_error_cells > 0) std::printf("\"max_error_percent_cell\": %.6g, ", 100.0 * r.max_error_cells);
-  std::printf("\"fit_levels\": [");
+  appendf(out,
+          ", \"bytes\": %zu, \"volume_bytes\": %zu, \"cell_size\": %.9g, \"extracted_vertices\": %zu, "
+          "\"base_vertices\": %zu, \"fine_vertices\": %zu, \"levels\": %d, \"seconds\": {\"load\": %.3f, "
+          "\"extract\": %.3f, \"simplify\": %.3f, \"distance\": %.3f, \"fit\": %.3f, \"analysis\": %.3f, "
+          "\"encode\": %.3f, \"evaluate\": %.3f}, \"fit_isosurface_rms_cells\": %.6g, "
+          "\"fit_isosurface_max_cells\": %.6g, \"fit_points_beyond_one_cell\": %zu, "
+          "\"isosurface_uncovered_share\": %.6g, \"fit_folded_share\": %.6g, \"base_attempts\": %d, ",
+          r.bytes.size(), o.volume_bytes, r.cell_size, r.extracted_vertices, r.base_vertices, r.fine_vertices,
+          r.levels, o.load_seconds, r.seconds.extract, r.seconds.simplify, r.seconds.distance, r.seconds.fit,
+          r.seconds.analysis, r.seconds.encode, r.seconds.evaluate, r.fit_isosurface.rms, r.fit_isosurface.max,
+          r.fit_isosurface.far, r.uncovered_share, r.folded_share(), r.base_attempts);
+  if (r.max_error_cells > 0) appendf(out, "\"max_error_percent_cell\": %.6g, ", 100.0 * r.max_error_cells);
+  out += "\"fit_levels\": [";
   for (std::size_t k = 0; k < r.level_reports.size(); ++k) {
     const LevelReport& l = r.level_reports[k];
-    std::printf("%s{\"levels\": %d, \"fine_vertices\": %zu, \"d_percent_cell\": %.6g, "
-                "\"forward_rms_percent_cell\": %.6g, \"backward_rms_percent_cell\": %.6g, \"folded_share\": %.6g, "
-                "\"stretch_min\": %.6g, \"stretch_median\": %.6g, \"stretch_max\": %.6g, \"seconds\": %.3f}",
-                k ? ", " : "", l.levels, l.fine_vertices, 100.0 * l.d_cells(), 100.0 * l.forward_rms_cells,
-                100.0 * l.backward_rms_cells, l.folded_share, l.stretch_min, l.stretch_median, l.stretch_max,
-                l.seconds);
+    appendf(out,
+            "%s{\"levels\": %d, \"fine_vertices\": %zu, \"d_percent_cell\": %.6g, "
+            "\"forward_rms_percent_cell\": %.6g, \"backward_rms_percent_cell\": %.6g, \"folded_share\": %.6g, "
+            "\"stretch_min\": %.6g, \"stretch_median\": %.6g, \"stretch_max\": %.6g, \"seconds\": %.3f}",
+            k ? ", " : "", l.levels, l.fine_vertices, 100.0 * l.d_cells(), 100.0 * l.forward_rms_cells,
+            100.0 * l.backward_rms_cells, l.folded_share, l.stretch_min, l.stretch_median, l.stretch_max, l.seconds);
   }
-  std::printf("], ");
+  out += "], ";
   if (r.parametrization.fine_vertices > 0)
-    std::printf("\"fit_fallback_points\": %zu, ", r.parametrization.fallback_points);
+    appendf(out, "\"fit_fallback_points\": %zu, ", r.parametrization.fallback_points);
   for (std::size_t k = 0; k < r.warnings.size(); ++k)
-    std::printf("%s%s", k ? ", " : "\"warnings\": [", cli::json_string(r.warnings[k]).c_str());
-  std::printf("%s\"rows\": [", r.warnings.empty() ? "" : "], ");
+    appendf(out, "%s%s", k ? ", " : "\"warnings\": [", cli::json_string(r.warnings[k]).c_str());
+  appendf(out, "%s\"rows\": [", r.warnings.empty() ? "" : "], ");
   for (std::size_t k = 0; k < r.summary.size(); ++k) {
     const RateDistortionRow& row = r.summary[k];
-    std::printf("%s{\"percent\": %.4f, \"coefficients\": %zu, \"rmse_percent_cell\": %.6g, \"max_percent_cell\": "
-                "%.6g, \"d_percent_cell\": %.6g, \"bytes\": %llu, \"base\": %s}",
-                k ? ", " : "", row.percent, row.kept, rmse_percent(r, row.rms), rmse_percent(r, row.max),
-                100.0 * r.summary_surface_error[k],
-                static_cast<unsigned long long>(row.bytes), row.is_base ? "true" : "false");
+    appendf(out,
+            "%s{\"percent\": %.4f, \"coefficients\": %zu, \"rmse_percent_cell\": %.6g, \"max_percent_cell\": "
+            "%.6g, \"d_percent_cell\": %.6g, \"bytes\": %llu, \"base\": %s}",
+            k ? ", " : "", row.percent, row.kept, rmse_percent(r, row.rms), rmse_percent(r, row.max),
+            100.0 * r.summary_surface_error[k], static_cast<unsigned long long>(row.bytes),
+            row.is_base ? "true" : "false");
   }
-  std::printf("], \"quantization_rmse_percent_cell\": %.6g, \"quantization_max_percent_cell\": %.6g}",
-              rmse_percent(r, r.quantization.rms), rmse_percent(r, r.quantization.max));
+  appendf(out, "], \"quantization_rmse_percent_cell\": %.6g, \"quantization_max_percent_cell\": %.6g}",
+          rmse_percent(r, r.quantization.rms), rmse_percent(r, r.quantization.max));
 }
 
-void print_json(const std::vector<Job>& jobs, const std::vector<JobOutcome>& outcomes, const Totals& totals) {
+// The job's object in the --json results.
+std::string render_json(const Job& job, const JobOutcome& o) {
+  std::string out;
+  if (job.problem.empty())
+    appendf(out, "{\"input\": %s, \"iso\": %.10g, \"output\": %s, \"ok\": %s", cli::json_string(job.input).c_str(),
+            job.iso, cli::json_string(job.output).c_str(), o.ok ? "true" : "false");
+  else
+    appendf(out, "{\"input\": %s, \"iso\": null, \"output\": null, \"ok\": false", cli::json_string(job.input).c_str());
+  if (o.ok) render_json_result(out, o);
+  else appendf(out, ", \"error\": %s}", cli::json_string(o.error).c_str());
+  return out;
+}
+
+void print_json(const std::vector<cli::JobReport>& reports, const Totals& totals) {
   std::printf("{\"inputs\": %zu, \"jobs\": %zu, \"converted\": %zu, \"failed\": %zu, \"volume_bytes\": %zu, "
               "\"bytes\": %zu, \"ratio\": %.6g, \"seconds\": %.3f, \"results\": [",
               totals.inputs, totals.jobs, totals.jobs - totals.failed, totals.failed, totals.bytes_in,
               totals.bytes_out, totals.ratio(), totals.seconds);
-  for (std::size_t j = 0; j < jobs.size(); ++j) {
-    const JobOutcome& o = outcomes[j];
-    if (jobs[j].problem.empty())
-      std::printf("%s{\"input\": %s, \"iso\": %.10g, \"output\": %s, \"ok\": %s", j ? ", " : "",
-                  cli::json_string(jobs[j].input).c_str(), jobs[j].iso, cli::json_string(jobs[j].output).c_str(),
-                  o.ok ? "true" : "false");
-    else
-      std::printf("%s{\"input\": %s, \"iso\": null, \"output\": null, \"ok\": false", j ? ", " : "",
-                  cli::json_string(jobs[j].input).c_str());
-    if (o.ok) print_json_result(o);
-    else std::printf(", \"error\": %s}", cli::json_string(o.error).c_str());
-  }
+  for (std::size_t j = 0; j < reports.size(); ++j) std::printf("%s%s", j ? ", " : "", reports[j].json.c_str());
   std::printf("]}\n");
 }
 
 // One line per level the fit tried: D both ways, folds and stretch.
-void print_level_reports(const ConvertResult& r) {
+void render_level_reports(std::string& out, const ConvertResult& r) {
   for (const LevelReport& l : r.level_reports)
-    std::printf("%-28s level %d (%zu fine vertices): D %.3g%% cell (fitted -> isosurface %.3g, isosurface -> "
-                "fitted %.3g)%s; %.2f%% of the fine faces folded; face areas %.2g..%.2g of their mean (median "
-                "%.2g); %.2f s\n",
-                "", l.levels, l.fine_vertices, 100.0 * l.d_cells(), 100.0 * l.forward_rms_cells,
-                100.0 * l.backward_rms_cells,
-                r.max_error_cells > 0 ? (l.d_cells() <= r.max_error_cells ? ", within the bound" : ", over the bound")
-                                      : "",
-                100.0 * l.folded_share, l.stretch_min, l.stretch_max, l.stretch_median, l.seconds);
+    appendf(out,
+            "%-28s level %d (%zu fine vertices): D %.3g%% cell (fitted -> isosurface %.3g, isosurface -> "
+            "fitted %.3g)%s; %.2f%% of the fine faces folded; face areas %.2g..%.2g of their mean (median "
+            "%.2g); %.2f s\n",
+            "", l.levels, l.fine_vertices, 100.0 * l.d_cells(), 100.0 * l.forward_rms_cells,
+            100.0 * l.backward_rms_cells,
+            r.max_error_cells > 0 ? (l.d_cells() <= r.max_error_cells ? ", within the bound" : ", over the bound")
+                                  : "",
+            100.0 * l.folded_share, l.stretch_min, l.stretch_max, l.stretch_median, l.seconds);
   if (r.max_error_cells > 0)
-    std::printf("%-28s levels by error: the bound on D is %.3g%% cell\n", "", 100.0 * r.max_error_cells);
+    appendf(out, "%-28s levels by error: the bound on D is %.3g%% cell\n", "", 100.0 * r.max_error_cells);
 }
 
-void print_table_row(const std::string& output, const JobOutcome& o) {
+void render_table_rows(std::string& out, const std::string& output, const JobOutcome& o) {
   const ConvertResult& r = o.result;
   std::string errors;
-  char cell[64];
   const RateDistortionRow* previous = nullptr;
   for (const RateDistortionRow& row : r.summary) {
     // Percentages below the base mesh's share all give the base mesh: one entry.
     if (previous && previous->kept == row.kept) continue;
     previous = &row;
     const double d = r.summary_surface_error[static_cast<std::size_t>(&row - r.summary.data())];
-    std::snprintf(cell, sizeof cell, "%s%.4g%%: %.3g (D %.3g)", errors.empty() ? "" : "  ", row.percent,
-                  rmse_percent(r, row.rms), 100.0 * d);
-    errors += cell;
+    appendf(errors, "%s%.4g%%: %.3g (D %.3g)", errors.empty() ? "" : "  ", row.percent, rmse_percent(r, row.rms),
+            100.0 * d);
   }
-  std::printf("%-28s %10zu %9zu %9zu %10zu %3d %8.1f  %s\n", output.c_str(), r.bytes.size(), r.extracted_vertices,
-              r.base_vertices, r.fine_vertices, r.levels, o.load_seconds + r.seconds.total(), errors.c_str());
-  std::printf("%-28s stages: load %.2f, extract %.2f, simplify %.2f, distance %.2f, fit %.2f, analysis %.2f, "
-              "encode %.2f, evaluate %.2f s; %.2f bits per fine vertex\n",
-              "", o.load_seconds, r.seconds.extract, r.seconds.simplify, r.seconds.distance, r.seconds.fit,
-              r.seconds.analysis, r.seconds.encode, r.seconds.evaluate,
-              8.0 * static_cast<double>(r.bytes.size()) / static_cast<double>(r.fine_vertices));
-  std::printf("%-28s fit: the fine control points lie %.3g cell RMS (max %.3g) off the isosurface, %zu of them "
-              "more than a cell; %.2f%% of the isosurface lies more than %g cells from all of them; %.2f%% of the "
-              "fine faces are folded against the field gradient\n",
-              "", r.fit_isosurface.rms, r.fit_isosurface.max, r.fit_isosurface.far, 100.0 * r.uncovered_share,
-              kUncoveredCells, 100.0 * r.folded_share());
-  std::printf("%-28s %s\n", "", describe_quantization_error(r.quantization, r.cell_size).c_str());
+  appendf(out, "%-28s %10zu %9zu %9zu %10zu %3d %8.1f  %s\n", output.c_str(), r.bytes.size(), r.extracted_vertices,
+          r.base_vertices, r.fine_vertices, r.levels, o.load_seconds + r.seconds.total(), errors.c_str());
+  appendf(out,
+          "%-28s stages: load %.2f, extract %.2f, simplify %.2f, distance %.2f, fit %.2f, analysis %.2f, "
+          "encode %.2f, evaluate %.2f s; %.2f bits per fine vertex\n",
+          "", o.load_seconds, r.seconds.extract, r.seconds.simplify, r.seconds.distance, r.seconds.fit,
+          r.seconds.analysis, r.seconds.encode, r.seconds.evaluate,
+          8.0 * static_cast<double>(r.bytes.size()) / static_cast<double>(r.fine_vertices));
+  appendf(out,
+          "%-28s fit: the fine control points lie %.3g cell RMS (max %.3g) off the isosurface, %zu of them "
+          "more than a cell; %.2f%% of the isosurface lies more than %g cells from all of them; %.2f%% of the "
+          "fine faces are folded against the field gradient\n",
+          "", r.fit_isosurface.rms, r.fit_isosurface.max, r.fit_isosurface.far, 100.0 * r.uncovered_share,
+          kUncoveredCells, 100.0 * r.folded_share());
+  appendf(out, "%-28s %s\n", "", describe_quantization_error(r.quantization, r.cell_size).c_str());
   if (r.base_attempts > 1)
-    std::printf("%-28s the base mesh grew from %zu to %zu vertices (%d tries) to cover the isosurface\n", "",
-                r.first_base_vertices, r.base_vertices, r.base_attempts);
-  print_level_reports(r);
-  if (r.parametrization.fine_vertices > 0) {
-    std::printf("%-28s parametrization: %zu points located by the nearest input triangle\n", "",
-                r.parametrization.fallback_points);
-  }
+    appendf(out, "%-28s the base mesh grew from %zu to %zu vertices (%d tries) to cover the isosurface\n", "",
+            r.first_base_vertices, r.base_vertices, r.base_attempts);
+  render_level_reports(out, r);
+  if (r.parametrization.fine_vertices > 0)
+    appendf(out, "%-28s parametrization: %zu points located by the nearest input triangle\n", "",
+            r.parametrization.fallback_points);
+}
+
+// The job's summary as data: its numbers and its table rows and JSON object.
+cli::JobReport report_of(const Job& job, const JobOutcome& o) {
+  cli::JobReport report;
+  report.ok = o.ok;
+  report.usage_error = o.usage_error;
+  report.error = o.error;
+  report.volume_bytes = o.volume_bytes;
+  report.bytes_out = o.ok ? o.result.bytes.size() : 0;
+  if (o.ok) render_table_rows(report.table_rows, job.output, o);
+  else appendf(report.table_rows, "%-28s FAILED (the error is above)\n", (job.problem.empty() ? job.output : job.input).c_str());
+  report.json = render_json(job, o);
+  return report;
+}
+
+// The reports of the jobs `order` names, from their outcomes (in that order).
+std::vector<cli::JobReport> reports_of(const std::vector<Job>& jobs, const std::vector<std::size_t>& order,
+                                       const std::vector<JobOutcome>& outcomes) {
+  std::vector<cli::JobReport> reports;
+  reports.reserve(order.size());
+  for (std::size_t i = 0; i < order.size(); ++i) reports.push_back(report_of(jobs[order[i]], outcomes[i]));
+  return reports;
 }
 
 // The summary table; a failed input's error was printed as it happened.
-void print_table(const std::vector<Job>& jobs, const std::vector<JobOutcome>& outcomes, const Totals& totals) {
+void print_table(const std::vector<cli::JobReport>& reports, const Totals& totals) {
   std::printf("\n%-28s %10s %9s %9s %10s %3s %8s  %s\n", "output", "bytes", "isosurf.", "base", "fine", "L",
               "seconds",
               "RMSE [% cell] against the full decode (D: against the isosurface) at percent kept (base last)");
-  for (std::size_t j = 0; j < jobs.size(); ++j) {
-    if (outcomes[j].ok) print_table_row(jobs[j].output, outcomes[j]);
-    else std::printf("%-28s FAILED (the error is above)\n", (jobs[j].problem.empty() ? jobs[j].output : jobs[j].input).c_str());
-  }
+  for (const cli::JobReport& report : reports) std::fputs(report.table_rows.c_str(), stdout);
   std::printf("\n%zu input%s", totals.inputs, totals.inputs == 1 ? "" : "s");
   if (totals.jobs != totals.inputs) std::printf(", %zu jobs", totals.jobs);
   std::printf(", %zu failed", totals.failed);
@@ -502,14 +552,56 @@ void print_table(const std::vector<Job>& jobs, const std::vector<JobOutcome>& ou
 
 // 0 when every job succeeded; 2 when every failure was a usage error (as the
 // other commands exit for the same input), else 1.
-int exit_code(const std::vector<JobOutcome>& outcomes) {
+int exit_code(const std::vector<cli::JobReport>& reports) {
   bool failed = false, other_failure = false;
-  for (const JobOutcome& o : outcomes) {
-    failed |= !o.ok;
-    other_failure |= !o.ok && !o.usage_error;
+  for (const cli::JobReport& r : reports) {
+    failed |= !r.ok;
+    other_failure |= !r.ok && !r.usage_error;
   }
   return !failed ? 0 : other_failure ? 1 : 2;
 }
+
+enum class Summary { Table, Json, Nothing };
+
+// Prints the batch's summary of every job's report (in job order) and
+// returns the exit code.
+int summarize(const std::vector<Job>& jobs, const std::vector<cli::JobReport>& reports,
+              std::chrono::steady_clock::time_point start, Summary summary) {
+  const Totals totals =
+      totals_of(jobs, reports, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+  if (summary == Summary::Json) print_json(reports, totals);
+  else if (summary == Summary::Table) print_table(reports, totals);
+  return exit_code(reports);
+}
+
+#ifdef ISOWAVE_WITH_MPI
+// The job's estimated cost for assigning it to a rank: its input file's
+// size, or a builtin field's samples times 4 (0 when it cannot be known).
+double job_cost(const Job& job) {
+  if (cli::is_builtin_volume(job.input)) {
+    const std::size_t colon = job.input.find(':', std::strlen("builtin:"));
+    const double n = colon == std::string::npos ? 128.0 : std::atof(job.input.c_str() + colon + 1);
+    return 4.0 * n * n * n;
+  }
+  std::error_code error;
+  const std::uintmax_t size = fs::file_size(job.input, error);
+  return error ? 0.0 : double(size);
+}
+
+// The batch spread over the ranks of `mpi` (apps/mpi_batch.h); every rank
+// returns the exit code, rank 0 prints the summary.
+int convert_on_ranks(const cli::MpiSession& mpi, const std::vector<Job>& jobs, const RunSettings& settings,
+                     int threads, Summary summary) {
+  const auto start = std::chrono::steady_clock::now();
+  std::vector<double> costs;
+  for (const Job& job : jobs) costs.push_back(job_cost(job));
+  const std::vector<cli::JobReport> reports =
+      cli::run_on_ranks(mpi, costs, [&](const std::vector<std::size_t>& mine) {
+        return reports_of(jobs, mine, run_jobs(jobs, mine, settings, threads));
+      });
+  return mpi.broadcast_from_root(mpi.rank() == 0 ? summarize(jobs, reports, start, summary) : 0);
+}
+#endif
 
 }  // namespace
 
@@ -534,18 +626,26 @@ int convert(const Args& raw) {
   settings.load_report = !settings.warn ? cli::LoadReport::Nothing
                                         : (quiet ? cli::LoadReport::WarningsOnly : cli::LoadReport::RangeAndWarnings);
   const std::vector<Job> jobs = plan_jobs(args);
+  const Summary summary = json ? Summary::Json : quiet ? Summary::Nothing : Summary::Table;
 
+#ifdef ISOWAVE_WITH_MPI
+  if (cli::launched_by_mpi()) {
+    const cli::MpiSession mpi;
+    if (mpi.ranks() > 1) {
+      // Ranks side by side write their lines whole.
+      settings.mode = quiet ? cli::ProgressMode::Quiet : cli::ProgressMode::BufferedLine;
+      return convert_on_ranks(mpi, jobs, settings, threads, summary);
+    }
+  }
+#endif
   // Runs side by side write their lines whole.
   settings.mode = quiet ? cli::ProgressMode::Quiet
                         : (threads > 1 && jobs.size() > 1 ? cli::ProgressMode::BufferedLine
                                                           : cli::default_progress_mode(false));
   const auto start = std::chrono::steady_clock::now();
-  const std::vector<JobOutcome> outcomes = run_jobs(jobs, settings, threads);
-  const Totals totals =
-      totals_of(jobs, outcomes, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
-  if (json) print_json(jobs, outcomes, totals);
-  else if (!quiet) print_table(jobs, outcomes, totals);
-  return exit_code(outcomes);
+  std::vector<std::size_t> order(jobs.size());
+  for (std::size_t j = 0; j < jobs.size(); ++j) order[j] = j;
+  return summarize(jobs, reports_of(jobs, order, run_jobs(jobs, order, settings, threads)), start, summary);
 }
 
 }  // namespace isowave::commands

@@ -25,6 +25,18 @@ find_package(OpenVDB REQUIRED)
 find_package(PkgConfig REQUIRED)
 pkg_check_modules(ISOWAVE_HDF5 REQUIRED IMPORTED_TARGET hdf5)
 pkg_check_modules(ISOWAVE_NETCDF REQUIRED IMPORTED_TARGET netcdf)
+# MPI is optional: without it isowave convert runs its batches on one machine.
+# Its C API (FindMPI's C component needs the C language).
+if(ISOWAVE_MPI)
+  enable_language(C)
+  find_package(MPI COMPONENTS C)
+  if(MPI_C_FOUND)
+    message(STATUS "isowave: MPI ${MPI_C_VERSION} found: isowave convert spreads batches over mpirun's ranks")
+  else()
+    message(STATUS "isowave: MPI not found: isowave convert runs batches on one machine "
+                   "(install libopenmpi-dev for batches over mpirun's ranks, or -DISOWAVE_MPI=OFF to skip the search)")
+  endif()
+endif()
 
 if(ISOWAVE_BUILD_TESTS)
   find_package(GTest REQUIRED)
