@@ -2,6 +2,7 @@
 // summary table; a failing input is reported and skipped.
 #include <algorithm>
 #include <atomic>
+#include <cctype>
 #include <chrono>
 #include <cmath>
 #include <cstdarg>
@@ -85,11 +86,26 @@ std::vector<Input> expand_inputs(const std::vector<std::string>& arguments) {
   return inputs;
 }
 
+// An input's name for its output file: a builtin field's name and size, a
+// file's stem, and for a dataset of an HDF5 or NetCDF file (FILE.h5:/g/d,
+// FILE.nc:var@T) the selection too, so that each dataset and time step of
+// one file gets a file of its own ("run.nc:rho@3" gives run_rho_3).
 std::string stem_of(const std::string& input) {
-  if (input.rfind("builtin:", 0) == 0) {
-    std::string name = input.substr(8);
-    std::replace(name.begin(), name.end(), ':', '_');
+  const auto underscored = [](std::string name) {
+    std::replace_if(name.begin(), name.end(), [](char c) { return c == ':' || c == '/' || c == '@'; }, '_');
     return name;
+  };
+  if (input.rfind("builtin:", 0) == 0) return underscored(input.substr(8));
+  std::string lower = input;
+  std::transform(lower.begin(), lower.end(), lower.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+  for (const char* container : {".h5:", ".hdf5:", ".nc:"}) {
+    const std::size_t at = lower.find(container);
+    if (at == std::string::npos || fs::is_regular_file(input)) continue;
+    const std::size_t colon = at + std::strlen(container) - 1;
+    std::string selection = underscored(input.substr(colon + 1));
+    selection.erase(0, selection.find_first_not_of('_'));
+    const std::string stem = fs::path(input.substr(0, colon)).stem().string();
+    return selection.empty() ? stem : stem + "_" + selection;
   }
   return fs::path(input).stem().string();
 }

@@ -112,6 +112,18 @@ TEST_F(CliTest, BatchTotalsCountEachVolumeOnceAndTheFilesWritten) {
   EXPECT_NEAR(ratio, double(volume_bytes) / double(bytes), 1e-3);
 }
 
+// Each dataset and time step of one HDF5 or NetCDF file gets its own output
+// name (the files here are missing, so the jobs fail, but their outputs are
+// planned: two jobs writing one file would be refused before any runs).
+TEST_F(CliTest, BatchNamesEachDatasetAndTimeStepApart) {
+  const RunResult r = run({"convert", path("run.nc:rho@0"), path("run.nc:rho@1"), path("f.h5:/g/v"), "--iso", "0",
+                           "--out-dir", path("out"), "--json"},
+                          dir_);
+  EXPECT_EQ(r.exit_code, 1) << r.err;  // missing files, not a usage error
+  for (const char* name : {"run_rho_0.isw", "run_rho_1.isw", "f_g_v.isw"})
+    EXPECT_NE(r.out.find(path(std::string("out/") + name)), std::string::npos) << name << "\n" << r.out;
+}
+
 // Every job's line after the first tells the batch's time left, before the
 // job's stages; the estimate (the time per finished job times the jobs left)
 // cannot exceed twice the whole run's time. Jobs side by side (--jobs 2)
