@@ -2,7 +2,6 @@
 // summary table; a failing input is reported and skipped.
 #include <algorithm>
 #include <atomic>
-#include <cctype>
 #include <chrono>
 #include <cmath>
 #include <cstdarg>
@@ -96,15 +95,11 @@ std::string stem_of(const std::string& input) {
     return name;
   };
   if (input.rfind("builtin:", 0) == 0) return underscored(input.substr(8));
-  std::string lower = input;
-  std::transform(lower.begin(), lower.end(), lower.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-  for (const char* container : {".h5:", ".hdf5:", ".nc:"}) {
-    const std::size_t at = lower.find(container);
-    if (at == std::string::npos || fs::is_regular_file(input)) continue;
-    const std::size_t colon = at + std::strlen(container) - 1;
-    std::string selection = underscored(input.substr(colon + 1));
+  const SelectedPath selected = split_selection(input);
+  if (!selected.selection.empty()) {
+    std::string selection = underscored(selected.selection);
     selection.erase(0, selection.find_first_not_of('_'));
-    const std::string stem = fs::path(input.substr(0, colon)).stem().string();
+    const std::string stem = fs::path(selected.file).stem().string();
     return selection.empty() ? stem : stem + "_" + selection;
   }
   return fs::path(input).stem().string();

@@ -434,11 +434,7 @@ Volume read_builtin(const std::string& spec) {
   return make_builtin_field(rest, n);
 }
 
-// "FILE.h5:/group/data" -> {"FILE.h5", "/group/data"} (also .hdf5 and .nc);
-// a path naming an existing file, or without such a ':', is kept whole.
-struct SelectedPath {
-  std::string file, selection;
-};
+}  // namespace
 
 SelectedPath split_selection(const std::string& path) {
   const std::string lower = detail::to_lower(path);
@@ -451,6 +447,8 @@ SelectedPath split_selection(const std::string& path) {
   if (colon == std::string::npos || (::stat(path.c_str(), &info) == 0 && S_ISREG(info.st_mode))) return {path, ""};
   return {path.substr(0, colon), path.substr(colon + 1)};
 }
+
+namespace {
 
 std::string extension_of(const std::string& path) {
   const auto slash = path.find_last_of('/');

@@ -76,6 +76,15 @@ struct VolumeReadOptions {
 // its own: .raw, .nrrd, .nhdr, .vtk, .vti, .vdb, .npy, .h5, .hdf5, .nc.
 bool has_volume_extension(const std::string& path);
 
+// A dataset path split into its file and selection: "FILE.h5:/group/data"
+// -> {"FILE.h5", "/group/data"}, likewise .hdf5 and .nc ("FILE.nc:var@3");
+// a path naming an existing file, or without such a ':', is kept whole with
+// an empty selection.
+struct SelectedPath {
+  std::string file, selection;
+};
+SelectedPath split_selection(const std::string& path);
+
 // Reads a volume. builtin:NAME[:N] calls make_builtin_field(NAME, N), N
 // defaulting to 128; a .raw file, or any file without a volume extension when
 // options.dims and options.type are both set, is raw samples; otherwise the
