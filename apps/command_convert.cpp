@@ -420,6 +420,8 @@ void render_json_result(std::string& out, const JobOutcome& o) {
           r.seconds.analysis, r.seconds.encode, r.seconds.evaluate, r.fit_isosurface.rms, r.fit_isosurface.max,
           r.fit_isosurface.far, r.uncovered_share, r.folded_share(), r.base_attempts);
   if (r.max_error_cells > 0) appendf(out, "\"max_error_percent_cell\": %.6g, ", 100.0 * r.max_error_cells);
+  if (r.extraction.topology_tolerance > 0)
+    appendf(out, "\"topology_tolerance\": %s, ", cli::topology_tolerance_json(r.extraction).c_str());
   out += "\"fit_levels\": [";
   for (std::size_t k = 0; k < r.level_reports.size(); ++k) {
     const LevelReport& l = r.level_reports[k];
@@ -514,6 +516,11 @@ void render_table_rows(std::string& out, const std::string& output, const JobOut
           "", r.fit_isosurface.rms, r.fit_isosurface.max, r.fit_isosurface.far, 100.0 * r.uncovered_share,
           kUncoveredCells, 100.0 * r.folded_share());
   appendf(out, "%-28s %s\n", "", describe_quantization_error(r.quantization, r.cell_size).c_str());
+  if (r.extraction.topology_tolerance > 0)
+    appendf(out, "%-28s %s; genus %lld -> %lld, components %zu -> %zu\n", "",
+            cli::topology_tolerance_line(r.extraction).c_str(), static_cast<long long>(r.extraction.before.genus),
+            static_cast<long long>(r.extraction.after.genus), r.extraction.before.components,
+            r.extraction.after.components);
   if (r.base_attempts > 1)
     appendf(out, "%-28s the base mesh grew from %zu to %zu vertices (%d tries) to cover the isosurface\n", "",
             r.first_base_vertices, r.base_vertices, r.base_attempts);

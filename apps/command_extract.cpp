@@ -77,6 +77,7 @@ std::string report_json(const std::string& input, const Volume& volume, const Is
   json += "  \"nonfinite_samples\": " + std::to_string(r.nonfinite_samples) + ",\n";
   json += "  \"smooth_sigma\": " + number(r.smooth_sigma) + ",\n";
   json += "  \"min_component_vertices\": " + std::to_string(r.min_component_vertices) + ",\n";
+  json += "  \"topology_tolerance\": " + cli::topology_tolerance_json(r) + ",\n";
   json += "  \"before\": " + statistics_json(r.before) + ",\n";
   json += "  \"after\": " + statistics_json(r.after) + ",\n";
   json += "  \"dropped\": {\"components\": " + std::to_string(r.dropped_components) +
@@ -94,7 +95,7 @@ std::string report_json(const std::string& input, const Volume& volume, const Is
 int extract(const Args& raw) {
   cli::CommandSpec spec{
       "extract",
-      "INPUT --iso V [reader options] [--min-component-vertices N] [--smooth SIGMA] [--flip] -o MESH.ply|MESH.obj",
+      "INPUT --iso V [reader options] [--min-component-vertices N] [--smooth SIGMA] [--topology-tolerance T] [--flip] -o MESH.ply|MESH.obj",
       "Extracts the isosurface of a volume as a 2-manifold, consistently oriented triangle mesh (normals\n"
       "toward lower values). INPUT is .raw, .nrrd/.nhdr, .vtk, .vti, .vdb or builtin:NAME[:N] with NAME one of\n"
       "sphere, torus, genus3, marschner-lobb, mixing (--iso defaults to 0 for these); with --dims and --type,\n"
@@ -154,10 +155,11 @@ int extract(const Args& raw) {
                 volume.spacing.z, load_seconds);
     if (r.nonfinite_samples) std::printf("  %zu NaN/Inf samples treated as outside\n", r.nonfinite_samples);
     std::printf("iso %g%s (extracted in %.2f s)\n", r.iso, r.flipped ? ", flipped" : "", extract_seconds);
-    const bool cleaned = r.smooth_sigma > 0 || r.min_component_vertices > 1;
+    const bool cleaned = r.smooth_sigma > 0 || r.topology_tolerance > 0 || r.min_component_vertices > 1;
     print_statistics(cleaned ? "before clean-up" : "surface", r.before);
     if (cleaned) {
       if (r.smooth_sigma > 0) std::printf("smoothed with a Gaussian of sigma %g voxels\n", r.smooth_sigma);
+      if (r.topology_tolerance > 0) std::printf("%s\n", cli::topology_tolerance_line(r).c_str());
       if (r.min_component_vertices > 1)
         std::printf("dropped %zu components under %zu vertices (%zu vertices, %zu triangles, area %.6g)\n",
                     r.dropped_components, r.min_component_vertices, r.dropped_vertices, r.dropped_triangles,

@@ -8,6 +8,7 @@
 #include "commands.h"
 #include "isowave/core/error.h"
 #include "isowave/core/mesh_io.h"
+#include "isowave/extract/isosurface.h"
 #include "isowave/simplify/simplify.h"
 
 namespace isowave::commands {
@@ -31,6 +32,10 @@ int simplify(const Args& raw) {
        {"flip-threshold", true, "a flip needs the old and new triangles' unit normals to have dot >= D, in [-1, 1] (default 0.7)", "D"},
        {"normal-threshold", true, "edge removal needs unit face normals with dot >= D, in [-1, 1] (default 0.5)",
         "D"},
+       {"topology-tolerance", true,
+        "first drop components under T across, in the mesh's units (cells for meshes `extract` made from a "
+        "unit-spaced grid); handles and tunnels are removed at extraction, where the field is known",
+        "T"},
        {"no-distance", false, "skip the distance from the input vertices to the base mesh", ""},
        {"ascii", false, "write ASCII PLY instead of binary", ""},
        {"quiet", false, "print nothing on success", ""},
@@ -70,6 +75,10 @@ int simplify(const Args& raw) {
   const std::string& input = args.positional()[0];
   PolygonMesh mesh = read_mesh(input);
   const std::size_t unreferenced = remove_unreferenced_vertices(mesh);
+  const double tolerance = args.get_double("topology-tolerance", 0.0);
+  if (!(tolerance >= 0))
+    throw Error(ErrorKind::InvalidArgument, "--topology-tolerance must be >= 0, got " + args.get("topology-tolerance"));
+  const ComponentRemoval specks = remove_components_under(mesh, tolerance);
   options.target_vertices = args.has("ratio")
                                 ? static_cast<std::size_t>(std::llround(ratio * double(mesh.vertex_count())))
                                 : static_cast<std::size_t>(target);
@@ -81,6 +90,9 @@ int simplify(const Args& raw) {
   if (!args.has("quiet")) {
     std::printf("%s", input.c_str());
     if (unreferenced) std::printf(" (%zu unreferenced vertices dropped)", unreferenced);
+    if (tolerance > 0)
+      std::printf("\ntopology tolerance %g: dropped %zu components under %g across (%zu vertices, area %.6g)",
+                  tolerance, specks.components, tolerance, specks.vertices, specks.area);
     std::printf("\n%s", simplify::format_report(result.report).c_str());
     std::printf("written: %s\n", output.c_str());
   }

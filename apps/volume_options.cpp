@@ -108,6 +108,8 @@ bool is_builtin_volume(const std::string& input) { return input.rfind("builtin:"
 void add_extraction_options(std::vector<OptionSpec>& options) {
   options.push_back({"min-component-vertices", true, "drop connected components with fewer vertices", "N"});
   options.push_back({"smooth", true, "Gaussian pre-filter of the field, standard deviation in voxels", "SIGMA"});
+  options.push_back({"topology-tolerance", true,
+                     "remove handles, tunnels, specks and bubbles smaller than T cells (0: exact topology)", "T"});
   options.push_back({"flip", false, "orient normals toward higher values", ""});
 }
 
@@ -134,7 +136,39 @@ IsosurfaceOptions extraction_options(const Arguments& args) {
   options.smooth_sigma = args.get_double("smooth", 0.0);
   if (!(options.smooth_sigma == 0 || (options.smooth_sigma >= 0.1 && options.smooth_sigma <= 100)))
     throw Error(ErrorKind::InvalidArgument, "--smooth must be 0 (off) or in 0.1..100 voxels, got " + args.get("smooth"));
+  options.topology_tolerance = args.get_double("topology-tolerance", options.topology_tolerance);
+  if (!(options.topology_tolerance >= 0 && options.topology_tolerance <= 100))
+    throw Error(ErrorKind::InvalidArgument,
+                "--topology-tolerance must be in 0..100 cells, got " + args.get("topology-tolerance"));
   return options;
+}
+
+std::string topology_tolerance_line(const IsosurfaceReport& r) {
+  if (r.topology_tolerance <= 0) return "";
+  const TopologyCleanup& t = r.topology;
+  char line[512];
+  std::snprintf(line, sizeof line,
+                "topology tolerance %g cells: cut %zu handles, filled %zu tunnels, removed %zu specks, filled %zu "
+                "bubbles (%zu samples changed, %.2f s); the surface moved D = %.2f%% of a cell, area %+.3g%%",
+                r.topology_tolerance, t.handles_cut, t.tunnels_filled, t.specks_removed, t.bubbles_filled,
+                t.samples_changed, t.seconds, 100 * r.topology_d,
+                r.before.area > 0 ? 100 * r.topology_area_change / r.before.area : 0.0);
+  return line;
+}
+
+std::string topology_tolerance_json(const IsosurfaceReport& r) {
+  const TopologyCleanup& t = r.topology;
+  char json[640];
+  std::snprintf(json, sizeof json,
+                "{\"cells\": %.9g, \"handles_cut\": %zu, \"tunnels_filled\": %zu, \"specks_removed\": %zu, "
+                "\"bubbles_filled\": %zu, \"samples_changed\": %zu, \"rounds\": %d, \"seconds\": %.6g, "
+                "\"d_percent_cell\": %.6g, \"area_change\": %.9g, \"genus_before\": %lld, \"genus_after\": %lld, "
+                "\"components_before\": %zu, \"components_after\": %zu}",
+                r.topology_tolerance, t.handles_cut, t.tunnels_filled, t.specks_removed, t.bubbles_filled,
+                t.samples_changed, t.rounds, t.seconds, 100 * r.topology_d, r.topology_area_change,
+                static_cast<long long>(r.before.genus), static_cast<long long>(r.after.genus), r.before.components,
+                r.after.components);
+  return json;
 }
 
 }  // namespace isowave::cli

@@ -30,6 +30,12 @@ void add_extraction_options(std::vector<OptionSpec>& options);
 // --smooth outside 0..100 voxels.
 IsosurfaceOptions extraction_options(const Arguments& args);
 
+// One line on what the topology tolerance changed ("" when it was off), for
+// extract and convert.
+std::string topology_tolerance_line(const IsosurfaceReport& report);
+// The same as a JSON object.
+std::string topology_tolerance_json(const IsosurfaceReport& report);
+
 // Appends --unfold-limit PERCENT (fit and convert) and applies it to the
 // shrink-wrap options: the unfold runs when untangle() left at most that
 // share of the finest level's faces folded (0: never); Error(InvalidArgument)

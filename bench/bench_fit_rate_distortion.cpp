@@ -17,7 +17,7 @@
 // that range (the exact integral of the difference of the two piecewise
 // linear curves), printed as the ratio of D at equal size.
 //
-// usage: bench_fit_rate_distortion VOLUME --iso V [--levels N] [--min-component-vertices N] [--smooth S]
+// usage: bench_fit_rate_distortion VOLUME --iso V [--levels N] [--min-component-vertices N] [--smooth S] [--topology-tolerance T]
 //                                  [--fit shrink-wrap|parametrization|both]
 #include <stdlib.h>
 #include <sys/stat.h>

@@ -12,7 +12,7 @@
 // convert; the children run before this process touches TBB, and send back
 // the fine mesh and their figures through a pipe.
 //
-// usage: bench_surface_error VOLUME --iso V [--levels N] [--min-component-vertices N] [--smooth S]
+// usage: bench_surface_error VOLUME --iso V [--levels N] [--min-component-vertices N] [--smooth S] [--topology-tolerance T]
 //                            [--fit shrink-wrap|parametrization|both]
 //   VOLUME is a file or builtin:NAME[:N]; --levels 0 (default) picks them
 //   automatically; --fit defaults to both.
@@ -29,7 +29,7 @@ int main(int argc, char** argv) {
   try {
     const FitRuns runs = run_fits(o);
     for (std::size_t i = 0; i < o.fits.size(); ++i)
-      print_fit(o.fits[i], runs.outcomes[i], runs.surfaces, runs.marching_cubes_d);
+      print_fit(o.fits[i], runs.outcomes[i], runs.surfaces, runs.marching_cubes_d, runs.kept_marching_cubes_d);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "bench_surface_error: %s\n", e.what());
     return 1;

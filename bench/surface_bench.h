@@ -6,6 +6,8 @@
 // field (2n - 1 samples per axis, spacing halved, same origin; the same
 // extractor and isovalue), closer to the true isosurface than any coder's
 // output. With --smooth the field is the pre-filtered one, as for the fit.
+// With --topology-tolerance both stay those of the field before the clean-up:
+// D is measured against the isosurface the user had.
 // With --min-component-vertices the reference leaves out its faces in the
 // cells (of the input grid) where the marching-cubes mesh has faces of
 // dropped components only: the upsample keeps the field's samples, so its
@@ -37,7 +39,7 @@ struct BenchOptions {
 };
 
 // The options both programs take (VOLUME --iso V [--levels N]
-// [--min-component-vertices N] [--smooth S] [--fit shrink-wrap|parametrization|both]);
+// [--min-component-vertices N] [--smooth S] [--topology-tolerance T] [--fit ...]);
 // anything else prints the usage under `program`'s name and exits with 2.
 BenchOptions parse_options(int argc, char** argv, const char* program);
 
@@ -69,6 +71,9 @@ FitOutcome fit_in_child(const BenchOptions& o, FitMethod fit);
 struct Surfaces {
   double cell = 1;  // the field's cell size (world units)
   PolygonMesh marching_cubes, reference;
+  // With a topology tolerance: the marching-cubes mesh after it, and the
+  // reference of the surface it keeps (2x upsample of the cleaned field).
+  PolygonMesh tolerant, kept_reference;
 };
 
 // The marching-cubes mesh of the (pre-filtered) field and the reference from
@@ -81,7 +86,8 @@ Surfaces extract_surfaces(const BenchOptions& o);
 struct FitRuns {
   std::vector<FitOutcome> outcomes;  // one per o.fits
   Surfaces surfaces;
-  double marching_cubes_d = 0;  // world units
+  double marching_cubes_d = 0;       // world units
+  double kept_marching_cubes_d = 0;  // the tolerant mesh against the kept reference (0: no tolerance)
 };
 FitRuns run_fits(const BenchOptions& o);
 
@@ -92,6 +98,7 @@ SurfaceError print_error(const char* what, const PolygonMesh& mesh, const Polygo
 // and the marching-cubes mesh, with the target (D <= 1.25 x D of the
 // marching-cubes mesh, or 1% of a cell where that is larger); false when the
 // fit did not run (the line says why).
-bool print_fit(FitMethod fit, const FitOutcome& outcome, const Surfaces& s, double marching_cubes_d);
+bool print_fit(FitMethod fit, const FitOutcome& outcome, const Surfaces& s, double marching_cubes_d,
+               double kept_marching_cubes_d = 0);
 
 }  // namespace isowave::bench

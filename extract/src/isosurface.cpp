@@ -13,6 +13,7 @@
 
 #include "isowave/core/error.h"
 #include "isowave/core/mesh_topology.h"
+#include "isowave/core/surface_error.h"
 
 namespace isowave {
 namespace {
@@ -148,15 +149,11 @@ SurfaceStatistics statistics_of(const ComponentTable& table, const std::vector<s
   return stats;
 }
 
-// remove_small_components() with the mesh's table; keep[c] says which stayed.
-ComponentRemoval remove_components(PolygonMesh& mesh, const ComponentTable& table, std::size_t min_vertices,
-                                   std::vector<std::uint8_t>& keep) {
+// Drops the components c without keep[c] (table is the mesh's).
+ComponentRemoval drop_components(PolygonMesh& mesh, const ComponentTable& table, const std::vector<std::uint8_t>& keep) {
   ComponentRemoval removal;
-  keep.assign(table.topology.size(), 1);
-  if (min_vertices <= 1 || mesh.face_count() == 0) return removal;
   for (std::size_t c = 0; c < table.topology.size(); ++c)
-    if (table.topology[c].vertices < min_vertices) {
-      keep[c] = 0;
+    if (!keep[c]) {
       ++removal.components;
       removal.faces += table.topology[c].faces;
       removal.area += table.area[c];
@@ -179,12 +176,42 @@ ComponentRemoval remove_components(PolygonMesh& mesh, const ComponentTable& tabl
   return removal;
 }
 
+// remove_small_components() with the mesh's table; keep[c] says which stayed.
+ComponentRemoval remove_components(PolygonMesh& mesh, const ComponentTable& table, std::size_t min_vertices,
+                                   std::vector<std::uint8_t>& keep) {
+  keep.assign(table.topology.size(), 1);
+  if (min_vertices <= 1 || mesh.face_count() == 0) return {};
+  for (std::size_t c = 0; c < table.topology.size(); ++c) keep[c] = table.topology[c].vertices >= min_vertices;
+  return drop_components(mesh, table, keep);
+}
+
 }  // namespace
 
 ComponentRemoval remove_small_components(PolygonMesh& mesh, std::size_t min_vertices) {
   if (min_vertices <= 1 || mesh.face_count() == 0) return {};
   std::vector<std::uint8_t> keep;
   return remove_components(mesh, component_table(mesh), min_vertices, keep);
+}
+
+ComponentRemoval remove_components_under(PolygonMesh& mesh, double extent) {
+  if (!(extent > 0) || mesh.face_count() == 0) return {};
+  const ComponentTable table = component_table(mesh);
+  const std::size_t count = table.topology.size();
+  std::vector<Vec3> low(count, Vec3{1e300, 1e300, 1e300}), high(count, Vec3{-1e300, -1e300, -1e300});
+  for (std::size_t f = 0; f < mesh.face_count(); ++f) {
+    const std::uint32_t c = table.face_component[f];
+    for (std::uint32_t k = 0; k < mesh.face_size(f); ++k) {
+      const Vec3& p = mesh.positions[mesh.face_begin(f)[k]];
+      low[c] = {std::min(low[c].x, p.x), std::min(low[c].y, p.y), std::min(low[c].z, p.z)};
+      high[c] = {std::max(high[c].x, p.x), std::max(high[c].y, p.y), std::max(high[c].z, p.z)};
+    }
+  }
+  std::vector<std::uint8_t> keep(count);
+  for (std::size_t c = 0; c < count; ++c) {
+    const Vec3 size = high[c] - low[c];
+    keep[c] = std::max({size.x, size.y, size.z}) >= extent;
+  }
+  return drop_components(mesh, table, keep);
 }
 
 double surface_area(const PolygonMesh& mesh) {
@@ -195,38 +222,65 @@ double surface_area(const PolygonMesh& mesh) {
 
 SurfaceStatistics surface_statistics(const PolygonMesh& mesh) { return statistics_of(component_table(mesh)); }
 
-Isosurface extract_isosurface(const Volume& volume, const IsosurfaceOptions& options, ProgressSink& progress) {
+namespace {
+
+// extract_isosurface() on `given`; the steps that change the field write to
+// *writable (which may be `given` itself) or, when it is null, to a copy.
+Isosurface extract(const Volume& given, Volume* writable, const IsosurfaceOptions& options, ProgressSink& progress) {
   if (!std::isfinite(options.iso)) throw Error(ErrorKind::InvalidArgument, "the isovalue must be finite");
   if (!(options.smooth_sigma >= 0) || !std::isfinite(options.smooth_sigma))
     throw Error(ErrorKind::InvalidArgument, "the smoothing sigma must be a non-negative number of voxels");
+  if (!(options.topology_tolerance >= 0) || !std::isfinite(options.topology_tolerance))
+    throw Error(ErrorKind::InvalidArgument, "the topology tolerance must be a non-negative number of cells");
   Isosurface result;
   IsosurfaceReport& report = result.report;
   report.iso = options.iso;
   report.flipped = options.flip;
-  report.nonfinite_samples = volume.nonfinite_count;
+  report.nonfinite_samples = given.nonfinite_count;
   report.smooth_sigma = options.smooth_sigma;
   report.min_component_vertices = options.min_component_vertices;
+  report.topology_tolerance = options.topology_tolerance;
 
   progress.begin_stage("contour");
-  result.mesh = contour_volume(volume, options.iso, options.flip, &report.centroid_vertices);
+  result.mesh = contour_volume(given, options.iso, options.flip, &report.centroid_vertices);
   progress.end_stage();
   progress.begin_stage("topology");
   ComponentTable table = component_table(result.mesh);
   report.before = statistics_of(table);
   progress.end_stage();
 
-  bool smoothed = false;
+  Volume copy;  // the changed field when the caller's may not change
+  const Volume* field = &given;
+  bool recontoured = false;
   if (options.smooth_sigma > 0) {
     progress.begin_stage("smooth");
     result.mesh = PolygonMesh();  // free the unsmoothed contour first
-    {
-      const Volume smoothed_field = gaussian_smoothed(volume, options.smooth_sigma);
-      result.mesh = contour_volume(smoothed_field, options.iso, options.flip, &report.centroid_vertices);
-    }
-    table = component_table(result.mesh);
+    Volume& target = writable ? *writable : copy;
+    target = gaussian_smoothed(*field, options.smooth_sigma);
+    field = &target;
+    result.mesh = contour_volume(*field, options.iso, options.flip, &report.centroid_vertices);
     progress.end_stage();
-    smoothed = true;
+    recontoured = true;
   }
+  if (options.topology_tolerance > 0) {
+    progress.begin_stage("topology tolerance");
+    if (!writable && field != &copy) copy = given;
+    Volume& target = writable ? *writable : copy;
+    report.topology = clean_topology(target, options.iso, options.topology_tolerance);
+    field = &target;
+    if (report.topology.changed()) {
+      PolygonMesh cleaned = contour_volume(*field, options.iso, options.flip, &report.centroid_vertices);
+      const double area_before = surface_area(result.mesh);
+      report.topology_area_change = surface_area(cleaned) - area_before;
+      if (cleaned.face_count() > 0 && result.mesh.face_count() > 0)
+        report.topology_d = surface_error(cleaned, result.mesh, 100000).d() / field->cell_size();
+      result.mesh = std::move(cleaned);
+      recontoured = true;
+    }
+    progress.end_stage();
+  }
+  if (recontoured) table = component_table(result.mesh);
+
   std::vector<std::uint8_t> keep;
   bool removed = false;
   if (options.min_component_vertices > 1) {
@@ -239,10 +293,20 @@ Isosurface extract_isosurface(const Volume& volume, const IsosurfaceOptions& opt
     removed = removal.components > 0;
     progress.end_stage();
   }
-  if (smoothed || removed) report.after = statistics_of(table, removed ? &keep : nullptr);
+  if (recontoured || removed) report.after = statistics_of(table, removed ? &keep : nullptr);
   else report.after = report.before;
   report.sharp_vertices = result.mesh.sharp_count();
   return result;
+}
+
+}  // namespace
+
+Isosurface extract_isosurface(const Volume& volume, const IsosurfaceOptions& options, ProgressSink& progress) {
+  return extract(volume, nullptr, options, progress);
+}
+
+Isosurface extract_isosurface_in_place(Volume& field, const IsosurfaceOptions& options, ProgressSink& progress) {
+  return extract(field, &field, options, progress);
 }
 
 }  // namespace isowave

@@ -341,8 +341,11 @@ void add_fit_warnings(const ConvertOptions& options, std::size_t target, Convert
     warning << "the base mesh keeps " << result.base_vertices << " vertices (target " << std::llround(floor)
             << "): the isosurface has " << result.extraction.after.components << " components and genus "
             << result.extraction.after.genus
-            << ", which the base mesh must keep; --min-component-vertices N and --smooth SIGMA remove small bubbles "
-               "and handles";
+            << ", which the base mesh must keep; "
+            << (options.prepare.extract.topology_tolerance > 0
+                    ? "the topology still holds the base mesh large: a larger --topology-tolerance T removes more "
+                      "handles and specks"
+                    : "--topology-tolerance T removes handles, tunnels and specks under T cells");
     result.warnings.push_back(warning.str());
   }
   if (double(result.fit_isosurface.far) > kFarPointsWarning * double(result.fine_vertices)) {

@@ -34,7 +34,7 @@ PreparedSurface extract_surface(Volume volume, const PrepareOptions& options, co
   }
   IsosurfaceOptions extract_options = options.extract;
   extract_options.smooth_sigma = 0;  // applied above
-  prepared.isosurface = extract_isosurface(prepared.field, extract_options, progress);
+  prepared.isosurface = extract_isosurface_in_place(prepared.field, extract_options, progress);
   prepared.isosurface.report.smooth_sigma = sigma;
   if (prepared.isosurface.mesh.face_count() == 0)
     throw empty_isosurface_error(source, options.extract.iso, prepared.field);

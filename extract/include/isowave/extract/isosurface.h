@@ -49,6 +49,7 @@
 #include "isowave/core/mesh_topology.h"
 #include "isowave/core/progress.h"
 #include "isowave/core/volume.h"
+#include "isowave/extract/topology_tolerance.h"
 
 namespace isowave {
 
@@ -69,6 +70,10 @@ struct IsosurfaceOptions {
   // standard deviation, in voxels along each axis, of a separable Gaussian
   // applied to the field before contouring (0: none).
   double smooth_sigma = 0.0;
+  // Topology tolerance T, cells: handles, tunnels, specks and bubbles under
+  // T removed from the (smoothed) field before component removal
+  // (topology_tolerance.h; 0: the paper's exact topology).
+  double topology_tolerance = 0.0;
 };
 
 // Topology counts (faces = triangles) plus area and component sizes.
@@ -84,6 +89,13 @@ struct IsosurfaceReport {
   std::size_t nonfinite_samples = 0;  // in the input volume (treated as outside)
   double smooth_sigma = 0.0;          // 0 if the field was not smoothed
   std::size_t min_component_vertices = 0;
+  double topology_tolerance = 0.0;  // cells
+  TopologyCleanup topology;         // what the tolerance changed
+  // D (surface_error.h, 100,000 samples a side), cells, and the area change
+  // (world units squared) from the contour before the tolerance to the one
+  // after it; 0 when it changed nothing.
+  double topology_d = 0.0;
+  double topology_area_change = 0.0;
   // Contour of the field as given (before smoothing and component removal).
   SurfaceStatistics before;
   // The returned mesh.
@@ -104,11 +116,19 @@ struct Isosurface {
 
 // Contours `volume` at options.iso, applies the requested clean-ups and
 // reports (see IsosurfaceReport). Throws Error(InvalidArgument) for a
-// non-finite iso or a negative or non-finite smooth_sigma, and what
-// contour_volume() throws. The report's topology counts need an O(n log n)
-// pass over the mesh (summarize_topology), about as long as the contouring.
+// non-finite iso, a negative or non-finite smooth_sigma or
+// topology_tolerance, and what contour_volume() and clean_topology() throw.
+// The report's topology counts need an O(n log n) pass over the mesh
+// (summarize_topology), about as long as the contouring. The pre-filter and
+// the topology tolerance each work on a copy of the volume.
 Isosurface extract_isosurface(const Volume& volume, const IsosurfaceOptions& options = {},
                               ProgressSink& progress = no_progress());
+
+// The same, with the pre-filter and the topology tolerance applied to
+// `field` itself: afterwards it is the field the returned surface is the
+// isosurface of (what the fit must search), and no copy is made.
+Isosurface extract_isosurface_in_place(Volume& field, const IsosurfaceOptions& options = {},
+                                       ProgressSink& progress = no_progress());
 
 // The building blocks of extract_isosurface(), for tests and other stages.
 
@@ -127,6 +147,11 @@ struct ComponentRemoval {
 // Drops every component with fewer than min_vertices vertices (and their
 // vertices, keeping the order of the rest). O(n).
 ComponentRemoval remove_small_components(PolygonMesh& mesh, std::size_t min_vertices);
+
+// Drops every component whose vertices span less than `extent` (world
+// units) along every axis: the mesh-side part of the topology tolerance, for
+// meshes without their field (handles need the field). O(n log n).
+ComponentRemoval remove_components_under(PolygonMesh& mesh, double extent);
 
 // Sum of face areas (polygons fanned from their first vertex).
 double surface_area(const PolygonMesh& mesh);

@@ -26,7 +26,8 @@ struct PrepareOptions {
 
 struct PreparedSurface {
   // The field the surface was extracted from: the input, pre-filtered when
-  // extract.smooth_sigma > 0 (the input itself is not kept).
+  // extract.smooth_sigma > 0 and with the topology tolerance's few samples
+  // changed when extract.topology_tolerance > 0 (the input is not kept).
   Volume field;
   // The extracted triangle mesh (world coordinates) and its report;
   // report.smooth_sigma records the pre-filter.
