@@ -16,6 +16,8 @@
 #include "isowave/extract/builtin_fields.h"
 #include "isowave/extract/isosurface.h"
 #include "isowave/extract/topology_tolerance.h"
+#include "isowave/extract/volume_io.h"
+#include "support/test_meshes.h"
 
 namespace isowave {
 namespace {
@@ -160,6 +162,34 @@ TEST(TopologyTolerance, SurfacesWithoutSmallFeaturesComeOutBitIdentical) {
   }
 }
 
+// Shared data: hydrogen has no feature under 4 cells; the engine CT only
+// sub-cell bubbles (its genus 18 is all thick handles).
+TEST(TopologyTolerance, HydrogenStaysBitIdenticalAndTheEngineLosesOnlyBubbles) {
+  ISOWAVE_REQUIRE_SHARED_FILE(hydrogen_path, "volumes/hydrogen.vti");
+  const Volume hydrogen = read_volume(hydrogen_path);
+  IsosurfaceOptions options;
+  options.iso = 0.05;
+  const Isosurface exact = extract_isosurface(hydrogen, options);
+  options.topology_tolerance = 4;
+  const Isosurface tolerant = extract_isosurface(hydrogen, options);
+  EXPECT_EQ(tolerant.report.topology.samples_changed, 0u);
+  EXPECT_EQ(tolerant.mesh.positions, exact.mesh.positions);
+  EXPECT_EQ(tolerant.mesh.face_vertices, exact.mesh.face_vertices);
+
+  ISOWAVE_REQUIRE_SHARED_FILE(engine_path, "volumes/engine_256x256x128.nrrd");
+  const Volume engine = read_volume(engine_path);
+  options.iso = 100;
+  const Isosurface engine_surface = extract_isosurface(engine, options);
+  const TopologySummary before = summarize_topology(contour_volume(engine, 100));
+  const TopologySummary after = summarize_topology(engine_surface.mesh);
+  const TopologyCleanup& t = engine_surface.report.topology;
+  EXPECT_EQ(t.handles_cut + t.tunnels_filled + t.specks_removed, 0u);
+  EXPECT_LE(t.bubbles_filled, 3u);
+  EXPECT_EQ(after.genus, before.genus);
+  EXPECT_EQ(after.components + t.bubbles_filled, before.components);
+  EXPECT_LT(engine_surface.report.topology_d, 0.01);
+}
+
 // Random fields: whatever the tolerance changes, it adds no topology (no
 // handle, no component), only the counted samples differ, each across the
 // isovalue, and the result does not depend on the thread count.
@@ -182,6 +212,7 @@ TEST(TopologyTolerance, NoiseGainsNoTopologyAndOnlyCountedSamplesChange) {
     const TopologyCleanup& t = surface.report.topology;
     EXPECT_LE(after.components + t.specks_removed + t.bubbles_filled, before.components) << cells;
     EXPECT_GT(t.specks_removed + t.bubbles_filled, 0u) << cells;
+    EXPECT_LT(surface.report.topology_d, cells) << cells;  // D of the clean-up, cells
     std::size_t changed = 0;
     for (std::size_t p = 0; p < noise.sample_count(); ++p) {
       if (cleaned.values[p] == noise.values[p]) continue;
