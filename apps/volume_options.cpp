@@ -161,11 +161,11 @@ std::string topology_tolerance_json(const IsosurfaceReport& r) {
   char json[640];
   std::snprintf(json, sizeof json,
                 "{\"cells\": %.9g, \"handles_cut\": %zu, \"tunnels_filled\": %zu, \"specks_removed\": %zu, "
-                "\"bubbles_filled\": %zu, \"samples_changed\": %zu, \"rounds\": %d, \"seconds\": %.6g, "
+                "\"bubbles_filled\": %zu, \"samples_changed\": %zu, \"seconds\": %.6g, "
                 "\"d_percent_cell\": %.6g, \"area_change\": %.9g, \"genus_before\": %lld, \"genus_after\": %lld, "
                 "\"components_before\": %zu, \"components_after\": %zu}",
                 r.topology_tolerance, t.handles_cut, t.tunnels_filled, t.specks_removed, t.bubbles_filled,
-                t.samples_changed, t.rounds, t.seconds, 100 * r.topology_d, r.topology_area_change,
+                t.samples_changed, t.seconds, 100 * r.topology_d, r.topology_area_change,
                 static_cast<long long>(r.before.genus), static_cast<long long>(r.after.genus), r.before.components,
                 r.after.components);
   return json;

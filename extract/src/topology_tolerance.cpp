@@ -22,7 +22,6 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kMinEdgeFraction = 1e-3;  // contour.cpp's clamp of the crossing along an edge
-constexpr int kMaxRounds = 2;              // handle rounds; on miranda a third and fourth add under 1% of the cuts
 
 enum Side : std::uint8_t { kOutside = 0, kInside = 1 };
 Side other(Side s) { return s == kInside ? kOutside : kInside; }
@@ -167,9 +166,7 @@ class Cleaner {
       : field_(field), iso_(iso), cells_(cells), nx_(field.dims[0]), ny_(field.dims[1]), nz_(field.dims[2]),
         plane_(nx_ * ny_), n_(plane_ * nz_) {}
 
-  // Round 0 tests every sample; later rounds only those whose 27 samples
-  // changed and the necks left out for spacing (a neck put back is a bridge
-  // of its side afterwards, so it cannot close a cycle later).
+  // Per side: thin necks cut by weakest link, then specks (bubbles) removed.
   TopologyCleanup run() {
     result_ = {};
     sides_.resize(n_);
@@ -178,27 +175,18 @@ class Cleaner {
     });
     parent_.resize(n_);
     mark_.assign(n_, 0);
-    // Round 0 scans every sample once for both sides; the outside's
-    // candidates are tested again after the inside's changes, with the
-    // samples those changes touched.
-    std::array<std::vector<Neck>, 2> first = scan_thin_necks();
-    std::vector<std::uint32_t> to_test;
-    for (int round = 0; round < kMaxRounds; ++round) {
-      ++result_.rounds;
-      std::vector<std::uint32_t> changed, retry;
-      for (const Side s : {kInside, kOutside}) {
-        std::vector<Neck> candidates =
-            round > 0       ? find_thin_necks(s, to_test)
-            : s == kInside ? std::move(first[kInside])
-                           : find_thin_necks(s, neighbourhoods(changed, samples_of(first[kOutside])));
-        std::vector<Neck> necks = spaced_apart(std::move(candidates), retry);
-        if (round > 0 && necks.empty()) continue;
-        const std::size_t cut = cut_weakest_links(s, std::move(necks), changed);
-        (s == kInside ? result_.handles_cut : result_.tunnels_filled) += cut;
-        if (round == 0) (s == kInside ? result_.specks_removed : result_.bubbles_filled) += remove_small(s, changed);
-      }
-      if (changed.empty() && retry.empty()) break;
-      to_test = neighbourhoods(changed, std::move(retry));
+    // One scan finds both sides' necks; the outside's are tested again after
+    // the inside's changes, with the samples those changes touched.
+    std::array<std::vector<Neck>, 2> found = scan_thin_necks();
+    std::vector<std::uint32_t> changed;
+    for (const Side s : {kInside, kOutside}) {
+      std::vector<Neck> candidates = s == kInside
+                                         ? std::move(found[kInside])
+                                         : find_thin_necks(s, neighbourhoods(changed, samples_of(found[kOutside])));
+      const std::size_t cut = cut_weakest_links(s, spaced_apart(std::move(candidates)), changed);
+      const std::size_t small = remove_small(s, changed);
+      (s == kInside ? result_.handles_cut : result_.tunnels_filled) = cut;
+      (s == kInside ? result_.specks_removed : result_.bubbles_filled) = small;
     }
     result_.samples_changed = original_.size();
     return result_;
@@ -463,10 +451,10 @@ class Cleaner {
     return necks;
   }
 
-  // Thinnest first, leaves out (into `left_out`) every neck within one
-  // sample of one kept: each kept neck's 27 samples then hold no other, so
-  // its local test stays true whatever happens to the others.
-  std::vector<Neck> spaced_apart(std::vector<Neck> necks, std::vector<std::uint32_t>& left_out) {
+  // Thinnest first, leaves out every neck within one sample of one kept:
+  // each kept neck's 27 samples then hold no other, so its local test stays
+  // true whatever happens to the others.
+  std::vector<Neck> spaced_apart(std::vector<Neck> necks) {
     std::sort(necks.begin(), necks.end(), [](const Neck& a, const Neck& b) {
       return a.depth != b.depth ? a.depth < b.depth : a.sample < b.sample;
     });
@@ -475,10 +463,7 @@ class Cleaner {
       if (original_.count(neck.sample)) continue;  // changed once already: a second change would undo the first
       bool free = true;
       for (int n = 0; n < 27 && free; ++n) free = !mark_[node_sample(neck.sample, n)];
-      if (!free) {
-        left_out.push_back(neck.sample);
-        continue;
-      }
+      if (!free) continue;
       mark_[neck.sample] = 1;
       kept.push_back(neck);
     }

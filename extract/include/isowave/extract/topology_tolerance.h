@@ -23,8 +23,8 @@
 //   closes a cycle and stays cut (Kruskal's maximum spanning forest). So each
 //   cut removes a handle at its thinnest one-sample neck, nothing is ever
 //   split or merged, and only necks thinner than T are cut. Inside handles
-//   are cut first, then outside ones (tunnels) are filled; rounds repeat
-//   while they change anything.
+//   are cut first, then outside ones (tunnels) are filled, each side once:
+//   a neck left out for spacing stays.
 // Handles whose necks are more than one sample thick everywhere are kept.
 //
 // A changed sample gets its value mirrored through the isovalue (2 iso - v,
@@ -42,7 +42,6 @@ struct TopologyCleanup {
   std::size_t handles_cut = 0;      // inside necks cut (each removes one handle)
   std::size_t tunnels_filled = 0;   // outside necks filled (each removes one tunnel)
   std::size_t samples_changed = 0;  // samples whose value changed
-  int rounds = 0;                   // handle rounds run
   double seconds = 0;               // wall time of the clean-up
   bool changed() const { return samples_changed > 0; }
 };
@@ -51,8 +50,8 @@ struct TopologyCleanup {
 // nothing. Throws Error(InvalidArgument) for a negative or non-finite T or a
 // non-finite iso and Error(Unsupported) for 2^32 samples or more. Volumes
 // under 3 samples along an axis are left alone. Cost: a 27-sample test per
-// sample next to the surface and a union-find over the samples per side and
-// round (both parallel over slabs), about 1-1.5x the contouring's time;
+// sample next to the surface and a union-find over the samples per side
+// (both parallel over slabs), about the contouring's time;
 // memory 6 bytes per sample. Deterministic for any thread count.
 TopologyCleanup clean_topology(Volume& field, double iso, double cells);
 
