@@ -95,7 +95,7 @@ std::string report_json(const std::string& input, const Volume& volume, const Is
 int extract(const Args& raw) {
   cli::CommandSpec spec{
       "extract",
-      "INPUT --iso V [reader options] [--min-component-vertices N] [--smooth SIGMA] [--topology-tolerance T] [--flip] -o MESH.ply|MESH.obj",
+      "INPUT --iso V [reader options] [extraction options] -o MESH.ply|MESH.obj",
       "Extracts the isosurface of a volume as a 2-manifold, consistently oriented triangle mesh (normals\n"
       "toward lower values). INPUT is .raw, .nrrd/.nhdr, .vtk, .vti, .vdb or builtin:NAME[:N] with NAME one of\n"
       "sphere, torus, genus3, marschner-lobb, mixing (--iso defaults to 0 for these); with --dims and --type,\n"

@@ -31,8 +31,8 @@ double seconds_since(Clock::time_point start) { return std::chrono::duration<dou
 
 [[noreturn]] void exit_with_usage(const char* program, const std::string& problem) {
   std::fprintf(stderr,
-               "%s: %s\nusage: %s VOLUME --iso V [--levels N] [--min-component-vertices N] [--smooth S] [--topology-tolerance T] "
-               "[--fit shrink-wrap|parametrization|both]\n",
+               "%s: %s\nusage: %s VOLUME --iso V [--levels N] [--min-component-vertices N] [--smooth S] "
+               "[--topology-tolerance T] [--fit shrink-wrap|parametrization|both]\n",
                program, problem.c_str(), program);
   std::exit(2);
 }

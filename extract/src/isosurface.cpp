@@ -150,7 +150,8 @@ SurfaceStatistics statistics_of(const ComponentTable& table, const std::vector<s
 }
 
 // Drops the components c without keep[c] (table is the mesh's).
-ComponentRemoval drop_components(PolygonMesh& mesh, const ComponentTable& table, const std::vector<std::uint8_t>& keep) {
+ComponentRemoval drop_components(PolygonMesh& mesh, const ComponentTable& table,
+                                 const std::vector<std::uint8_t>& keep) {
   ComponentRemoval removal;
   for (std::size_t c = 0; c < table.topology.size(); ++c)
     if (!keep[c]) {

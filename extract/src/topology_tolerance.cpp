@@ -37,7 +37,8 @@ float mirrored_value(float value, double iso, Side from) {
   const double v = value;
   const double limit = std::numeric_limits<float>::max();
   float f = std::isfinite(v) ? static_cast<float>(std::clamp(2 * iso - v, -limit, limit)) : static_cast<float>(iso);
-  const float toward = from == kInside ? -std::numeric_limits<float>::infinity() : std::numeric_limits<float>::infinity();
+  const float infinity = std::numeric_limits<float>::infinity();
+  const float toward = from == kInside ? -infinity : infinity;
   while (side_of(f, iso) == from) f = std::nextafter(f, toward);
   return f;
 }
@@ -421,7 +422,8 @@ class Cleaner {
   // The thin necks of side s among `samples`.
   std::vector<Neck> find_thin_necks(Side s, const std::vector<std::uint32_t>& samples) const {
     std::vector<float> depth(samples.size(), -1.0f);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, samples.size()), [&](const tbb::blocked_range<std::size_t>& range) {
+    const tbb::blocked_range<std::size_t> all(0, samples.size());
+    tbb::parallel_for(all, [&](const tbb::blocked_range<std::size_t>& range) {
       for (std::size_t m = range.begin(); m != range.end(); ++m) {
         const std::size_t p = samples[m];
         if (sides_[p] != s || !off_box(p) || !is_thin_neck(p, s, depth[m])) depth[m] = -1.0f;
@@ -442,7 +444,8 @@ class Cleaner {
           for (std::size_t i = 1; i + 1 < nx_; ++i) {
             const std::size_t p = i + nx_ * j + plane_ * k;
             float depth = 0;
-            if (is_thin_neck(p, sides_[p], depth)) found[k][sides_[p]].push_back({static_cast<std::uint32_t>(p), depth, field_.values[p]});
+            if (is_thin_neck(p, sides_[p], depth))
+              found[k][sides_[p]].push_back({static_cast<std::uint32_t>(p), depth, field_.values[p]});
           }
     });
     std::array<std::vector<Neck>, 2> necks;
@@ -513,7 +516,8 @@ class Cleaner {
 
   // The samples within one sample of a changed one (all are off the box),
   // plus `extra`; sorted, each once.
-  std::vector<std::uint32_t> neighbourhoods(const std::vector<std::uint32_t>& changed, std::vector<std::uint32_t> extra) {
+  std::vector<std::uint32_t> neighbourhoods(const std::vector<std::uint32_t>& changed,
+                                            std::vector<std::uint32_t> extra) {
     std::vector<std::uint32_t> samples;
     for (const std::uint32_t p : changed)
       for (int n = 0; n < 27; ++n) samples.push_back(static_cast<std::uint32_t>(node_sample(p, n)));

@@ -19,8 +19,9 @@
 //   distance from the sample to its crossings, in cells, under T), is a thin
 //   connection. All thin connections of a side (pairwise at least two samples
 //   apart) are taken out, the rest is joined by union-find, and they are put
-//   back strongest first; one whose return would join a piece to itself
-//   closes a cycle and stays cut (Kruskal's maximum spanning forest). So each
+//   back strongest first; one whose pieces all reach each other without it
+//   would only close cycles and stays cut (Kruskal's maximum spanning
+//   forest). So each
 //   cut removes a handle at its thinnest one-sample neck, nothing is ever
 //   split or merged, and only necks thinner than T are cut. Inside handles
 //   are cut first, then outside ones (tunnels) are filled, each side once:
