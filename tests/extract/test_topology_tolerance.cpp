@@ -132,6 +132,36 @@ TEST(TopologyTolerance, FillsTunnelsWithNecksUnderT) {
   EXPECT_EQ(two.report.topology.handles_cut, 0u);
 }
 
+// A sponge: a solid slab pierced by three straight tunnels (genus 3), two of
+// them one sample wide with necks of 1.26 and 2.86 cells, one 5 cells wide.
+TEST(TopologyTolerance, FillsTheSpongesTunnelsUnderTAndKeepsTheWideOne) {
+  Volume volume = filled_volume({44, 20, 17}, -4.0f);
+  for (std::size_t k = 4; k <= 12; ++k)
+    for (std::size_t j = 3; j <= 16; ++j)
+      for (std::size_t i = 3; i <= 40; ++i) volume.values[volume.index(i, j, k)] = 4.0f;
+  for (std::size_t k = 4; k <= 12; ++k) {  // crossings at -v / (4 - v) from a tunnel's samples
+    volume.values[volume.index(9, 10, k)] = -1.0f;         // 0.2
+    volume.values[volume.index(19, 10, k)] = -10.0f / 3;   // 0.4545
+  }
+  for (std::size_t k = 4; k <= 12; ++k)  // a wide tunnel, radius 2.5 cells
+    for (std::size_t j = 0; j < 20; ++j)
+      for (std::size_t i = 26; i < 38; ++i) {
+        const double r = std::hypot(double(i) - 32, double(j) - 10);
+        float& v = volume.values[volume.index(i, j, k)];
+        v = std::min(v, static_cast<float>(r - 2.5));
+      }
+  ASSERT_EQ(topology_at(volume, 0).genus, 3);
+  ASSERT_EQ(topology_at(volume, 0).components, 1u);
+  Isosurface two, four;
+  EXPECT_EQ(topology_at(volume, 2, &two).genus, 2);
+  EXPECT_EQ(two.report.topology.tunnels_filled, 1u);
+  const TopologySummary t4 = topology_at(volume, 4, &four);
+  EXPECT_EQ(t4.genus, 1);
+  EXPECT_EQ(t4.components, 1u);
+  EXPECT_EQ(four.report.topology.tunnels_filled, 2u);
+  EXPECT_EQ(four.report.topology.handles_cut, 0u);
+}
+
 TEST(TopologyTolerance, RemovesSpecksAndBubblesUnderTAcross) {
   Volume volume = filled_volume({40, 20, 20}, -1.0f);
   volume.values[volume.index(5, 5, 5)] = 1.0f;  // a speck 1 cell across
