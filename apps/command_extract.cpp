@@ -138,7 +138,8 @@ int extract(const Args& raw) {
   const double extract_seconds = seconds_since(extract_start);
   if (result.mesh.face_count() == 0)  // the range of the field the surface was extracted from
     throw empty_isosurface_error(input, options.iso,
-                                 options.smooth_sigma > 0 ? gaussian_smoothed(volume, options.smooth_sigma) : volume);
+                                 options.smooth_sigma > 0 ? gaussian_smoothed(volume, options.smooth_sigma) : volume,
+                                 result.report.topology.changed() ? options.topology_tolerance : 0);
   MeshWriteOptions write_options;
   write_options.ascii = args.has("ascii");
   write_mesh(output, result.mesh, write_options);

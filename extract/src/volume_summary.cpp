@@ -124,7 +124,12 @@ std::vector<std::size_t> value_histogram(const Volume& volume, const ValueSummar
   return counts;
 }
 
-Error empty_isosurface_error(const std::string& source, double iso, const Volume& volume) {
+Error empty_isosurface_error(const std::string& source, double iso, const Volume& volume, double tolerance_cells) {
+  if (tolerance_cells > 0)
+    return Error(ErrorKind::EmptyResult,
+                 source + ": the topology tolerance of " + format("%g", tolerance_cells) +
+                     " cells removed the whole isosurface at " + format("%.9g", iso) +
+                     " (every component is smaller); a smaller --topology-tolerance keeps it");
   const ValueSummary s = summarize_values(volume);
   std::string where;
   if (s.finite == 0) where = " (no finite samples)";

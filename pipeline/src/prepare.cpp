@@ -37,7 +37,8 @@ PreparedSurface extract_surface(Volume volume, const PrepareOptions& options, co
   prepared.isosurface = extract_isosurface_in_place(prepared.field, extract_options, progress);
   prepared.isosurface.report.smooth_sigma = sigma;
   if (prepared.isosurface.mesh.face_count() == 0)
-    throw empty_isosurface_error(source, options.extract.iso, prepared.field);
+    throw empty_isosurface_error(source, options.extract.iso, prepared.field,
+                                 prepared.isosurface.report.topology.changed() ? options.extract.topology_tolerance : 0);
   return prepared;
 }
 

@@ -375,6 +375,7 @@ TEST_F(CliTest, BadInputGivesOneLineAndANonZeroExitCode) {
       {"convert", "builtin:sphere:32", "--topology-tolerance", "-1", "-o", path("x.isw")},
       {"extract", "builtin:sphere:32", "--topology-tolerance", "nan", "-o", path("x.ply")},
       {"extract", "builtin:sphere:32", "--topology-tolerance", "abc", "-o", path("x.ply")},
+      {"extract", "builtin:sphere:16", "--topology-tolerance", "20", "-o", path("x.ply")},  // removes everything
       {"convert", "builtin:sphere:32", "builtin:sphere:32", "--out-dir", path("x")},  // both would write x/sphere_32.isw
       {"decode", path("garbage.isw"), "--percent", "-o", path("x.ply")},              // -o is no percentage
       {"info", dir_.string()},                                                         // a directory

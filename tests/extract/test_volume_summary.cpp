@@ -126,6 +126,10 @@ TEST(VolumeSummary, EmptyIsosurfaceErrorSaysWhereTheIsovalueLies) {
                                        "range -1 .. 3)");
   EXPECT_NE(std::string(empty_isosurface_error("f.raw", -1, v).what()).find("every finite sample is at or above it"),
             std::string::npos);
+  const Error removed = empty_isosurface_error("f.raw", 1, v, 4);
+  EXPECT_EQ(removed.kind(), ErrorKind::EmptyResult);
+  EXPECT_NE(std::string(removed.what()).find("the topology tolerance of 4 cells removed the whole isosurface"),
+            std::string::npos);
 }
 
 }  // namespace

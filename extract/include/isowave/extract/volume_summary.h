@@ -54,7 +54,10 @@ std::vector<std::size_t> value_histogram(const Volume& volume, const ValueSummar
 
 // The error for an isosurface with no faces at `iso` (Error(EmptyResult):
 // exit code 1, as for any failure that is not a usage error), naming the
-// source, the isovalue and where it lies against the finite values.
-Error empty_isosurface_error(const std::string& source, double iso, const Volume& volume);
+// source, the isovalue and where it lies against the finite values; or, when
+// a topology tolerance of `tolerance_cells` (> 0) removed every component,
+// saying so.
+Error empty_isosurface_error(const std::string& source, double iso, const Volume& volume,
+                             double tolerance_cells = 0);
 
 }  // namespace isowave
