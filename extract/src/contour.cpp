@@ -23,6 +23,7 @@
 
 #include "isowave/core/error.h"
 #include "isowave/extract/isosurface.h"
+#include "contour_rules.h"
 
 namespace isowave {
 namespace {
@@ -191,7 +192,6 @@ const CaseTable& case_table() {
 
 constexpr std::uint32_t kGhost = 0x80000000u;  // vertex owned by the next slab
 constexpr std::size_t kLayersPerSlab = 8;      // fixed: the output must not depend on threads
-constexpr double kMinEdgeFraction = 1e-3;
 
 struct SlabOutput {
   std::vector<Vec3> positions;
@@ -241,10 +241,7 @@ class Contourer {
     std::vector<std::uint32_t> x_low, y_low, x_high, y_high, z;
   };
 
-  bool inside(float value) const {
-    const double v = value;
-    return v >= iso_ && v <= std::numeric_limits<double>::max();  // NaN and +-Inf are outside
-  }
+  bool inside(float value) const { return contour_rules::is_inside(value, iso_); }
 
   void classify(std::size_t k, std::uint8_t* inside_flags) const {
     const float* slice = values_ + k * plane_;
@@ -255,12 +252,7 @@ class Contourer {
   Vec3 edge_point(std::size_t i, std::size_t j, std::size_t k, int axis) const {
     const std::size_t a = i + nx_ * (j + ny_ * k);
     const std::size_t b = a + (axis == 0 ? 1 : axis == 1 ? nx_ : plane_);
-    const double va = values_[a], vb = values_[b];
-    double t = 0.5;
-    if (std::isfinite(va) && std::isfinite(vb)) {
-      t = (iso_ - va) / (vb - va);
-      t = std::min(std::max(t, kMinEdgeFraction), 1.0 - kMinEdgeFraction);
-    }
+    const double t = contour_rules::crossing_fraction(values_[a], values_[b], iso_);
     double index[3] = {static_cast<double>(i), static_cast<double>(j), static_cast<double>(k)};
     index[axis] += t;
     return volume_.world(index[0], index[1], index[2]);
@@ -309,8 +301,7 @@ class Contourer {
     const auto& corner = face_table().corners[face];
     double f[4];
     for (int q = 0; q < 4; ++q) f[q] = static_cast<double>(values_[base + corner_offset[corner[q]]]) - iso_;
-    const double even = f[0] * f[2], odd = f[1] * f[3];
-    return ((cube >> corner[0]) & 1) ? even >= odd : odd >= even;
+    return contour_rules::inside_corners_joined(f[0], f[1], f[2], f[3], (cube >> corner[0]) & 1);
   }
 
   void make_cells(std::size_t k, SlabState& s, SlabOutput& out, std::uint32_t& owned) const {

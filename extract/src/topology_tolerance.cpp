@@ -16,20 +16,24 @@
 #include <vector>
 
 #include "isowave/core/error.h"
+#include "contour_rules.h"
 
 namespace isowave {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
-constexpr double kMinEdgeFraction = 1e-3;  // contour.cpp's clamp of the crossing along an edge
 
 enum Side : std::uint8_t { kOutside = 0, kInside = 1 };
 Side other(Side s) { return s == kInside ? kOutside : kInside; }
 
-// contour.cpp's classification: finite and >= iso.
-Side side_of(float value, double iso) {
-  const double v = value;
-  return v >= iso && v <= std::numeric_limits<double>::max() ? kInside : kOutside;
+Side side_of(float value, double iso) { return contour_rules::is_inside(value, iso) ? kInside : kOutside; }
+
+// On an ambiguous face (corners in cyclic order, corner 0 on side s0, values
+// minus iso f0..f3), the diagonal the contour gives side s: 0 for corners
+// (0, 2), 1 for (1, 3), -1 when the other side has the face.
+int diagonal_of(Side s, Side s0, double f0, double f1, double f2, double f3) {
+  if (contour_rules::inside_corners_joined(f0, f1, f2, f3, s0 == kInside) != (s == kInside)) return -1;
+  return s0 == s ? 0 : 1;
 }
 
 // The float nearest 2 iso - v on the other side of iso (at least one float step across).
@@ -100,11 +104,9 @@ Diagonals diagonals(const Block& block, Side s) {
   for (const auto& c : block_tables().faces) {
     const std::uint32_t b0 = (block.inside >> c[0]) & 1, b1 = (block.inside >> c[1]) & 1;
     if (b0 == b1 || b0 != ((block.inside >> c[2]) & 1) || b1 != ((block.inside >> c[3]) & 1)) continue;
-    const double even = block.f[c[0]] * block.f[c[2]], odd = block.f[c[1]] * block.f[c[3]];
-    const bool inside_connected = b0 ? even >= odd : odd >= even;
-    if (inside_connected != (s == kInside)) continue;
-    const bool even_pair_is_s = (b0 == 1) == (s == kInside);
-    d.pair[d.count++] = even_pair_is_s ? std::array<int, 2>{c[0], c[2]} : std::array<int, 2>{c[1], c[3]};
+    const Side s0 = b0 ? kInside : kOutside;
+    const int pair = diagonal_of(s, s0, block.f[c[0]], block.f[c[1]], block.f[c[2]], block.f[c[3]]);
+    if (pair >= 0) d.pair[d.count++] = {c[pair], c[pair + 2]};
   }
   return d;
 }
@@ -270,12 +272,10 @@ class Cleaner {
   void join_face_diagonal(Side s, std::size_t c0, std::size_t c1, std::size_t c2, std::size_t c3) {
     const Side s0 = sides_[c0];
     if (s0 == sides_[c1] || s0 != sides_[c2] || sides_[c1] != sides_[c3]) return;
-    const double even = (field_.values[c0] - iso_) * static_cast<double>(field_.values[c2] - iso_);
-    const double odd = (field_.values[c1] - iso_) * static_cast<double>(field_.values[c3] - iso_);
-    const bool inside_connected = s0 == kInside ? even >= odd : odd >= even;
-    if (s == kInside ? !inside_connected : inside_connected) return;
-    if (s0 == s) unite(c0, c2);
-    else unite(c1, c3);
+    const auto f = [&](std::size_t c) { return static_cast<double>(field_.values[c]) - iso_; };
+    const int pair = diagonal_of(s, s0, f(c0), f(c1), f(c2), f(c3));
+    if (pair == 0) unite(c0, c2);
+    if (pair == 1) unite(c1, c3);
   }
 
   std::size_t node_sample(std::size_t p, int n) const {
@@ -303,9 +303,7 @@ class Cleaner {
 
   // Fraction of the edge from p to q (of different sides) at which the contour puts the crossing.
   double crossing_fraction(std::size_t p, std::size_t q) const {
-    const double vp = field_.values[p], vq = field_.values[q];
-    if (!std::isfinite(vp) || !std::isfinite(vq)) return 0.5;
-    return std::clamp((iso_ - vp) / (vq - vp), kMinEdgeFraction, 1.0 - kMinEdgeFraction);
+    return contour_rules::crossing_fraction(field_.values[p], field_.values[q], iso_);
   }
 
   // --- specks and bubbles -------------------------------------------------
