@@ -124,9 +124,12 @@ cli::CommandSpec convert_spec() {
        "parametrization) and 8 million",
        "L|auto"},
       {"max-error", true,
-       "with --levels auto: the bound on the fitted surface's error D, in cells (default: the marching-cubes "
-       "mesh's own distance from the isosurface)",
+       "the decoded surface's error D against the isosurface, in cells: the levels are the fewest whose fit lies "
+       "within 0.9 of it, and the file keeps the shortest prefix of its embedded stream within it (default: levels "
+       "within the marching-cubes mesh's own distance from the isosurface, the whole stream)",
        "CELLS"},
+      {"size", true, "the file's size limit in bytes: the embedded stream is cut to fit", "BYTES"},
+      {"bits-per-vertex", true, "the size limit in bits per isosurface vertex", "B"},
       {"base-vertices", true, "base mesh vertex target", "N"},
       {"base-ratio", true,
        "base mesh vertex target as a fraction of the isosurface's vertices (default 0.0625; without --base-vertices "
@@ -137,7 +140,7 @@ cli::CommandSpec convert_spec() {
       {"no-coverage-pull", false, "fit without pulling the fine levels toward isosurface parts they leave out", ""},
       {"allow-folded", false, "write the file even when most of the fit's faces fold (unusable)", ""},
       {"verify", false, "decode each encoded file once more before writing it and check it gives exactly the coded coefficients", ""},
-      {"step", true, "quantization step in cells (default 0.01: adds about 0.5% of a cell RMSE)", "CELLS"},
+      {"step", true, "the step of the stream's last bit plane in cells (default 0.01): the finest it goes", "CELLS"},
       {"output", true, "output file (one input and one isovalue)", "OUT.isw"},
       {"out-dir", true, "output directory: NAME.isw, or NAME_isoV.isw with several isovalues", "DIR"},
       {"jobs", true, "convert this many inputs at once (default 1)", "N"},
@@ -174,9 +177,19 @@ ConvertOptions convert_options_from(const cli::Arguments& args) {
   if (fit == "parametrization") options.fit = FitMethod::Parametrization;
   else if (fit != "shrink-wrap")
     throw Error(ErrorKind::InvalidArgument, "--fit must be 'shrink-wrap' or 'parametrization', not '" + fit + "'");
-  options.max_error_cells = args.get_double("max-error", 0.0);
-  if (!(options.max_error_cells > 0) && args.has("max-error"))
+  options.rate.max_error_cells = args.get_double("max-error", 0.0);
+  if (!(options.rate.max_error_cells > 0) && args.has("max-error"))
     throw Error(ErrorKind::InvalidArgument, "--max-error must be a positive number of cells");
+  options.max_error_cells = kLevelShareOfMaxError * options.rate.max_error_cells;
+  const double size = args.get_double("size", 0.0);
+  if (args.has("size") && !(size >= 1 && size <= 1e15 && size == std::floor(size)))
+    throw Error(ErrorKind::InvalidArgument, "--size must be a whole number of bytes");
+  options.rate.max_bytes = static_cast<std::uint64_t>(size);
+  options.rate.bits_per_vertex = args.get_double("bits-per-vertex", 0.0);
+  if (args.has("bits-per-vertex") && !(options.rate.bits_per_vertex > 0 && options.rate.bits_per_vertex < 1e6))
+    throw Error(ErrorKind::InvalidArgument, "--bits-per-vertex must be a positive number");
+  if (args.has("max-error") + args.has("size") + args.has("bits-per-vertex") > 1)
+    throw Error(ErrorKind::InvalidArgument, "give at most one of --max-error, --size and --bits-per-vertex");
   options.base.vertices = static_cast<std::size_t>(args.get_int("base-vertices", 0, 4, 1 << 30));
   options.base.ratio = args.get_double("base-ratio", options.base.ratio);
   if (!(options.base.ratio > 0 && options.base.ratio <= 1))

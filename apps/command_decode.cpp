@@ -2,6 +2,7 @@
 // as a mesh at the chosen level (optionally its limit surface).
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 
 #include "cli.h"
@@ -17,12 +18,17 @@ namespace isowave::commands {
 int decode(const Args& raw) {
   const cli::CommandSpec spec{
       "decode",
-      "IN.isw (--percent P | --coefficients N) [--level L] [--limit] [--triangulate] [--ascii] [--force] -o OUT.ply|OUT.obj|OUT.off",
-      "Rebuilds the surface from the base mesh and the most important wavelet coefficients of IN.isw.\n"
-      "--percent counts as the paper does: the total is the number of fine control points (base vertices plus\n"
-      "all coefficients), and the base mesh alone is the smallest choice: a percentage below the base mesh's\n"
-      "share gives the base mesh, and says so. Decodes only the chunks it needs.",
-      {{"percent", true, "keep this percentage of full resolution (0..100)", "P"},
+      "IN.isw [--bytes N | --max-error E] [--percent P | --coefficients N] [--level L] [--limit] [--triangulate]\n"
+      "                [--ascii] [--force] -o OUT.ply|OUT.obj|OUT.off",
+      "Rebuilds the surface from the base mesh and the wavelet coefficients of IN.isw (all of them by default).\n"
+      "--bytes reads only the first N bytes of the file: any prefix of a version 2 file's stream decodes to the\n"
+      "best surface it allows. --max-error reads the shortest prefix whose error the file records within E.\n"
+      "--percent then keeps the most important coefficients of what was read, counted as the paper does: the\n"
+      "total is the number of fine control points (base vertices plus all coefficients), and the base mesh\n"
+      "alone is the smallest choice: a percentage below the base mesh's share gives the base mesh, and says so.",
+      {{"bytes", true, "read only the first N bytes of the file", "N"},
+       {"max-error", true, "read the shortest prefix whose recorded error D is within E cells (version 2 files)", "E"},
+       {"percent", true, "keep this percentage of full resolution (0..100)", "P"},
        {"coefficients", true, "keep this many wavelet coefficients (besides the base mesh)", "N"},
        {"level", true, "write the control mesh of this level (default: the finest)", "L"},
        {"limit", false, "move the vertices to the limit surface (OpenSubdiv)", ""},
@@ -36,8 +42,10 @@ int decode(const Args& raw) {
       "decode engine.isw --percent 5 -o engine_5pct.ply"};
   const cli::Arguments args(spec, raw);
   if (cli::print_help_if_requested(spec, args)) return 0;
-  if (args.has("percent") == args.has("coefficients"))
-    throw Error(ErrorKind::InvalidArgument, "give exactly one of --percent and --coefficients");
+  if (args.has("percent") && args.has("coefficients"))
+    throw Error(ErrorKind::InvalidArgument, "give at most one of --percent and --coefficients");
+  if (args.has("bytes") && args.has("max-error"))
+    throw Error(ErrorKind::InvalidArgument, "give at most one of --bytes and --max-error");
   const std::string output = args.require("output");
   cli::check_outputs(args, {output});
   mesh_format_from_path(output);
@@ -48,14 +56,33 @@ int decode(const Args& raw) {
     options.max_percent = args.get_double("percent", 100);
     if (!(options.max_percent >= 0 && options.max_percent <= 100))
       throw Error(ErrorKind::InvalidArgument, "--percent must be in 0..100");
-  } else {
+  } else if (args.has("coefficients")) {
     const double n = args.get_double("coefficients", 0);
     if (!(n >= 0) || n != static_cast<double>(static_cast<std::uint64_t>(n)))
       throw Error(ErrorKind::InvalidArgument, "--coefficients must be a non-negative integer");
     options.max_coefficients = static_cast<std::uint64_t>(n);
   }
+  if (args.has("bytes")) {
+    const double n = args.get_double("bytes", 0);
+    if (!(n >= 1 && n <= 1e18) || n != std::floor(n))
+      throw Error(ErrorKind::InvalidArgument, "--bytes must be a positive whole number");
+    options.max_file_bytes = static_cast<std::uint64_t>(n);
+  }
   const std::string& input = args.positional()[0];
+  if (args.has("max-error")) {
+    const double cells = args.get_double("max-error", 0);
+    if (!(cells > 0) || !std::isfinite(cells)) throw Error(ErrorKind::InvalidArgument, "--max-error must be a positive number of cells");
+    IswDecodeOptions headers;
+    headers.headers_only = true;
+    const IswDecoded file = read_isw(input, headers);
+    const double cell = file.metadata.number("cell_size", 0);
+    if (file.major_version < 2 || !(cell > 0))
+      throw Error(ErrorKind::InvalidArgument, input + ": --max-error needs a version 2 file that records its errors and cell size");
+    options.max_error = cells * cell;
+  }
   IswDecoded decoded = read_isw(input, options);
+  if (args.has("max-error") && decoded.stream.rate_table.empty())
+    std::fprintf(stderr, "isowave decode: warning: %s records no errors: decoding the whole stream\n", input.c_str());
   if (decoded.truncated) std::fprintf(stderr, "isowave decode: warning: %s: %s\n", input.c_str(), decoded.truncation_note.c_str());
   const int level = args.get_int("level", decoded.levels, 0, decoded.levels);
 
@@ -86,6 +113,11 @@ int decode(const Args& raw) {
     std::printf("%s: %.2f%% of %zu fine control points: base mesh + %zu non-zero coefficients (of %llu), level %d%s\n",
                 input.c_str(), percent, fine, decoded.ranked.size(),
                 static_cast<unsigned long long>(decoded.coefficients_total), level, args.has("limit") ? ", limit surface" : "");
+    if (decoded.major_version >= 2)
+      std::printf("%s: read %llu of %llu stream bytes (%d of %d bit planes complete)\n", input.c_str(),
+                  static_cast<unsigned long long>(decoded.stream.decoded),
+                  static_cast<unsigned long long>(decoded.stream.bytes), decoded.stream.planes_decoded,
+                  decoded.stream.planes);
     std::printf("%s: %zu vertices, %zu faces (%.2f s)\n", output.c_str(), mesh.vertex_count(), mesh.face_count(), seconds);
   }
   return 0;

@@ -21,6 +21,8 @@
 #include "isowave/core/mesh_io.h"
 #include "isowave/core/mesh_topology.h"
 #include "isowave/transform/hierarchy.h"
+#include "isw2_layout.h"
+#include "isw_headers.h"
 #include "isw_models.h"
 #include "isw_sections.h"
 
@@ -129,73 +131,9 @@ struct DecodeState {
   std::vector<QuantizedVector> ranked_q;
   std::vector<std::uint8_t> significant;  // per fine entry: sent by an earlier chunk
   bool saw_end = false;
+  int major = 1;
+  V2Scales scales;  // version 2
 };
-
-// ------------------------------------------------------------ META
-
-void decode_meta(std::string_view payload, IswMetadata& metadata) {
-  std::size_t start = 0;
-  while (start < payload.size()) {
-    std::size_t end = payload.find('\n', start);
-    if (end == std::string::npos) end = payload.size();
-    const std::string line(payload.substr(start, end - start));
-    const std::size_t eq = line.find('=');
-    if (eq != std::string::npos) metadata.values[line.substr(0, eq)] = line.substr(eq + 1);
-    start = end + 1;
-  }
-}
-
-// ------------------------------------------------------------ BASE
-
-void decode_base(PayloadReader& reader, PolygonMesh& base) {
-  const auto vertices = reader.read<std::uint32_t>();
-  const auto faces = reader.read<std::uint32_t>();
-  const auto corners = reader.read<std::uint32_t>();
-  const auto sharp_count = reader.read<std::uint32_t>();
-  const auto coded_size = reader.read<std::uint64_t>();
-  if (coded_size != reader.remaining()) reader.fail("has an inconsistent size");
-  const std::uint64_t integer_budget = kMaxIntegersPerCodedByte * (coded_size + 16);
-  if (faces == 0 || corners < 3ull * faces || vertices > corners || sharp_count > vertices ||
-      std::uint64_t{corners} + faces + sharp_count > integer_budget)
-    reader.fail("has impossible counts");
-  const std::string_view coded = reader.bytes(coded_size);
-  RangeDecoder rc(reinterpret_cast<const std::uint8_t*>(coded.data()), coded.size());
-  BaseModels m;
-  base.positions.assign(vertices, Vec3{});
-  base.face_offsets.reserve(std::size_t{faces} + 1);
-  base.face_vertices.reserve(corners);
-  std::int64_t previous_first = 0;
-  std::vector<std::uint32_t> face;
-  for (std::uint32_t f = 0; f < faces; ++f) {
-    const std::int64_t size_code = decode_integer(rc, m.face_size);
-    if (size_code < 0 || base.face_vertices.size() + 3 + static_cast<std::uint64_t>(size_code) > corners)
-      reader.fail("has an invalid face size");
-    face.assign(static_cast<std::size_t>(size_code + 3), 0);
-    const std::int64_t first = previous_first + decode_integer(rc, m.first_index);
-    for (std::size_t k = 0; k < face.size(); ++k) {
-      const std::int64_t index = k == 0 ? first : first + decode_integer(rc, m.other_index);
-      if (index < 0 || index >= vertices) reader.fail("has a vertex index out of range");
-      face[k] = static_cast<std::uint32_t>(index);
-    }
-    previous_first = first;
-    base.add_face(face.data(), face.size());
-  }
-  if (base.face_vertices.size() != corners) reader.fail("has an inconsistent corner count");
-  if (sharp_count > 0) base.sharp.assign(vertices, 0);
-  std::int64_t previous_sharp = -1;
-  for (std::uint32_t s = 0; s < sharp_count; ++s) {
-    const std::int64_t v = previous_sharp + decode_integer(rc, m.sharp_gap);
-    if (v <= previous_sharp || v >= vertices) reader.fail("has an invalid sharp vertex");
-    base.sharp[static_cast<std::size_t>(v)] = 1;
-    previous_sharp = v;
-  }
-  if (rc.overran()) reader.fail("is corrupt (coded data ends early)");
-  try {
-    require_manifold(base, "base mesh");
-  } catch (const Error& error) {
-    reader.fail(std::string("holds an invalid base mesh: ") + error.what());
-  }
-}
 
 // ------------------------------------------------------------ QUAN
 
@@ -225,6 +163,31 @@ void decode_quantization(PayloadReader& reader, DecodeState& state) {
   if (!state.chunk_ends.empty() && state.chunk_ends.back() != result.coefficients_total)
     reader.fail("has invalid chunk boundaries");
   result.chunks_total = chunks;
+}
+
+void decode_quantization_v2(PayloadReader& reader, DecodeState& state) {
+  IswDecoded& result = state.result;
+  V2Scales& scales = state.scales;
+  scales.step = result.step = reader.read<double>();
+  scales.frame_step = reader.read<double>();
+  scales.tangential_factor = reader.read<double>();
+  const auto levels = reader.read<std::uint32_t>();
+  const auto classes = reader.read<std::uint32_t>();
+  const auto positive = [](double v) { return v > 0 && std::isfinite(v); };
+  if (!positive(scales.step) || !positive(scales.frame_step)) reader.fail("has an invalid quantization step");
+  if (!(scales.tangential_factor >= 1) || !std::isfinite(scales.tangential_factor))
+    reader.fail("has an invalid tangential factor");
+  if (levels > kMaxLevels || classes != 1 + 2 * levels) reader.fail("has an invalid level count");
+  result.levels = static_cast<int>(levels);
+  for (std::uint32_t c = 0; c < classes; ++c) {
+    const double w = reader.read<double>();
+    if (!positive(w)) reader.fail("has an invalid class weight");
+    result.class_weights.push_back(w);
+  }
+  scales.weights = result.class_weights;
+  result.coefficients_total = reader.read<std::uint64_t>();
+  result.stream.tangential_factor = scales.tangential_factor;
+  result.stream.frame_step = scales.frame_step;
 }
 
 // After QUAN: lays out the coefficient classes, bounds the hierarchy by the
@@ -259,31 +222,6 @@ void plan_hierarchy(PayloadReader& reader, DecodeState& state) {
       state.limit, coefficients_for_percent(state.layout->fine(), base_count, state.options.max_percent));
   if (result.coefficients_total > state.layout->fine() - base_count)
     reader.fail("claims more coefficients than the hierarchy has");
-}
-
-// ------------------------------------------------------------ BPTS
-
-void decode_base_points(PayloadReader& reader, DecodeState& state) {
-  PolygonMesh& base = state.result.base;
-  const auto coded_size = reader.read<std::uint64_t>();
-  if (coded_size != reader.remaining()) reader.fail("has an inconsistent size");
-  if (3ull * base.vertex_count() > kMaxIntegersPerCodedByte * (coded_size + 16)) reader.fail("is too short");
-  const std::string_view coded = reader.bytes(coded_size);
-  RangeDecoder rc(reinterpret_cast<const std::uint8_t*>(coded.data()), coded.size());
-  std::vector<QuantizedVector>& q = state.base_q;
-  q.assign(base.vertex_count(), QuantizedVector{0, 0, 0});
-  std::array<IntegerModel, 3> models;
-  const auto neighbours = earlier_neighbours(base);
-  const double s = class_step(state.result.step, state.result.class_weights, 0);
-  for (std::size_t v = 0; v < base.vertex_count(); ++v) {
-    const QuantizedVector prediction = predict_base(q, neighbours[v], v);
-    for (int axis = 0; axis < 3; ++axis) {
-      q[v][axis] = prediction[axis] + decode_integer(rc, models[static_cast<std::size_t>(axis)]);
-      if (std::abs(q[v][axis]) > (1ll << 40)) reader.fail("holds an impossible value");
-    }
-    base.positions[v] = {q[v][0] * s, q[v][1] * s, q[v][2] * s};
-  }
-  if (rc.overran()) reader.fail("is corrupt (coded data ends early)");
 }
 
 // ------------------------------------------------------------ CHNK
@@ -380,40 +318,75 @@ std::uint64_t decode_chunk(PayloadReader& reader, DecodeState& state) {
 
 // ------------------------------------------------------------ driver steps
 
+void await_hierarchy(DecodeState& state) {
+  IswDecoded& result = state.result;
+  if (state.build.started()) {
+    const auto wait_start = Clock::now();
+    state.hierarchy = state.build.get();
+    result.seconds.hierarchy_wait = seconds_since(wait_start);
+    result.seconds.hierarchy = state.build.seconds();
+  }
+  assert(*state.layout == CoefficientClasses(*state.hierarchy));
+  result.hierarchy = state.hierarchy;
+}
+
+// Version 2: the plane stream bytes to decode (the options' limit, or the
+// RDTB row that reaches max_error).
+std::uint64_t stream_limit(const DecodeState& state) {
+  std::uint64_t limit = state.options.max_stream_bytes;
+  if (state.options.max_error > 0) {
+    const std::vector<IswRatePoint>& table = state.result.stream.rate_table;
+    for (const IswRatePoint& row : table)
+      if (row.error <= state.options.max_error) {
+        limit = std::min(limit, row.stream_bytes);
+        break;
+      }
+  }
+  return limit;
+}
+
+
 enum class Next { Continue, Stop, HeadersOnly };
 
 // Decodes one known section into `state`; says whether to read on.
 Next decode_section(const Section& section, DecodeState& state) {
   PayloadReader reader = section.reader();
   IswSectionInfo info = section.info;
+  IswDecoded& result = state.result;
   Next next = Next::Continue;
   if (section.tag == "META") {
-    decode_meta(section.payload, state.result.metadata);
+    decode_meta(reader, section.payload, result.metadata, state.major);
   } else if (section.tag == "BASE") {
-    decode_base(reader, state.result.base);
+    decode_base(reader, result.base, state.major);
   } else if (section.tag == "QUAN") {
-    decode_quantization(reader, state);
+    if (state.major == 1) decode_quantization(reader, state);
+    else decode_quantization_v2(reader, state);
     plan_hierarchy(reader, state);
   } else if (section.tag == "BPTS") {
-    decode_base_points(reader, state);
+    const double step = state.major == 1 ? class_step(result.step, result.class_weights, 0) : state.scales.frame_step;
+    decode_base_points(reader, result.base, step, state.base_q);
     if (state.options.headers_only) {
       next = Next::HeadersOnly;
-    } else {
+    } else if (state.major == 1) {
       reserve_fresh_on_huge_pages(state.significant, state.layout->fine());
       state.significant.assign(state.layout->fine(), 0);
     }
   } else if (section.tag == "CHNK") {
     info.coefficients = decode_chunk(reader, state);
     // Stop at the limit, but read END after the last chunk.
-    const IswDecoded& result = state.result;
     if (result.ranked.size() >= state.limit && result.chunks_decoded < result.chunks_total) next = Next::Stop;
+  } else if (section.tag == "RDTB") {
+    result.stream.rate_table = read_rate_table(reader);
+  } else if (section.tag == "PLNS") {
+    await_hierarchy(state);
+    decode_plane_stream(section, *state.hierarchy, *state.layout, state.scales, stream_limit(state), result);
   } else {  // END
-    if (state.result.chunks_decoded != state.result.chunks_total)
+    if (state.major == 1 && result.chunks_decoded != result.chunks_total)
       throw Error(ErrorKind::Format, section.where + ": chunks are missing");
     state.saw_end = true;
     next = Next::Stop;
   }
-  state.result.sections.push_back(info);
+  result.sections.push_back(info);
   return next;
 }
 
@@ -427,18 +400,6 @@ IswDecoded finish_headers_only(DecodeState& state, SectionWalker& sections) {
     result.truncation_note = "file is truncated after byte " + std::to_string(sections.position()) + " of " +
                              std::to_string(state.bytes.size()) + " (not checked further: headers only)";
   return std::move(result);
-}
-
-void await_hierarchy(DecodeState& state) {
-  IswDecoded& result = state.result;
-  if (state.build.started()) {
-    const auto wait_start = Clock::now();
-    state.hierarchy = state.build.get();
-    result.seconds.hierarchy_wait = seconds_since(wait_start);
-    result.seconds.hierarchy = state.build.seconds();
-  }
-  assert(*state.layout == CoefficientClasses(*state.hierarchy));
-  result.hierarchy = state.hierarchy;
 }
 
 // A file is truncated when it ends before END unless the limit stopped the
@@ -476,12 +437,41 @@ void dequantize_kept(DecodeState& state) {
   result.seconds.dequantize = seconds_since(dequantize_start);
 }
 
+// Version 2: what the plane stream gave (the base alone when the file ends
+// before it), ranked by importance and cut to the limit.
+void finish_v2(DecodeState& state, bool cut) {
+  IswDecoded& result = state.result;
+  if (result.coefficients.empty()) {
+    result.coefficients.assign(state.layout->fine(), Vec3{});
+    std::copy(result.base.positions.begin(), result.base.positions.end(), result.coefficients.begin());
+  }
+  result.truncated = cut || !state.saw_end;
+  if (result.truncated) {
+    const IswStreamInfo& stream = result.stream;
+    result.truncation_note = "file is truncated inside the plane stream: decoded " +
+                             std::to_string(stream.planes_decoded) + " of " + std::to_string(stream.planes) +
+                             " planes (" + std::to_string(stream.decoded) + " stream bytes)";
+  }
+  const auto rank_start = Clock::now();
+  rank_and_keep(result, *state.layout, state.limit);
+  result.seconds.rank = seconds_since(rank_start);
+}
+
 }  // namespace
 
 IswDecoded decode_isw(const std::string& bytes, const std::string& name, const IswDecodeOptions& options) {
+  if (options.max_file_bytes < bytes.size()) {
+    IswDecodeOptions whole = options;
+    whole.max_file_bytes = UINT64_MAX;
+    IswDecoded result = decode_isw(bytes.substr(0, static_cast<std::size_t>(options.max_file_bytes)), name, whole);
+    result.truncated = false;
+    result.truncation_note.clear();
+    return result;
+  }
   DecodeState state(bytes, name, options);
   read_file_header(bytes, name, state.result);
-  SectionWalker sections(bytes, name);
+  state.major = state.result.major_version;
+  SectionWalker sections(bytes, name, state.major);
   try {
     while (const std::optional<Section> section = sections.next()) {
       if (!section->known) {
@@ -498,8 +488,12 @@ IswDecoded decode_isw(const std::string& bytes, const std::string& name, const I
     throw;
   }
   await_hierarchy(state);
-  note_truncation(state, sections.truncated());
-  dequantize_kept(state);
+  if (state.major == 1) {
+    note_truncation(state, sections.truncated());
+    dequantize_kept(state);
+  } else {
+    finish_v2(state, sections.truncated());
+  }
   return std::move(state.result);
 }
 

@@ -14,6 +14,8 @@
 #include "isowave/core/error.h"
 #include "isowave/core/huge_page_vector.h"
 #include "isw_models.h"
+#include "isw2_layout.h"
+#include "isw_headers.h"
 #include "isw_sections.h"
 
 namespace isowave {
@@ -122,58 +124,6 @@ void check_encode_arguments(const SubdivisionHierarchy& hierarchy, const std::ve
 
 // ------------------------------------------------------------ sections
 
-// Metadata lines are `key=value`, split at the first '=': a key loses its
-// '=', both lose line breaks (to spaces).
-std::string sanitize(const std::string& text, bool key) {
-  std::string s = text;
-  for (char& c : s)
-    if (c == '\n' || c == '\r' || (key && c == '=')) c = ' ';
-  return s;
-}
-
-void put_meta(std::string& out, const IswMetadata& metadata) {
-  std::string text;
-  for (const auto& [key, value] : metadata.values) text += sanitize(key, true) + "=" + sanitize(value, false) + "\n";
-  put_section(out, "META", text);
-}
-
-// Payload: a u64 size, then the coded bytes.
-void put_coded(std::string& payload, const std::string& coded) {
-  put_u64(payload, coded.size());
-  payload += coded;
-}
-
-void put_base(std::string& out, const PolygonMesh& base) {
-  std::string payload;
-  put_u32(payload, static_cast<std::uint32_t>(base.vertex_count()));
-  put_u32(payload, static_cast<std::uint32_t>(base.face_count()));
-  put_u32(payload, static_cast<std::uint32_t>(base.face_vertices.size()));
-  std::vector<std::uint32_t> sharp;
-  for (std::size_t v = 0; v < base.vertex_count(); ++v)
-    if (base.is_sharp(v)) sharp.push_back(static_cast<std::uint32_t>(v));
-  put_u32(payload, static_cast<std::uint32_t>(sharp.size()));
-  std::string coded;
-  RangeEncoder rc(coded);
-  BaseModels m;
-  std::int64_t previous_first = 0;
-  for (std::size_t f = 0; f < base.face_count(); ++f) {
-    const std::uint32_t* face = base.face_begin(f);
-    encode_integer(rc, m.face_size, static_cast<std::int64_t>(base.face_size(f)) - 3);
-    encode_integer(rc, m.first_index, static_cast<std::int64_t>(face[0]) - previous_first);
-    for (std::uint32_t k = 1; k < base.face_size(f); ++k)
-      encode_integer(rc, m.other_index, static_cast<std::int64_t>(face[k]) - static_cast<std::int64_t>(face[0]));
-    previous_first = face[0];
-  }
-  std::int64_t previous_sharp = -1;
-  for (std::uint32_t v : sharp) {
-    encode_integer(rc, m.sharp_gap, static_cast<std::int64_t>(v) - previous_sharp);
-    previous_sharp = v;
-  }
-  rc.finish();
-  put_coded(payload, coded);
-  put_section(out, "BASE", payload);
-}
-
 void put_quantization(std::string& out, double step, int levels, const std::vector<double>& weights,
                       std::uint64_t coefficients, const std::vector<std::uint64_t>& chunk_ends) {
   std::string payload;
@@ -185,22 +135,6 @@ void put_quantization(std::string& out, double step, int levels, const std::vect
   put_u32(payload, static_cast<std::uint32_t>(chunk_ends.size()));
   for (std::uint64_t end : chunk_ends) put_u64(payload, end);
   put_section(out, "QUAN", payload);
-}
-
-void put_base_points(std::string& out, const PolygonMesh& base, const std::vector<QuantizedVector>& q) {
-  std::string coded;
-  RangeEncoder rc(coded);
-  std::array<IntegerModel, 3> models;
-  const auto neighbours = earlier_neighbours(base);
-  for (std::size_t v = 0; v < base.vertex_count(); ++v) {
-    const QuantizedVector prediction = predict_base(q, neighbours[v], v);
-    for (int axis = 0; axis < 3; ++axis)
-      encode_integer(rc, models[static_cast<std::size_t>(axis)], q[v][axis] - prediction[axis]);
-  }
-  rc.finish();
-  std::string payload;
-  put_coded(payload, coded);
-  put_section(out, "BPTS", payload);
 }
 
 // One CHNK section: flags over the coefficients not yet significant, in
@@ -285,16 +219,21 @@ std::string encode_isw(const PolygonMesh& base, int levels, const std::vector<Ve
 std::string encode_isw(const SubdivisionHierarchy& hierarchy, const std::vector<Vec3>& coefficients,
                        const IswMetadata& metadata, const IswEncodeOptions& options,
                        std::vector<std::uint32_t>* ranked_out) {
-  const std::vector<double> weights = options.class_weights.empty() ? wavelet_norms(hierarchy) : options.class_weights;
+  std::vector<double> weights = options.class_weights.empty() ? wavelet_norms(hierarchy) : options.class_weights;
   check_encode_arguments(hierarchy, coefficients, options.step, weights);
+  if (options.major_version == 2) {
+    if (ranked_out) ranked_out->clear();
+    return encode_isw_v2(hierarchy, coefficients, metadata, options, std::move(weights));
+  }
+  if (options.major_version != 1) throw Error(ErrorKind::InvalidArgument, "the format version must be 1 or 2");
   const std::vector<QuantizedVector> q = quantize(hierarchy, coefficients, options.step, weights);
   std::vector<std::uint32_t> ranked = ranked_nonzero(hierarchy, q, options.step, weights);
   const std::vector<std::uint64_t> chunk_ends = chunk_ends_for(hierarchy, options.chunk_percents, ranked.size());
 
   std::string out;
-  put_file_header(out);
-  put_meta(out, metadata);
-  put_base(out, hierarchy.base());
+  put_file_header(out, 1);
+  put_meta(out, metadata, 1);
+  put_base(out, hierarchy.base(), 1);
   put_quantization(out, options.step, hierarchy.levels(), weights, ranked.size(), chunk_ends);
   put_base_points(out, hierarchy.base(), q);
   put_chunks(out, hierarchy, q, ranked, chunk_ends);

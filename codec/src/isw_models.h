@@ -20,6 +20,8 @@ constexpr std::uint64_t kFineVerticesPerFileByte = 4096;
 // An adaptive binary decision costs at least ~0.02 bits and an integer at
 // least six of them, so a coded byte holds at most ~64 integers.
 constexpr std::uint64_t kMaxIntegersPerCodedByte = 64;
+// The largest metadata text a version 2 file may inflate to.
+constexpr std::uint32_t kMaxMetadataBytes = 1u << 20;
 // Entries per TBB task in the per-coefficient loops.
 constexpr std::size_t kParallelGrain = 1 << 14;
 

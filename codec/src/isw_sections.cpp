@@ -27,6 +27,11 @@ namespace {
 
 constexpr const char* kHeaderOrder[] = {"META", "BASE", "QUAN", "BPTS"};
 constexpr std::string_view kKnownTags[] = {"META", "BASE", "QUAN", "BPTS", "CHNK", "END "};
+constexpr std::string_view kKnownTags2[] = {"META", "BASE", "QUAN", "BPTS", "RDTB", "PLNS", "END "};
+
+bool stream_tag(int major, const std::string& tag) {
+  return major == 1 ? tag == "CHNK" || tag == "END " : tag == "RDTB" || tag == "PLNS" || tag == "END ";
+}
 
 std::uint32_t crc_of(const char* tag, std::string_view payload) {
   uLong crc = crc32(0L, Z_NULL, 0);
@@ -55,9 +60,9 @@ bool fits(const std::string& bytes, std::size_t position, std::uint64_t size) {
 
 }  // namespace
 
-void put_file_header(std::string& out) {
+void put_file_header(std::string& out, int major) {
   out.append(kIswMagic, kIswMagic + 8);
-  put_u16(out, kIswMajorVersion);
+  put_u16(out, static_cast<std::uint16_t>(major));
   put_u16(out, kIswMinorVersion);
   put_u32(out, 0);
 }
@@ -82,9 +87,9 @@ void read_file_header(const std::string& bytes, const std::string& name, IswDeco
   std::memcpy(&major, bytes.data() + 8, 2);
   std::memcpy(&minor, bytes.data() + 10, 2);
   std::memcpy(&reserved, bytes.data() + 12, 4);
-  if (major != kIswMajorVersion)
+  if (major != 1 && major != kIswMajorVersion)
     throw Error(ErrorKind::Unsupported, name + ": .isw format version " + std::to_string(major) + "." +
-                                            std::to_string(minor) + " is not supported (this build reads " +
+                                            std::to_string(minor) + " is not supported (this build reads 1.x and " +
                                             std::to_string(kIswMajorVersion) + ".x)");
   if (reserved != 0) throw Error(ErrorKind::Format, name + ": corrupt file header (reserved field is not zero)");
   result.major_version = major;
@@ -112,15 +117,25 @@ std::optional<Section> SectionWalker::next() {
   section.where = name_ + ": section " + tag + " (at byte " + std::to_string(position_) + ")";
   if (header_crc(tag.c_str(), size) != stored_header_crc)
     throw Error(ErrorKind::Format, section.where + ": corrupt section header (CRC mismatch)");
-  section.known = std::find(std::begin(kKnownTags), std::end(kKnownTags), tag) != std::end(kKnownTags);
+  section.known = major_ == 1
+                      ? std::find(std::begin(kKnownTags), std::end(kKnownTags), tag) != std::end(kKnownTags)
+                      : std::find(std::begin(kKnownTags2), std::end(kKnownTags2), tag) != std::end(kKnownTags2);
   if (section.known && !in_stream && tag != kHeaderOrder[headers_read_])
     throw Error(ErrorKind::Format, section.where + ": expected section " + kHeaderOrder[headers_read_]);
-  if (section.known && in_stream && tag != "CHNK" && tag != "END ")
+  if (section.known && in_stream && !stream_tag(major_, tag))
     throw Error(ErrorKind::Format, section.where + ": section out of order");
   if (!fits(bytes_, position_, size)) {
-    // Known tags are in order here: a cut stream section ends the stream.
+    // Known tags are in order here: a cut stream section ends the stream,
+    // and a cut plane stream still decodes as far as it goes.
     if (in_stream) {
       truncated_ = true;
+      if (major_ == 2 && tag == "PLNS") {
+        section.cut = true;
+        section.payload = std::string_view(bytes_).substr(std::min(bytes_.size(), position_ + kSectionHeader));
+        section.info = IswSectionInfo{tag, position_, bytes_.size() - position_, 0};
+        position_ = bytes_.size();
+        return section;
+      }
       return std::nullopt;
     }
     throw Error(ErrorKind::Format, section.where + " is truncated");

@@ -30,8 +30,8 @@ inline void put_u32(std::string& out, std::uint32_t v) { out.append(reinterpret_
 inline void put_u64(std::string& out, std::uint64_t v) { out.append(reinterpret_cast<const char*>(&v), 8); }
 inline void put_f64(std::string& out, double v) { out.append(reinterpret_cast<const char*>(&v), 8); }
 
-// The 16-byte file header of the current version.
-void put_file_header(std::string& out);
+// The 16-byte file header of major version `major` (1 or 2), minor 0.
+void put_file_header(std::string& out, int major);
 // Appends one section: header, payload, CRC. `tag` is 4 characters.
 void put_section(std::string& out, const char* tag, std::string_view payload);
 
@@ -75,15 +75,18 @@ struct Section {
   IswSectionInfo info;  // offset and whole size; coefficients left to the CHNK decoder
   std::string where;    // "NAME: section TAG (at byte N)", for messages
   bool known = false;   // a tag of this version (others come from later minor versions and are skipped)
+  bool cut = false;     // version 2 PLNS only: the file ends inside it; `payload` is what is present, unchecked
   PayloadReader reader() const { return PayloadReader(payload, where); }
 };
 
 // Walks the sections of a file after its header, checking the order of the
-// known ones: META, BASE, QUAN, BPTS, then CHNK... and END; unknown tags may
-// appear anywhere. Cost: one CRC pass over the bytes.
+// known ones: META, BASE, QUAN, BPTS, then CHNK... (version 1) or RDTB and
+// PLNS (version 2), and END; unknown tags may appear anywhere. Cost: one CRC
+// pass over the bytes.
 class SectionWalker {
  public:
-  SectionWalker(const std::string& bytes, const std::string& name) : bytes_(bytes), name_(name) {}
+  SectionWalker(const std::string& bytes, const std::string& name, int major)
+      : bytes_(bytes), name_(name), major_(major) {}
   // The next section, or nothing at the end of the bytes or when the file is
   // cut inside the coefficient stream (then truncated()). Throws Error(Format)
   // for a corrupt or misplaced section and for a cut before the stream.
@@ -100,6 +103,7 @@ class SectionWalker {
  private:
   const std::string& bytes_;
   const std::string& name_;
+  int major_;
   std::size_t position_ = kFileHeaderBytes;
   std::size_t headers_read_ = 0;  // of META, BASE, QUAN, BPTS
   bool truncated_ = false;

@@ -52,6 +52,26 @@ class RangeEncoder {
     for (int i = 0; i < 5; ++i) shift_low();
   }
 
+  // Flushes the shortest stream a PrefixRangeDecoder reads exactly: the value
+  // in the final interval with the most trailing zero bits, without the
+  // leading byte (always 0) and the trailing zero bytes (the decoder of a
+  // complete packet reads zeros past its end). `first` is out_'s size when
+  // this encoder started.
+  void finish_trimmed(std::size_t first) {
+    const std::uint64_t high = low_ + range_ - 1;
+    for (int bits = 32; bits >= 0; --bits) {
+      const std::uint64_t mask = (std::uint64_t{1} << bits) - 1;
+      const std::uint64_t v = (low_ + mask) & ~mask;
+      if (v <= high) {
+        low_ = v;
+        break;
+      }
+    }
+    finish();
+    out_.erase(out_.begin() + static_cast<std::ptrdiff_t>(first));  // the leading 0
+    while (out_.size() > first && out_.back() == 0) out_.pop_back();
+  }
+
  private:
   void shift_low() {
     if (static_cast<std::uint32_t>(low_) < 0xFF000000u || (low_ >> 32) != 0) {
@@ -129,6 +149,68 @@ class RangeDecoder {
   std::size_t size_;
   std::size_t position_ = 0;
   std::uint32_t code_ = 0;
+  std::uint32_t range_ = 0xFFFFFFFFu;
+};
+
+// The decoder of one packet written by RangeEncoder::finish_trimmed(). A
+// complete packet reads zeros past its end, as its encoder trimmed them. A
+// packet cut short (a file prefix) does not know its missing bytes: the
+// decoder tracks how far they could move its code value and stops at the
+// first decision they could change, so every decision it returns is the
+// encoder's. Once stopped() it returns 0 bits and reads nothing.
+class PrefixRangeDecoder {
+ public:
+  enum class Ending { Complete, Cut };
+  PrefixRangeDecoder(const std::uint8_t* data, std::size_t size, Ending ending)
+      : data_(data), size_(size), cut_(ending == Ending::Cut) {
+    for (int i = 0; i < 4; ++i) code_ = (code_ << 8) | next_byte();
+  }
+
+  int decode_bit(Probability& p) {
+    if (stopped_) return 0;
+    const std::uint32_t bound = (range_ >> kProbabilityBits) * p;
+    if (unknown_ != 0 && code_ < bound && std::uint64_t{code_} + unknown_ >= bound) return stop();
+    int bit;
+    if (code_ < bound) {
+      range_ = bound;
+      p = static_cast<Probability>(p + (((1 << kProbabilityBits) - p) >> kAdaptShift));
+      bit = 0;
+    } else {
+      code_ -= bound;
+      range_ -= bound;
+      p = static_cast<Probability>(p - (p >> kAdaptShift));
+      bit = 1;
+    }
+    while (range_ < kTop) {
+      range_ <<= 8;
+      code_ = (code_ << 8) | next_byte();
+    }
+    return bit;
+  }
+
+  bool stopped() const { return stopped_; }
+
+ private:
+  int stop() {
+    stopped_ = true;
+    return 0;
+  }
+  std::uint32_t next_byte() {
+    if (position_ < size_) return data_[position_++];
+    ++position_;
+    // Past a cut the byte is unknown: the code value may be up to
+    // `unknown_` larger than with zeros (all of it after 4 such bytes).
+    if (cut_) unknown_ = unknown_ >= 0x00FFFFFFu ? 0xFFFFFFFFu : (unknown_ << 8) | 0xFFu;
+    return 0u;
+  }
+
+  const std::uint8_t* data_;
+  std::size_t size_;
+  bool cut_;
+  bool stopped_ = false;
+  std::size_t position_ = 0;
+  std::uint32_t code_ = 0;
+  std::uint32_t unknown_ = 0;
   std::uint32_t range_ = 0xFFFFFFFFu;
 };
 

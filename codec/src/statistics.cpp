@@ -78,7 +78,10 @@ std::vector<RateDistortionRow> rate_distortion(const IswDecoded& decoded, const 
   std::vector<std::uint64_t> chunk_end_rank, chunk_end_bytes;
   std::uint64_t rank = 0;
   for (const IswSectionInfo& s : decoded.sections) {
-    if (s.tag == "CHNK") {
+    if (s.tag == "PLNS") {  // version 2: a percentage ranks the whole decode
+      chunk_end_rank.push_back(decoded.ranked.size());
+      chunk_end_bytes.push_back(s.offset + s.bytes);
+    } else if (s.tag == "CHNK") {
       rank += s.coefficients;
       chunk_end_rank.push_back(rank);
       chunk_end_bytes.push_back(s.offset + s.bytes);

@@ -21,6 +21,7 @@
 #include "isowave/fit/signed_distance.h"
 #include "isowave/transform/wavelet_transform.h"
 #include "levels_by_error.h"
+#include "rate_control.h"
 
 namespace isowave {
 
@@ -56,6 +57,12 @@ void check_options(const ConvertOptions& options) {
     throw Error(ErrorKind::InvalidArgument, "the quantization step must be positive");
   if (!(options.max_error_cells >= 0) || !std::isfinite(options.max_error_cells))
     throw Error(ErrorKind::InvalidArgument, "the maximum error must be a non-negative number of cells");
+  const RateTarget& rate = options.rate;
+  if (!(rate.max_error_cells >= 0) || !std::isfinite(rate.max_error_cells) || !(rate.bits_per_vertex >= 0) ||
+      !std::isfinite(rate.bits_per_vertex))
+    throw Error(ErrorKind::InvalidArgument, "a rate target must be a non-negative number");
+  if ((rate.max_error_cells > 0) + (rate.max_bytes > 0) + (rate.bits_per_vertex > 0) > 1)
+    throw Error(ErrorKind::InvalidArgument, "give at most one of a maximum error, a size and bits per vertex");
 }
 
 std::size_t base_target(const BaseMeshOptions& base, std::size_t extracted_vertices) {
@@ -413,22 +420,23 @@ IswMetadata metadata_of(const Volume& volume, const std::string& source, const C
   return metadata;
 }
 
-// What the encoder stored, for the evaluation.
+// What the file decodes to, for the evaluation.
 struct Coded {
-  std::vector<Vec3> stored;            // the coefficients as quantized
-  std::vector<std::uint32_t> ranked;   // the order the file sends them
-  std::vector<Vec3> full_decode;       // the stored coefficients synthesized: what a 100% decode gives
+  IswDecoded decoded;             // the file written, decoded
+  std::vector<Vec3> full_decode;  // its coefficients synthesized: what a 100% decode gives
 };
 
-// Analysis (Sec. 3) and coding: records the error quantization adds, the
-// full decode of the coefficients exactly as stored against the fitted
-// points (the summary's rows are measured against that full decode).
-Coded analyze_and_encode(const SubdivisionHierarchy& hierarchy, IswMetadata metadata, const ConvertOptions& options,
-                         ConvertResult& result, ProgressSink& progress) {
+// Analysis (Sec. 3), the embedded stream down to the finest step, the cut
+// the rate target asks for (rate_control.h), and the file: its metadata
+// records the quantization error of the cut stream (the full decode against
+// the fitted points) and its RDTB the D measured at the stream's prefixes.
+Coded analyze_and_encode(const std::shared_ptr<const SubdivisionHierarchy>& hierarchy, IswMetadata metadata,
+                         const SurfaceErrorReference& against_surface, const std::string& source,
+                         const ConvertOptions& options, ConvertResult& result, ProgressSink& progress) {
   auto start = Clock::now();
   progress.begin_stage("analysis");
   std::vector<Vec3> coefficients = result.fit.positions;
-  analyze(hierarchy, coefficients);
+  analyze(*hierarchy, coefficients);
   progress.end_stage();
   result.seconds.analysis = seconds_since(start);
 
@@ -436,13 +444,24 @@ Coded analyze_and_encode(const SubdivisionHierarchy& hierarchy, IswMetadata meta
   progress.begin_stage("encode");
   IswEncodeOptions encode_options;
   encode_options.step = options.step_cells * result.cell_size;
-  encode_options.class_weights = wavelet_norms(hierarchy);
-  Coded coded;
-  coded.stored = quantize_coefficients(hierarchy, coefficients, encode_options.step, encode_options.class_weights);
-  coded.full_decode = coded.stored;
-  synthesize(hierarchy, coded.full_decode);
+  encode_options.frame_step = kFrameStepCells * result.cell_size;
+  const std::string whole = encode_isw(*hierarchy, coefficients, metadata, encode_options);
+  std::vector<Vec3>().swap(coefficients);
+  const detail::RatePlan plan =
+      detail::plan_rate(whole, hierarchy, against_surface, options.rate, result.extracted_vertices, result.cell_size);
+  if (plan.target_missed)
+    result.warnings.push_back("the whole stream lies " + number(plan.error / result.cell_size) +
+                              " cells from the isosurface, more than the maximum error asked for: the fit's own error "
+                              "is the floor (more levels or a larger base mesh lower it)");
+  IswDecodeOptions decode_options;
+  decode_options.hierarchy = hierarchy;
+  decode_options.max_stream_bytes = plan.stream_bytes;
+  Coded coded{decode_isw(whole, source, decode_options), {}};
+  coded.full_decode = reconstruct(coded.decoded, SIZE_MAX);
   record_quantization_error(point_errors(coded.full_decode, result.fit.positions, coded.full_decode.size()), metadata);
-  result.bytes = encode_isw(hierarchy, coefficients, metadata, encode_options, &coded.ranked);
+  result.bytes = rewrite_isw(whole, IswRewrite{plan.stream_bytes, plan.table, &metadata});
+  result.rate_table = plan.table;
+  result.file_error = plan.error;
   progress.end_stage();
   result.seconds.encode = seconds_since(start);
   return coded;
@@ -466,30 +485,24 @@ void measure_rows(const SubdivisionHierarchy& hierarchy, const IswDecoded& expec
     if (repeats(k)) errors[k] = errors[k - 1];
 }
 
-// Error summary (error_table, as stats makes it), from what the file holds
-// as the encoder stored it, without decoding the file again
-// (FileCheck::DecodeAgain does); and each row's D against the extracted isosurface.
+// Error summary (error_table, as stats makes it) of the file as written,
+// decoded again (its sections and metadata are the final ones; its
+// coefficients must be those the encoder planned), and each row's D against
+// the extracted isosurface.
 void evaluate(const std::shared_ptr<const SubdivisionHierarchy>& hierarchy, Coded coded,
               const SurfaceErrorReference& against_surface, const std::string& source, const ConvertOptions& options,
               ConvertResult& result, ProgressSink& progress) {
   const auto start = Clock::now();
   progress.begin_stage("evaluate");
-  const IswDecoded expected =
-      expected_decode(hierarchy, std::move(coded.stored), std::move(coded.ranked), result.bytes, source);
-  std::future<bool> decodes_as_expected;
-  if (options.file_check == FileCheck::DecodeAgain)
-    decodes_as_expected = std::async(std::launch::async, [&] {
-      IswDecodeOptions decode_options;
-      decode_options.hierarchy = hierarchy;
-      const IswDecoded decoded = decode_isw(result.bytes, source, decode_options);
-      return decoded.ranked == expected.ranked && decoded.coefficients == expected.coefficients;
-    });
-  ErrorTable errors = error_table(expected, options.summary_percents, &coded.full_decode);
+  IswDecodeOptions decode_options;
+  decode_options.hierarchy = hierarchy;
+  const IswDecoded decoded = decode_isw(result.bytes, source, decode_options);
+  if (decoded.ranked != coded.decoded.ranked || decoded.coefficients != coded.decoded.coefficients)
+    throw std::logic_error(source + ": the file written does not decode to the coefficients it was planned with");
+  ErrorTable errors = error_table(decoded, options.summary_percents, &coded.full_decode);
   result.summary = std::move(errors.rows);
   result.quantization = errors.quantization;
-  measure_rows(*hierarchy, expected, against_surface, result);
-  if (decodes_as_expected.valid() && !decodes_as_expected.get())
-    throw std::logic_error(source + ": the file written does not decode to the coefficients it was coded from");
+  measure_rows(*hierarchy, decoded, against_surface, result);
   progress.end_stage();
   result.seconds.evaluate = seconds_since(start);
 }
@@ -526,7 +539,7 @@ ConvertResult convert_volume(Volume volume, const std::string& source, const Con
   if (options.keep_extracted_mesh) result.extracted_mesh = std::move(prepared.isosurface.mesh);
   prepared = PreparedSurface{};
 
-  Coded coded = analyze_and_encode(*hierarchy, std::move(metadata), options, result, progress);
+  Coded coded = analyze_and_encode(hierarchy, std::move(metadata), against_surface, source, options, result, progress);
   evaluate(hierarchy, std::move(coded), against_surface, source, options, result, progress);
   return result;
 }

@@ -85,7 +85,7 @@ TEST_F(CliTest, ConvertDecodeStatsAndInfoRoundTrip) {
 
   const RunResult info = run({"info", path("g.isw")}, dir_);
   ASSERT_EQ(info.exit_code, 0) << info.err;
-  EXPECT_NE(info.out.find("CHNK"), std::string::npos);
+  EXPECT_NE(info.out.find("PLNS"), std::string::npos);
 }
 
 TEST_F(CliTest, BatchSkipsAFailingInputAndExitsNonZero) {

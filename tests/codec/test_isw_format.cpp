@@ -43,6 +43,7 @@ struct Encoded {
 Encoded encode_sample(PolygonMesh base, int levels, double step = 1e-3) {
   Encoded e{test::make_coded_surface(std::move(base), levels, 0.05, 9), {}, step};
   IswEncodeOptions options;
+  options.major_version = 1;
   options.step = step;
   e.bytes = encode_isw(e.surface.base, levels, e.surface.coefficients, sample_metadata(), options);
   return e;
@@ -104,6 +105,7 @@ TEST(IswFormat, ExpectedDecodeEqualsTheDecodeOfTheFile) {
   const test::CodedSurface surface = test::make_coded_surface(slab_with_sharp_vertex(5), 3, 0.05, 9);
   const auto hierarchy = std::make_shared<const SubdivisionHierarchy>(surface.base, 3);
   IswEncodeOptions options;
+  options.major_version = 1;
   options.step = 1e-3;
   options.class_weights = wavelet_norms(*hierarchy);
   std::vector<std::uint32_t> ranked;
@@ -176,6 +178,7 @@ TEST(IswFormat, ReencodingADecodedFileIsStable) {
   const Encoded e = encode_sample(test::genus_slab(1), 3);
   const IswDecoded d = decode_isw(e.bytes, "test.isw");
   IswEncodeOptions options;
+  options.major_version = 1;
   options.step = d.step;
   const std::string again = encode_isw(d.base, d.levels, d.coefficients, d.metadata, options);
   EXPECT_EQ(again, e.bytes);
@@ -271,6 +274,7 @@ TEST(IswFormat, StatisticsTakeKnownErrorsOfEveryCoefficientOnlyForFullRows) {
 TEST(IswFormat, EncodingIsTheSameOnOneThread) {
   const test::CodedSurface s = test::make_coded_surface(test::genus_slab(3), 3, 0.05, 4);
   IswEncodeOptions options;
+  options.major_version = 1;
   options.step = 1e-3;
   const std::string parallel = encode_isw(*s.hierarchy, s.coefficients, sample_metadata(), options);
   std::string serial;
@@ -287,6 +291,7 @@ TEST(IswFormat, ManyCoefficientsAreRankedByImportanceThenIndex) {
   // other tests take the comparison sort).
   const test::CodedSurface s = test::make_coded_surface(test::genus_slab(3), 5, 0.05, 6);
   IswEncodeOptions options;
+  options.major_version = 1;
   options.step = 1e-6;
   const IswDecoded d = decode_isw(encode_isw(*s.hierarchy, s.coefficients, sample_metadata(), options), "test.isw");
   ASSERT_GT(d.ranked.size(), 1u << 16);
@@ -435,7 +440,7 @@ TEST(IswFormat, SectionsOfALaterMinorVersionAreSkipped) {
   std::string minor5 = e.bytes;
   minor5[10] = 5;
   EXPECT_EQ(decode_isw(minor5, "minor.isw").minor_version, 5);
-  EXPECT_EQ(decode_isw(minor5, "minor.isw").major_version, kIswMajorVersion);
+  EXPECT_EQ(decode_isw(minor5, "minor.isw").major_version, 1);
 }
 
 TEST(IswFormat, BaseMeshTheHierarchyCannotRefineIsAFormatErrorNamingTheSection) {
@@ -452,6 +457,7 @@ TEST(IswFormat, BaseMeshTheHierarchyCannotRefineIsAFormatErrorNamingTheSection) 
   }
   for (std::uint32_t i = 0; i < kRing; ++i) fan.add_face({0u, 1 + i, 1 + (i + 1) % kRing});
   IswEncodeOptions options;
+  options.major_version = 1;
   options.step = 1e-3;
   const std::string level0 = encode_isw(fan, 0, fan.positions, sample_metadata(), options);
   ASSERT_EQ(decode_isw(level0, "fan.isw").base.face_count(), kRing);

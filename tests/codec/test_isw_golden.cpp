@@ -1,19 +1,20 @@
-// The golden .isw file: tests/codec/data/golden_1_0.isw was written by the
-// format 1.0 encoder from the surface that golden_surface() defines, and
-// every later reader must decode it to that surface. Its expected values
+// The golden .isw files: tests/codec/data/golden_1_0.isw and golden_2_0.isw
+// were written by the format 1.0 and 2.0 encoders from the surface that
+// golden_surface() defines, and every later reader must decode them to that surface. Its expected values
 // come from the generator below, not from a decode: base topology, sharp
 // flags and metadata exactly, base control points and coefficients within
 // half their quantization step. The generator uses only integer arithmetic
 // and decimal constants, so it gives the same values on every platform.
 //
-// Regenerate only with a new format version (and keep the old file, whose
-// test must keep passing): ISOWAVE_WRITE_GOLDEN=PATH codec_tests
-// --gtest_filter='IswGolden.*' writes the current encoder's file to PATH.
+// Regenerate only with a new format version (and keep the old files, whose
+// tests must keep passing): ISOWAVE_WRITE_GOLDEN_1_0=PATH (or _2_0) codec_tests
+// --gtest_filter='IswGolden.*' writes that version's file to PATH.
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
 #include <fstream>
+#include <iterator>
 #include <string>
 #include <vector>
 
@@ -71,12 +72,15 @@ GoldenSurface golden_surface() {
   return s;
 }
 
-std::string golden_path() { return std::string(ISOWAVE_CODEC_TEST_DATA_DIR) + "/golden_1_0.isw"; }
+std::string golden_path(const char* name = "golden_1_0.isw") {
+  return std::string(ISOWAVE_CODEC_TEST_DATA_DIR) + "/" + name;
+}
 
 TEST(IswGolden, Format10FileDecodesToItsGenerator) {
   const GoldenSurface expected = golden_surface();
-  if (const char* out = std::getenv("ISOWAVE_WRITE_GOLDEN")) {
+  if (const char* out = std::getenv("ISOWAVE_WRITE_GOLDEN_1_0")) {
     IswEncodeOptions options;
+    options.major_version = 1;
     options.step = kStep;
     std::ofstream(out, std::ios::binary)
         << encode_isw(expected.base, kLevels, expected.coefficients, expected.metadata, options);
@@ -136,6 +140,58 @@ TEST(IswGolden, Format10FileDecodesTheMostImportantCoefficientsFirst) {
     if (decoded[i]) continue;
     EXPECT_LE(importance(i), least_decoded + tolerance) << i;
     EXPECT_EQ(d.coefficients[i], Vec3{}) << i;
+  }
+}
+
+// Version 2 (embedded planes in local frames): the golden file decodes to the
+// generator within its quantizer's bounds, and every byte count of it past
+// its headers decodes.
+constexpr double kTangentialFactor = 4;
+
+TEST(IswGolden, Format20FileDecodesToItsGenerator) {
+  const GoldenSurface expected = golden_surface();
+  if (const char* out = std::getenv("ISOWAVE_WRITE_GOLDEN_2_0")) {
+    IswEncodeOptions options;
+    options.major_version = 2;
+    options.step = kStep;
+    options.tangential_factor = kTangentialFactor;
+    std::ofstream(out, std::ios::binary)
+        << encode_isw(expected.base, kLevels, expected.coefficients, expected.metadata, options);
+    GTEST_SKIP() << "wrote " << out;
+  }
+  const IswDecoded d = read_isw(golden_path("golden_2_0.isw"));
+  EXPECT_EQ(d.major_version, 2);
+  EXPECT_EQ(d.minor_version, 0);
+  EXPECT_FALSE(d.truncated);
+  EXPECT_EQ(d.stream.planes_decoded, d.stream.planes);
+  EXPECT_DOUBLE_EQ(d.stream.tangential_factor, kTangentialFactor);
+  EXPECT_EQ(d.metadata.values, expected.metadata.values);
+  EXPECT_EQ(d.levels, kLevels);
+  EXPECT_DOUBLE_EQ(d.step, kStep);
+  EXPECT_EQ(d.base.face_offsets, expected.base.face_offsets);
+  EXPECT_EQ(d.base.face_vertices, expected.base.face_vertices);
+  EXPECT_EQ(d.base.sharp, expected.base.sharp);
+  ASSERT_EQ(d.coefficients.size(), expected.coefficients.size());
+  // A dead-zone quantizer: every component within one step of its class
+  // (k steps along the surface), whatever the frame; base control points
+  // in world axes.
+  for (std::size_t i = 0; i < d.coefficients.size(); ++i) {
+    const int cls = coefficient_class(*d.hierarchy, i);
+    const double step = kStep / d.class_weights[static_cast<std::size_t>(cls)];
+    const double bound = cls == 0 ? std::sqrt(3.0) * step : std::sqrt(1 + 2 * kTangentialFactor * kTangentialFactor) * step;
+    ASSERT_LE(norm(d.coefficients[i] - expected.coefficients[i]), bound * (1 + 1e-9)) << "value " << i;
+  }
+}
+
+TEST(IswGolden, Format20FileDecodesAtEveryByteOfItsStream) {
+  std::ifstream in(golden_path("golden_2_0.isw"), std::ios::binary);
+  const std::string bytes((std::istreambuf_iterator<char>(in)), {});
+  const IswDecoded full = decode_isw(bytes, "golden");
+  ASSERT_GT(full.stream.bytes, 0u);
+  for (std::uint64_t n = full.stream.offset; n < bytes.size(); ++n) {
+    const IswDecoded d = decode_isw(bytes.substr(0, n), "cut");
+    ASSERT_TRUE(d.truncated) << n;
+    ASSERT_LE(d.stream.decoded, n - full.stream.offset) << n;
   }
 }
 

@@ -3,17 +3,24 @@
 //
 //   header   8-byte magic "\x89ISW\r\n\x1a\n", u16 major version, u16 minor version, u32 zero
 //   sections [4-byte tag][u64 payload size][u32 CRC-32 of tag and size][payload][u32 CRC-32 of tag and payload]:
-//            META  metadata as UTF-8 "key=value" lines
+//            META  metadata as UTF-8 "key=value" lines (deflated in version 2)
 //            BASE  base mesh: counts, face sizes and indices (range coded), sharp flags
-//            QUAN  quantization step and per-class wavelet weights
+//            QUAN  quantization steps and per-class wavelet weights
 //            BPTS  base control points, quantized, predicted from decoded neighbours, range coded
+//   version 2 (written by default; issue #34):
+//            RDTB  optional: the surface error D measured at prefixes of the plane stream
+//            PLNS  embedded bit planes of every coefficient in its local frame (normal,
+//                  tangent, bitangent), most significant plane first, set-partitioned over
+//                  the hierarchy's parent-child tree: any prefix decodes
+//   version 1:
 //            CHNK  (several) wavelet coefficients, most important first: chunk k holds the coefficients
 //                  ranked in [start_k, end_k) by importance, coded by significance flags over the
 //                  coefficients not yet sent plus quantized components
 //            END   empty
 //
-// Progressive: a reader may stop after any chunk and still rebuild a valid
-// approximation. Decoding treats every byte as hostile: every count is checked
+// Progressive: a version 2 file cut at any byte of its plane stream (or
+// decoded with max_stream_bytes) rebuilds the best surface that prefix
+// allows; a version 1 reader may stop after any chunk. Decoding treats every byte as hostile: every count is checked
 // against the bytes present before anything is allocated and the work is
 // linear in the file size; a corrupt section (bad CRC, impossible values) is
 // an Error(Format) naming the section; a file cut inside the coefficient
@@ -31,9 +38,9 @@
 
 namespace isowave {
 
-// A reader decodes every minor version of its major version (it skips the
+// A reader decodes every minor version of majors 1 and 2 (it skips the
 // sections it does not know) and refuses other majors (Error(Unsupported)).
-constexpr std::uint16_t kIswMajorVersion = 1;
+constexpr std::uint16_t kIswMajorVersion = 2;
 constexpr std::uint16_t kIswMinorVersion = 0;
 
 struct IswMetadata {
@@ -47,12 +54,33 @@ struct IswMetadata {
   std::string text(const std::string& key, const std::string& fallback = {}) const;
 };
 
+// D of a decoded surface at a prefix of the plane stream (RDTB).
+struct IswRatePoint {
+  std::uint64_t stream_bytes = 0;  // bytes of the plane stream (PLNS packets) decoded
+  double error = 0;                // D at that prefix, world units (the writer's measure; convert: against the isosurface)
+};
+
 struct IswEncodeOptions {
+  // The major version written: 2 (embedded planes in local frames) or 1.
+  int major_version = kIswMajorVersion;
   // Quantization step for importance-weighted coefficients, in world units,
   // finite and > 0: a coefficient of class c is quantized with step / weight_c,
   // so every kept coefficient adds about the same error to the fine control
-  // points. The expected RMSE added over the fine points is about step / 2.
+  // points. Version 1: the expected RMSE added over the fine points is about
+  // step / 2. Version 2: the step of the last bit plane (a dead-zone
+  // quantizer; any prefix stops at a coarser one).
   double step = 0.01;
+  // Version 2: tangential components use a step this many times the normal
+  // one (>= 1): they move the surface along itself, which costs bits and
+  // changes the surface little.
+  double tangential_factor = 8;
+  // Version 2: BPTS sends the base control points at this step (world units;
+  // 0: 16 x step / weight_0), from which the local frames are built; the
+  // planes refine them to `step`.
+  double frame_step = 0;
+  // Version 2: cut the plane stream so that the file holds at most this many
+  // bytes (0: the whole stream). Error(InvalidArgument) when the headers alone exceed it.
+  std::uint64_t max_bytes = 0;
   // Chunk boundaries in percent of full resolution (fine control points),
   // ascending in (0, 100]; the remaining coefficients form the last chunk. A
   // reader stopping at p% reads the chunks up to the first boundary >= p.
@@ -74,13 +102,26 @@ struct IswEncodeOptions {
 std::string encode_isw(const PolygonMesh& base, int levels, const std::vector<Vec3>& coefficients,
                        const IswMetadata& metadata, const IswEncodeOptions& options = {});
 // The same for a hierarchy already built (its base mesh and levels are coded).
-// `ranked`, if given, receives the indices of the non-zero quantized wavelet
-// coefficients in the order the file sends them (as a decode lists them).
+// `ranked`, if given, receives (version 1 only) the indices of the non-zero
+// quantized wavelet coefficients in the order the file sends them (as a decode lists them).
 std::string encode_isw(const SubdivisionHierarchy& hierarchy, const std::vector<Vec3>& coefficients,
                        const IswMetadata& metadata, const IswEncodeOptions& options = {},
                        std::vector<std::uint32_t>* ranked = nullptr);
 
-// The coefficients exactly as encode_isw() stores them (quantized per class
+// What rewrite_isw() changes in a version 2 file.
+struct IswRewrite {
+  std::uint64_t stream_bytes = UINT64_MAX;  // keep at most this many plane stream bytes (any count decodes)
+  std::vector<IswRatePoint> rate_table;     // the new RDTB, rows ascending in bytes; rows beyond stream_bytes dropped
+  const IswMetadata* metadata = nullptr;    // the new META, when given
+};
+// A complete version 2 file rewritten; Error(InvalidArgument) for anything else.
+std::string rewrite_isw(const std::string& file, const IswRewrite& rewrite);
+// The plane stream bytes that keep `file` (version 2) within `max_bytes`
+// bytes in all with an RDTB of `table_rows` rows. Error(InvalidArgument) when
+// the headers alone exceed it.
+std::uint64_t stream_bytes_within(const std::string& file, std::uint64_t max_bytes, std::size_t table_rows = 0);
+
+// The coefficients exactly as encode_isw() stores them (version 1) (quantized per class
 // with step / class_weights[c], then scaled back): lets a caller measure the
 // quantization error before encoding. Errors as encode_isw(). Cost: O(fine vertices).
 std::vector<Vec3> quantize_coefficients(const SubdivisionHierarchy& hierarchy, const std::vector<Vec3>& coefficients,
@@ -91,6 +132,20 @@ struct IswSectionInfo {
   std::uint64_t offset = 0;        // of the section header in the file, bytes
   std::uint64_t bytes = 0;         // whole section: header, payload, CRC
   std::uint64_t coefficients = 0;  // CHNK only: the wavelet coefficients it sends
+};
+
+// Version 2: the plane stream of a decode.
+struct IswStreamInfo {
+  std::uint64_t offset = 0;   // file offset of the first packet byte
+  std::uint64_t bytes = 0;    // packet bytes in the file
+  std::uint64_t decoded = 0;  // packet bytes the decode read (complete packets, and the cut one)
+  int top_plane = -1;         // -1: every coefficient below the step
+  int planes = 0;             // packets in the file (some may be cut or missing)
+  int planes_decoded = 0;     // complete packets decoded
+  std::vector<std::uint64_t> packet_ends;  // cumulative packet bytes, as the table of the file says
+  double tangential_factor = 1;
+  double frame_step = 0;      // world units
+  std::vector<IswRatePoint> rate_table;  // RDTB, if the file has one
 };
 
 // Wall-clock seconds of the decoder's phases (for benchmarks; not part of the
@@ -119,11 +174,14 @@ struct IswDecoded {
   // `coefficients`, most important first (the order the encoder ranked them).
   std::vector<std::uint32_t> ranked;
   std::vector<IswSectionInfo> sections;  // in file order, unknown tags included
+  IswStreamInfo stream;                  // version 2
   // The subdivision hierarchy of `base` and `levels` (options.hierarchy when
   // that one matches the file).
   std::shared_ptr<const SubdivisionHierarchy> hierarchy;
-  std::size_t chunks_total = 0;    // chunks the encoder wrote (from QUAN)
-  std::size_t chunks_decoded = 0;  // chunks_total unless truncated or stopped at the limit
+  // Version 1: chunks the encoder wrote (QUAN) and those decoded; version 2:
+  // planes (PLNS) and complete planes decoded.
+  std::size_t chunks_total = 0;
+  std::size_t chunks_decoded = 0;
   std::uint64_t coefficients_total = 0;  // non-zero coefficients the encoder wrote
   bool truncated = false;          // the file ends inside the coefficient chunks or before END
   std::string truncation_note;     // what was decoded, when truncated
@@ -138,6 +196,14 @@ struct IswDecodeOptions {
   // The same limit as a percentage of full resolution, counted as the paper
   // does (see coefficients_for_percent), in [0, 100]; the smaller limit applies.
   double max_percent = 100;
+  // Version 2: decode at most this many bytes of the plane stream, or the
+  // prefix the file's RDTB gives for D <= max_error (world units, > 0;
+  // the whole stream when no row reaches it or there is no RDTB); the smaller applies.
+  std::uint64_t max_stream_bytes = UINT64_MAX;
+  double max_error = 0;
+  // Decode only the first max_file_bytes bytes of the file (a prefix; for
+  // version 2 any prefix past BPTS decodes). Not reported as truncated.
+  std::uint64_t max_file_bytes = UINT64_MAX;
   // Read only the metadata, base mesh and section table (for `info`).
   bool headers_only = false;
   // A hierarchy the caller already has (convert checking its own output):

@@ -80,6 +80,14 @@ enum class FinePoints {
   OnTrilinearIsosurface,
 };
 
+// What the .isw 2.0 file's size follows (issue #34): at most one target;
+// none writes the whole embedded stream, down to ConvertOptions::step_cells.
+struct RateTarget {
+  double max_error_cells = 0;   // > 0: the shortest stream prefix whose D (against the extracted isosurface) is within this
+  std::uint64_t max_bytes = 0;  // > 0: the file's size limit in bytes
+  double bits_per_vertex = 0;   // > 0: the size limit in bits per extracted isosurface vertex
+};
+
 struct ConvertOptions {
   // Isovalue, orientation, clean-up, pre-filter and the distance band.
   PrepareOptions prepare;
@@ -100,9 +108,10 @@ struct ConvertOptions {
   FinePoints fine_points = FinePoints::OnTrilinearIsosurface;
   // The shrink-wrap (Sec. 4.2); convert_volume() sets `surface` to the extracted mesh.
   ShrinkWrapOptions shrink_wrap;
-  // Quantization step in cells (IswEncodeOptions::step / cell size, > 0);
-  // the expected RMSE it adds is about half of it.
+  // The step of the last bit plane in cells (IswEncodeOptions::step / cell
+  // size, > 0): the finest the stream goes; `rate` cuts it shorter.
   double step_cells = 0.01;
+  RateTarget rate;
   // Percentages for the error summary (the base-mesh row is added).
   std::vector<double> summary_percents{100, 20, 10, 5};
   FoldedFit folded_fit = FoldedFit::Refuse;
@@ -167,6 +176,13 @@ inline constexpr int kFineUnfoldRounds = 10;  // FinePoints::OnTrilinearIsosurfa
 // enough for a few per mille of noise where no rare far point dominates.
 inline constexpr std::size_t kErrorSamples = 50000;
 inline constexpr double kLevelErrorFloorCells = 0.01;
+// The step at which the file sends the base control points before the
+// planes (IswEncodeOptions::frame_step), in cells: the local frames' base.
+inline constexpr double kFrameStepCells = 0.125;
+// With a maximum error for the file (RateTarget::max_error_cells), the
+// automatic levels' bound is this share of it: the quantization of the cut
+// stream adds the rest (errors add about in quadrature).
+inline constexpr double kLevelShareOfMaxError = 0.9;
 
 // One level a fit tried (issue #33, item 4): its fitted fine mesh before
 // quantization (the parametrization's before its points move onto the
@@ -231,6 +247,10 @@ struct ConvertResult {
   // user gets back, which the rows' control-point errors do not show.
   std::vector<double> summary_surface_error;
   QuantizationError quantization;
+  // D (world units) at prefixes of the plane stream: every plane boundary up
+  // to the cut, and the cut (the file's RDTB); and D of the file's whole stream.
+  std::vector<IswRatePoint> rate_table;
+  double file_error = 0;
   std::vector<std::string> warnings;  // one line each, e.g. a base mesh kept large by the topology
 };
 

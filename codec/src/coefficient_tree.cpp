@@ -1,0 +1,52 @@
+#include "coefficient_tree.h"
+
+#include <cassert>
+
+namespace isowave::detail {
+
+namespace {
+
+// The parent (a level-`level` vertex) of every coefficient of level + 1.
+void link_level(const SubdivisionHierarchy& hierarchy, int level, std::vector<std::uint32_t>& parent) {
+  const RefinementStep& into = hierarchy.step(level);     // level - 1 -> level: where level's f and e vertices lie
+  const RefinementStep& next = hierarchy.step(level + 1);  // level -> level + 1
+  const std::uint32_t f_first = into.first_face_vertex(), e_first = into.first_edge_vertex();
+  const std::uint32_t e_end = into.child_vertex_count();
+  for (std::uint32_t face = 0; face < next.parent_face_count; ++face) {
+    std::uint32_t owner = UINT32_MAX;
+    for (std::uint32_t k = next.face_offsets[face]; k < next.face_offsets[face + 1]; ++k) {
+      const std::uint32_t v = next.face_vertices[k];
+      if (v >= f_first && v < e_first) owner = v;
+    }
+    assert(owner != UINT32_MAX);
+    parent[next.first_face_vertex() + face] = owner;
+  }
+  for (std::uint32_t edge = 0; edge < next.parent_edge_count; ++edge) {
+    const std::uint32_t a = next.edge_vertices[2 * edge], b = next.edge_vertices[2 * edge + 1];
+    const std::uint32_t owner = a >= e_first && a < e_end ? a : b;
+    assert(owner >= e_first && owner < e_end);
+    parent[next.first_edge_vertex() + edge] = owner;
+  }
+}
+
+}  // namespace
+
+CoefficientTree build_coefficient_tree(const SubdivisionHierarchy& hierarchy) {
+  CoefficientTree tree;
+  const int levels = hierarchy.levels();
+  tree.nodes = hierarchy.fine_vertex_count();
+  tree.roots_end = hierarchy.vertex_count(levels >= 1 ? 1 : 0);
+  tree.parent.assign(tree.nodes, UINT32_MAX);
+  for (int level = 1; level < levels; ++level) link_level(hierarchy, level, tree.parent);
+  // Children in ascending order by a counting sort over the parents.
+  const std::size_t parents = levels >= 2 ? hierarchy.vertex_count(levels - 1) : 0;
+  tree.child_offsets.assign(parents + 1, 0);
+  for (std::size_t i = tree.roots_end; i < tree.nodes; ++i) ++tree.child_offsets[tree.parent[i] + 1];
+  for (std::size_t i = 0; i < parents; ++i) tree.child_offsets[i + 1] += tree.child_offsets[i];
+  tree.children.resize(tree.nodes - tree.roots_end);
+  std::vector<std::uint32_t> fill(tree.child_offsets.begin(), tree.child_offsets.end() - 1);
+  for (std::size_t i = tree.roots_end; i < tree.nodes; ++i) tree.children[fill[tree.parent[i]]++] = static_cast<std::uint32_t>(i);
+  return tree;
+}
+
+}  // namespace isowave::detail

@@ -1,0 +1,36 @@
+#pragma once
+// Private: the parent-child tree of the coefficient array that the embedded
+// coder's significance contexts follow (SPIHT's spatial orientation trees on
+// the subdivision hierarchy). Every level-l quad is (v, e, f, e') and every
+// level-l edge has exactly one e endpoint, so for l >= 1:
+//   - the f detail of a level-l face opens level l + 1 under the face's f corner;
+//   - the e detail of a level-l edge opens level l + 1 under the edge's e endpoint.
+// Every level-(l+1) coefficient thus has exactly one parent at level l. Roots:
+// the base control points (no children) and the level-1 coefficients.
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "isowave/transform/hierarchy.h"
+
+namespace isowave::detail {
+
+struct CoefficientTree {
+  std::size_t nodes = 0;      // the hierarchy's fine vertex count: one node per entry
+  std::size_t roots_end = 0;  // entries [0, roots_end) are roots: base and level 1
+  // Children of node i (ascending): children[child_offsets[i] .. child_offsets[i + 1]]
+  // for i < child_offsets.size() - 1; nodes beyond have none. Flat arrays: the
+  // coder walks them once per bit plane.
+  std::vector<std::uint32_t> child_offsets;
+  std::vector<std::uint32_t> children;
+  // Parent of node i >= roots_end, or UINT32_MAX for roots.
+  std::vector<std::uint32_t> parent;
+
+  std::uint32_t child_begin(std::size_t i) const { return i + 1 < child_offsets.size() ? child_offsets[i] : 0; }
+  std::uint32_t child_end(std::size_t i) const { return i + 1 < child_offsets.size() ? child_offsets[i + 1] : 0; }
+};
+
+// Cost: O(fine vertices) time and 12 bytes per entry.
+CoefficientTree build_coefficient_tree(const SubdivisionHierarchy& hierarchy);
+
+}  // namespace isowave::detail

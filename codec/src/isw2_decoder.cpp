@@ -1,0 +1,109 @@
+// The .isw 2.0 plane stream decoder (docs/FORMAT.md, PLNS): the packets
+// through the plane decoder, the local frames of the frame-precision base
+// (built meanwhile on another thread), and the world coefficients.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_group.h>
+
+#include "isowave/core/huge_page_vector.h"
+#include "bitplane_coder.h"
+#include "coefficient_tree.h"
+#include "isw2_layout.h"
+#include "isw_models.h"
+
+namespace isowave::detail {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
+
+// Packets through the decoder; returns the packet bytes read.
+std::uint64_t decode_packets(const PlaneStream& planes, PlaneDecoder& decoder) {
+  std::uint64_t bytes = 0;
+  for (std::size_t p = 0; p < planes.packets.size(); ++p) {
+    const bool cut = planes.last_cut && p + 1 == planes.packets.size();
+    decoder.decode_packet(planes.packets[p], cut);
+    bytes += planes.packets[p].size();
+    if (decoder.stopped()) break;
+  }
+  return bytes;
+}
+
+// The world coefficients from the decoder's step-unit values.
+void to_world(const PlaneDecoder& decoder, const CoefficientClasses& layout, const std::vector<std::uint8_t>& classes,
+              const V2Scales& scales, const std::vector<Vec3>& frame_base, const std::vector<Vec3>& normals,
+              IswDecoded& result) {
+  std::vector<double> steps;
+  decoder.values(steps);
+  const std::size_t fine = layout.fine();
+  reserve_fresh_on_huge_pages(result.coefficients, fine);
+  result.coefficients.resize(fine);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, fine, kParallelGrain), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t i = r.begin(); i < r.end(); ++i) {
+      const Vec3 u{steps[3 * i], steps[3 * i + 1], steps[3 * i + 2]};
+      const int cls = classes[i];
+      result.coefficients[i] = cls > 0 && u == Vec3{} ? Vec3{} : scales.from_steps(i, cls, u, frame_base, normals);
+    }
+  });
+  std::copy(result.coefficients.begin(), result.coefficients.begin() + static_cast<std::ptrdiff_t>(layout.base()),
+            result.base.positions.begin());
+}
+
+}  // namespace
+
+void decode_plane_stream(const Section& section, const SubdivisionHierarchy& hierarchy,
+                         const CoefficientClasses& layout, const V2Scales& scales, std::uint64_t max_stream_bytes,
+                         IswDecoded& result) {
+  const auto start = Clock::now();
+  PayloadReader reader = section.reader();
+  const PlaneStream planes = read_planes(reader, section.payload, section.cut, max_stream_bytes);
+  IswStreamInfo& stream = result.stream;
+  stream.offset = section.info.offset + kSectionHeader + planes.data_offset;
+  stream.bytes = section.payload.size() > planes.data_offset ? section.payload.size() - planes.data_offset : 0;
+  stream.top_plane = planes.top_plane;
+  stream.planes = static_cast<int>(planes.packets_total);
+  stream.packet_ends = planes.packet_ends;
+  result.chunks_total = planes.packets_total;
+
+  // The frames need only the base the decoder has: built during the planes.
+  const std::vector<Vec3> frame_base = result.base.positions;
+  std::vector<Vec3> normals;
+  tbb::task_group frames;
+  frames.run([&] { normals = frame_normals(hierarchy, frame_base); });
+  const CoefficientTree tree = build_coefficient_tree(hierarchy);
+  const std::vector<std::uint8_t> classes = node_classes(layout);
+  PlaneDecoder decoder(tree, classes, layout.count(), planes.top_plane);
+  stream.decoded = decode_packets(planes, decoder);
+  stream.planes_decoded = decoder.planes_done();
+  result.chunks_decoded = static_cast<std::size_t>(decoder.planes_done());
+  result.seconds.chunks = seconds_since(start);
+  frames.wait();
+  const auto world_start = Clock::now();
+  to_world(decoder, layout, classes, scales, frame_base, normals, result);
+  result.seconds.dequantize = seconds_since(world_start);
+}
+
+void rank_and_keep(IswDecoded& result, const CoefficientClasses& layout, std::uint64_t keep) {
+  std::vector<RankedEntry> keyed;
+  for (std::size_t i = layout.base(); i < result.coefficients.size(); ++i) {
+    const Vec3& c = result.coefficients[i];
+    if (c == Vec3{}) continue;
+    keyed.push_back({result.class_weights[static_cast<std::size_t>(layout.of(i))] * norm(c),
+                     static_cast<std::uint32_t>(i), 0});
+  }
+  sort_by_importance(keyed);
+  result.ranked.resize(keyed.size());
+  for (std::size_t k = 0; k < keyed.size(); ++k) result.ranked[k] = keyed[k].index;
+  if (keep >= result.ranked.size()) return;
+  for (std::size_t k = static_cast<std::size_t>(keep); k < result.ranked.size(); ++k)
+    result.coefficients[result.ranked[k]] = Vec3{};
+  result.ranked.resize(static_cast<std::size_t>(keep));
+}
+
+}  // namespace isowave::detail

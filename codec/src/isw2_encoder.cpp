@@ -1,0 +1,198 @@
+// The .isw 2.0 encoder (docs/FORMAT.md, version 2): base control points at
+// a frame precision, local frames from them, every coefficient in its frame
+// and class weight as three step-unit magnitudes, and the embedded bit planes.
+#include <algorithm>
+#include <atomic>
+#include <optional>
+#include <cmath>
+#include <string>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include "isowave/codec/importance.h"
+#include "isowave/codec/isw_format.h"
+#include "isowave/core/error.h"
+#include "isw_sections.h"
+#include "bitplane_coder.h"
+#include "coefficient_tree.h"
+#include "isw2_layout.h"
+#include "isw_headers.h"
+#include "local_frames.h"
+
+namespace isowave {
+
+using namespace detail;
+
+namespace {
+
+void check_v2_options(const IswEncodeOptions& options, const std::vector<double>& weights) {
+  if (!(options.tangential_factor >= 1) || !std::isfinite(options.tangential_factor))
+    throw Error(ErrorKind::InvalidArgument, "the tangential factor must be at least 1");
+  if (options.frame_step < 0 || !std::isfinite(options.frame_step))
+    throw Error(ErrorKind::InvalidArgument, "the frame step must be positive (or 0: automatic)");
+  (void)weights;
+}
+
+// One component in step units: magnitude and sign; false when it is not
+// finite or beyond the largest magnitude.
+bool split(double value, std::uint32_t& magnitude, int& negative) {
+  const double m = std::floor(std::abs(value));
+  if (!(m <= double(kMaxMagnitude))) return false;
+  magnitude = static_cast<std::uint32_t>(m);
+  negative = value < 0 && magnitude > 0 ? 1 : 0;
+  return true;
+}
+
+// Every entry's magnitudes and signs: base control points as their
+// residual from the frame-precision base, wavelet coefficients in their
+// local frames (docs/FORMAT.md, PLNS).
+PlaneSymbols symbols_of(const SubdivisionHierarchy& hierarchy, const std::vector<Vec3>& coefficients,
+                        const std::vector<Vec3>& coarse_base, const V2Scales& scales) {
+  const CoefficientClasses classes(hierarchy);
+  const std::vector<Vec3> normals = frame_normals(hierarchy, coarse_base);
+  PlaneSymbols s;
+  const std::size_t n = hierarchy.fine_vertex_count();
+  s.classes = classes.count();
+  s.magnitude.resize(3 * n);
+  s.negative.resize(n);
+  s.node_class = node_classes(classes);
+  std::atomic<bool> invalid{false};
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, kParallelGrain), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t i = r.begin(); i < r.end(); ++i) {
+      const Vec3 u = scales.to_steps(i, s.node_class[i], coefficients[i], coarse_base, normals);
+      std::uint8_t negative = 0;
+      for (int k = 0; k < 3; ++k) {
+        int sign = 0;
+        if (!split(u[k], s.magnitude[3 * i + static_cast<std::size_t>(k)], sign)) invalid = true;
+        negative = static_cast<std::uint8_t>(negative | (sign << k));
+      }
+      s.negative[i] = negative;
+    }
+  });
+  if (invalid)
+    throw Error(ErrorKind::InvalidArgument, "a coefficient is not finite or too large for the quantization step");
+  return s;
+}
+
+void put_quantization_v2(std::string& out, const V2Scales& scales, int levels, std::uint64_t nonzero) {
+  std::string payload;
+  put_f64(payload, scales.step);
+  put_f64(payload, scales.frame_step);
+  put_f64(payload, scales.tangential_factor);
+  put_u32(payload, static_cast<std::uint32_t>(levels));
+  put_u32(payload, static_cast<std::uint32_t>(scales.weights.size()));
+  for (double w : scales.weights) put_f64(payload, w);
+  put_u64(payload, nonzero);
+  put_section(out, "QUAN", payload);
+}
+
+std::uint64_t nonzero_wavelets(const SubdivisionHierarchy& hierarchy, const PlaneSymbols& s) {
+  std::uint64_t count = 0;
+  for (std::size_t i = hierarchy.vertex_count(0); i < hierarchy.fine_vertex_count(); ++i)
+    count += (s.magnitude[3 * i] | s.magnitude[3 * i + 1] | s.magnitude[3 * i + 2]) != 0;
+  return count;
+}
+
+}  // namespace
+
+namespace detail {
+
+std::string encode_isw_v2(const SubdivisionHierarchy& hierarchy, const std::vector<Vec3>& coefficients,
+                          const IswMetadata& metadata, const IswEncodeOptions& options, std::vector<double> weights) {
+  check_v2_options(options, weights);
+  const std::size_t base_count = hierarchy.vertex_count(0);
+  V2Scales scales{options.step, options.frame_step > 0 ? options.frame_step : 16 * options.step / weights[0],
+                  options.tangential_factor, std::move(weights)};
+  // The frame-precision base, which the decoder has before any plane.
+  std::vector<QuantizedVector> base_q(base_count);
+  std::vector<Vec3> coarse_base(base_count);
+  for (std::size_t v = 0; v < base_count; ++v)
+    for (int axis = 0; axis < 3; ++axis) {
+      const double scaled = coefficients[v][axis] / scales.frame_step;
+      if (!(std::abs(scaled) <= 1e12)) throw Error(ErrorKind::InvalidArgument, "a base control point is not finite or too large");
+      base_q[v][axis] = std::llround(scaled);
+      coarse_base[v][axis] = double(base_q[v][axis]) * scales.frame_step;
+    }
+  const PlaneSymbols symbols = symbols_of(hierarchy, coefficients, coarse_base, scales);
+  const PlanePackets planes = encode_planes(build_coefficient_tree(hierarchy), symbols);
+
+  std::string out;
+  put_file_header(out, 2);
+  put_meta(out, metadata, 2);
+  put_base(out, hierarchy.base(), 2);
+  put_quantization_v2(out, scales, hierarchy.levels(), nonzero_wavelets(hierarchy, symbols));
+  put_base_points(out, hierarchy.base(), base_q);
+  put_planes(out, planes.top_plane, planes.packets, PlaneEnding::Complete);
+  put_section(out, "END ", std::string_view());
+  if (options.max_bytes > 0 && out.size() > options.max_bytes)
+    return rewrite_isw(out, IswRewrite{stream_bytes_within(out, options.max_bytes), {}, nullptr});
+  return out;
+}
+
+}  // namespace detail
+
+namespace {
+
+// The sections of a complete version 2 file, in order; Error(InvalidArgument) otherwise.
+std::vector<Section> sections_of_v2(const std::string& file) {
+  IswDecoded header;
+  read_file_header(file, "rewrite_isw", header);
+  if (header.major_version != 2) throw Error(ErrorKind::InvalidArgument, "rewrite_isw: not a version 2 .isw file");
+  SectionWalker walker(file, "rewrite_isw", 2);
+  std::vector<Section> sections;
+  while (std::optional<Section> section = walker.next()) sections.push_back(std::move(*section));
+  if (walker.truncated() || sections.empty() || sections.back().tag != "END ")
+    throw Error(ErrorKind::InvalidArgument, "rewrite_isw: the file is truncated");
+  return sections;
+}
+
+}  // namespace
+
+std::string rewrite_isw(const std::string& file, const IswRewrite& rewrite) {
+  const std::uint64_t stream_bytes = rewrite.stream_bytes;
+  std::string out;
+  put_file_header(out, 2);
+  for (const Section& section : sections_of_v2(file)) {
+    if (section.tag == "RDTB") continue;  // replaced
+    if (section.tag == "META" && rewrite.metadata) {
+      put_meta(out, *rewrite.metadata, 2);
+      continue;
+    }
+    if (section.tag != "PLNS") {
+      out.append(file, static_cast<std::size_t>(section.info.offset), static_cast<std::size_t>(section.info.bytes));
+      continue;
+    }
+    PayloadReader reader = section.reader();
+    const PlaneStream planes = read_planes(reader, section.payload, false, stream_bytes);
+    std::vector<IswRatePoint> rows;
+    for (const IswRatePoint& row : rewrite.rate_table)
+      if (row.stream_bytes <= stream_bytes) rows.push_back(row);
+    if (!rows.empty()) put_rate_table(out, rows);
+    put_planes(out, planes.top_plane, planes.packets, planes.last_cut ? PlaneEnding::Cut : PlaneEnding::Complete);
+  }
+  return out;
+}
+
+std::uint64_t stream_bytes_within(const std::string& file, std::uint64_t max_bytes, std::size_t table_rows) {
+  // Every section but the packets themselves, with the packet table at its
+  // longest (a cut one is never longer).
+  std::uint64_t fixed = kFileHeaderBytes + (table_rows > 0 ? kSectionOverhead + 4 + 16 * table_rows : 0);
+  for (const Section& section : sections_of_v2(file)) {
+    if (section.tag == "RDTB") continue;
+    if (section.tag != "PLNS") {
+      fixed += section.info.bytes;
+      continue;
+    }
+    PayloadReader reader = section.reader();
+    const PlaneStream planes = read_planes(reader, section.payload, false, UINT64_MAX);
+    fixed += section.info.bytes - (section.payload.size() - planes.data_offset);
+  }
+  if (fixed >= max_bytes)
+    throw Error(ErrorKind::InvalidArgument, "a file of at most " + std::to_string(max_bytes) +
+                                                " bytes cannot hold even the base mesh (" + std::to_string(fixed) +
+                                                " bytes)");
+  return max_bytes - fixed;
+}
+
+}  // namespace isowave

@@ -1,0 +1,123 @@
+#include "isw2_layout.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "isowave/core/error.h"
+
+namespace isowave::detail {
+
+namespace {
+
+void put_varint(std::string& out, std::uint64_t v) {
+  while (v >= 0x80) {
+    out.push_back(static_cast<char>((v & 0x7F) | 0x80));
+    v >>= 7;
+  }
+  out.push_back(static_cast<char>(v));
+}
+
+// False when the bytes end first (a cut table); Error(Format) for more than
+// 64 bits.
+bool read_varint(PayloadReader& reader, std::uint64_t& v) {
+  v = 0;
+  for (int shift = 0; shift < 64; shift += 7) {
+    if (reader.remaining() == 0) return false;
+    const auto byte = reader.read<std::uint8_t>();
+    v |= std::uint64_t{byte & 0x7Fu} << shift;
+    if (!(byte & 0x80)) return true;
+  }
+  reader.fail("holds an invalid packet table");
+}
+
+}  // namespace
+
+std::vector<std::uint8_t> node_classes(const CoefficientClasses& classes) {
+  std::vector<std::uint8_t> result(classes.fine());
+  for (int c = 0; c < classes.count(); ++c) {
+    const auto [first, last] = classes.range(c);
+    std::fill(result.begin() + static_cast<std::ptrdiff_t>(first), result.begin() + static_cast<std::ptrdiff_t>(last),
+              static_cast<std::uint8_t>(c));
+  }
+  return result;
+}
+
+void put_planes(std::string& out, int top_plane, const std::vector<std::string_view>& packets, PlaneEnding last) {
+  std::string payload;
+  payload.push_back(static_cast<char>(static_cast<std::int8_t>(top_plane)));
+  payload.push_back(last == PlaneEnding::Cut ? 1 : 0);
+  put_varint(payload, packets.size());
+  for (std::string_view p : packets) put_varint(payload, p.size());
+  for (std::string_view p : packets) payload += p;
+  put_section(out, "PLNS", payload);
+}
+
+PlaneStream read_planes(PayloadReader& reader, std::string_view payload, bool payload_cut,
+                        std::uint64_t max_stream_bytes) {
+  PlaneStream stream;
+  if (reader.remaining() < 2) {
+    if (payload_cut) return stream;
+    reader.fail("is truncated");
+  }
+  stream.top_plane = reader.read<std::int8_t>();
+  const auto flags = reader.read<std::uint8_t>();
+  if (stream.top_plane < -1 || stream.top_plane > 31 || flags > 1) reader.fail("has an invalid plane header");
+  std::uint64_t count = 0;
+  if (!read_varint(reader, count)) {
+    if (payload_cut) return stream;
+    reader.fail("is truncated");
+  }
+  if (count > static_cast<std::uint64_t>(stream.top_plane + 1)) reader.fail("holds more packets than planes");
+  std::vector<std::uint64_t> sizes(static_cast<std::size_t>(count));
+  for (std::uint64_t& size : sizes)
+    if (!read_varint(reader, size)) {
+      if (payload_cut) return stream;
+      reader.fail("is truncated");
+    }
+  stream.packets_total = sizes.size();
+  std::uint64_t end = 0;
+  for (std::uint64_t size : sizes) stream.packet_ends.push_back(end += std::min<std::uint64_t>(size, payload.size()));
+  stream.data_offset = payload.size() - reader.remaining();
+  std::string_view data = payload.substr(static_cast<std::size_t>(stream.data_offset));
+  std::uint64_t total = 0;
+  for (std::uint64_t size : sizes) total += std::min<std::uint64_t>(size, payload.size());
+  if (!payload_cut && total != data.size()) reader.fail("has an inconsistent packet table");
+  std::uint64_t offset = 0;
+  for (std::size_t p = 0; p < sizes.size(); ++p) {
+    const std::uint64_t available = std::min<std::uint64_t>(data.size(), max_stream_bytes);
+    if (offset >= available) break;
+    const std::uint64_t size = std::min(sizes[p], available - offset);
+    stream.packets.push_back(data.substr(static_cast<std::size_t>(offset), static_cast<std::size_t>(size)));
+    const bool cut_here = size < sizes[p] || (p + 1 == sizes.size() && (flags & 1));
+    offset += size;
+    if (cut_here) {
+      stream.last_cut = true;
+      break;
+    }
+  }
+  return stream;
+}
+
+void put_rate_table(std::string& out, const std::vector<IswRatePoint>& rows) {
+  std::string payload;
+  put_u32(payload, static_cast<std::uint32_t>(rows.size()));
+  for (const IswRatePoint& row : rows) {
+    put_u64(payload, row.stream_bytes);
+    put_f64(payload, row.error);
+  }
+  put_section(out, "RDTB", payload);
+}
+
+std::vector<IswRatePoint> read_rate_table(PayloadReader& reader) {
+  const auto rows = reader.read<std::uint32_t>();
+  if (rows > reader.remaining() / 16) reader.fail("has an impossible row count");
+  std::vector<IswRatePoint> table(rows);
+  for (IswRatePoint& row : table) {
+    row.stream_bytes = reader.read<std::uint64_t>();
+    row.error = reader.read<double>();
+    if (!(row.error >= 0) || !std::isfinite(row.error)) reader.fail("holds an invalid error");
+  }
+  return table;
+}
+
+}  // namespace isowave::detail

@@ -1,0 +1,89 @@
+#pragma once
+// Private: what the .isw 2.0 encoder and decoder share (docs/FORMAT.md,
+// version 2): the scaling of every entry to step units in its local frame,
+// the context class of every node, and the PLNS and RDTB payloads.
+#include <cstdint>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "isowave/codec/importance.h"
+#include "isowave/codec/isw_format.h"
+#include "isowave/core/vec3.h"
+#include "isowave/transform/hierarchy.h"
+#include "isw_sections.h"
+#include "local_frames.h"
+
+namespace isowave::detail {
+
+// QUAN of version 2. An entry of class c > 0 with world value d and frame
+// (n, t, b) is, in step units, (d.n, d.t / k, d.b / k) x weight_c / step; a
+// base control point is (p - p_frame) x weight_0 / step, p_frame its value
+// at the frame step (BPTS).
+struct V2Scales {
+  double step = 0;               // world units at weight 1, > 0
+  double frame_step = 0;         // BPTS step, world units, > 0
+  double tangential_factor = 1;  // k >= 1
+  std::vector<double> weights;   // per class, > 0
+
+  Vec3 to_steps(std::size_t i, int cls, const Vec3& value, const std::vector<Vec3>& frame_base,
+                const std::vector<Vec3>& normals) const {
+    if (cls == 0) return (value - frame_base[i]) * (weights[0] / step);
+    const Vec3 c = to_frame(frame_of(normals[i]), value) * (weights[static_cast<std::size_t>(cls)] / step);
+    return {c[0], c[1] / tangential_factor, c[2] / tangential_factor};
+  }
+  Vec3 from_steps(std::size_t i, int cls, const Vec3& u, const std::vector<Vec3>& frame_base,
+                  const std::vector<Vec3>& normals) const {
+    if (cls == 0) return frame_base[i] + u * (step / weights[0]);
+    const Vec3 c{u[0], u[1] * tangential_factor, u[2] * tangential_factor};
+    return from_frame(frame_of(normals[i]), c) * (step / weights[static_cast<std::size_t>(cls)]);
+  }
+};
+
+// Per entry, its coefficient class (the plane coder's context class).
+std::vector<std::uint8_t> node_classes(const CoefficientClasses& classes);
+
+// PLNS: i8 top plane, u8 flags (bit 0: the last packet is cut), LEB128
+// packet count and sizes, then the packets.
+enum class PlaneEnding { Complete, Cut };
+void put_planes(std::string& out, int top_plane, const std::vector<std::string_view>& packets, PlaneEnding last);
+inline void put_planes(std::string& out, int top_plane, const std::vector<std::string>& packets, PlaneEnding last) {
+  put_planes(out, top_plane, std::vector<std::string_view>(packets.begin(), packets.end()), last);
+}
+
+struct PlaneStream {
+  int top_plane = -1;
+  std::size_t packets_total = 0;        // as the table says
+  std::vector<std::uint64_t> packet_ends;  // cumulative sizes, as the table says
+  std::vector<std::string_view> packets;  // those present, the last maybe cut
+  bool last_cut = false;                // the last of `packets` is cut (by the encoder or the file's end)
+  std::uint64_t data_offset = 0;        // of the first packet in the payload
+};
+// Reads a PLNS payload that may itself be cut (`payload_cut`), keeping at
+// most `max_stream_bytes` bytes of packets. Error(Format) through `reader`
+// for impossible tables.
+PlaneStream read_planes(PayloadReader& reader, std::string_view payload, bool payload_cut,
+                        std::uint64_t max_stream_bytes);
+
+// RDTB: u32 rows, each u64 stream bytes and f64 D (world units).
+void put_rate_table(std::string& out, const std::vector<IswRatePoint>& rows);
+std::vector<IswRatePoint> read_rate_table(PayloadReader& reader);
+
+// The encoder (isw2_encoder.cpp): `weights` are the class weights.
+std::string encode_isw_v2(const SubdivisionHierarchy& hierarchy, const std::vector<Vec3>& coefficients,
+                          const IswMetadata& metadata, const IswEncodeOptions& options, std::vector<double> weights);
+
+// The decoder's PLNS (isw2_decoder.cpp): decodes at most `max_stream_bytes`
+// of the section's packets into result.coefficients (world units; base
+// control points included, and result.base.positions) and result.stream.
+// Error(Format) naming the section for a damaged complete packet.
+void decode_plane_stream(const Section& section, const SubdivisionHierarchy& hierarchy,
+                         const CoefficientClasses& layout, const V2Scales& scales, std::uint64_t max_stream_bytes,
+                         IswDecoded& result);
+
+// result.ranked: the non-zero wavelet coefficients by importance (class
+// weight times magnitude, ties by index), the first `keep` of them; the
+// others are zeroed in result.coefficients.
+void rank_and_keep(IswDecoded& result, const CoefficientClasses& layout, std::uint64_t keep);
+
+}  // namespace isowave::detail

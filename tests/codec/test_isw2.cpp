@@ -1,0 +1,222 @@
+// The .isw 2.0 file (embedded bit planes in local frames, issue #34): the
+// quantizer's bounds on every coefficient, at the whole stream and at every
+// prefix; error falling plane by plane; file cuts and stream limits that
+// agree; the encoder's size limit and rate table; `--percent` on top of the
+// stream; hostile packets and damaged sections.
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <random>
+
+#include <gtest/gtest.h>
+#include <zlib.h>
+
+#include "codec_test_data.h"
+#include "isowave/codec/importance.h"
+#include "isowave/codec/isw_format.h"
+#include "isowave/core/error.h"
+
+namespace isowave {
+namespace {
+
+IswMetadata sample_metadata() {
+  IswMetadata m;
+  m.values["source"] = "generated";
+  m.values["cell_size"] = "0.05";
+  return m;
+}
+
+struct Encoded {
+  test::CodedSurface surface;
+  IswEncodeOptions options;
+  std::string bytes;
+};
+
+Encoded encode_sample(PolygonMesh base, int levels, double step, double tangential_factor = 4) {
+  Encoded e{test::make_coded_surface(std::move(base), levels, 0.05, 9), {}, {}};
+  e.options.step = step;
+  e.options.tangential_factor = tangential_factor;
+  e.bytes = encode_isw(*e.surface.hierarchy, e.surface.coefficients, sample_metadata(), e.options);
+  return e;
+}
+
+// The largest error of a value of class c whose components are known to
+// within `steps` of its (normal) step: the tangential ones k times that,
+// base control points in world axes.
+double bound(const IswDecoded& d, int cls, double steps, double tangential_factor) {
+  const double step = steps * d.step / d.class_weights[static_cast<std::size_t>(cls)];
+  return (cls == 0 ? std::sqrt(3.0) : std::sqrt(1 + 2 * tangential_factor * tangential_factor)) * step * (1 + 1e-9);
+}
+
+// Sum of squared, weighted errors of the decoded values.
+double weighted_error(const IswDecoded& d, const std::vector<Vec3>& truth) {
+  double sum = 0;
+  const CoefficientClasses classes(*d.hierarchy);
+  for (std::size_t i = 0; i < truth.size(); ++i)
+    sum += squared_norm(d.coefficients[i] - truth[i]) * std::pow(d.class_weights[static_cast<std::size_t>(classes.of(i))], 2);
+  return sum;
+}
+
+TEST(IswFormat2, WholeStreamIsWithinTheDeadZoneQuantizersBound) {
+  for (const double k : {1.0, 4.0, 16.0}) {
+    const Encoded e = encode_sample(test::genus_slab(2), 3, 1e-3, k);
+    const IswDecoded d = decode_isw(e.bytes, "test.isw");
+    EXPECT_EQ(d.major_version, 2);
+    EXPECT_FALSE(d.truncated);
+    EXPECT_EQ(d.stream.planes_decoded, d.stream.planes);
+    const CoefficientClasses classes(*d.hierarchy);
+    for (std::size_t i = 0; i < d.coefficients.size(); ++i)
+      ASSERT_LE(norm(d.coefficients[i] - e.surface.coefficients[i]), bound(d, classes.of(i), 1, k)) << k << " " << i;
+    // The base mesh decoded is the base control points decoded.
+    for (std::size_t v = 0; v < d.base.vertex_count(); ++v) ASSERT_EQ(d.base.positions[v], d.coefficients[v]);
+  }
+}
+
+TEST(IswFormat2, EveryPrefixDecodesWithinTheBoundOfItsLastCompletePlane) {
+  const Encoded e = encode_sample(test::cube(), 2, 1e-3);
+  const IswDecoded full = decode_isw(e.bytes, "test.isw");
+  const CoefficientClasses classes(*full.hierarchy);
+  ASSERT_GT(full.stream.planes, 4);
+  for (std::uint64_t n = full.stream.offset; n <= e.bytes.size(); ++n) {
+    const IswDecoded d = decode_isw(e.bytes.substr(0, n), "cut.isw");
+    ASSERT_EQ(d.coefficients.size(), full.coefficients.size());
+    // Planes above the last complete one are known (all magnitudes are
+    // below 2^(top + 1)): each component within 2^low steps.
+    const int low = full.stream.top_plane + 1 - d.stream.planes_decoded;
+    for (std::size_t i = 0; i < d.coefficients.size(); ++i)
+      ASSERT_LE(norm(d.coefficients[i] - e.surface.coefficients[i]),
+                bound(d, classes.of(i), std::ldexp(1.0, low), e.options.tangential_factor))
+          << "prefix " << n << " value " << i;
+    // The same prefix of the stream alone decodes the same values.
+    IswDecodeOptions limit;
+    limit.max_stream_bytes = n > full.stream.offset ? n - full.stream.offset : 0;
+    if (n >= full.stream.offset + full.stream.bytes) continue;
+    const IswDecoded same = decode_isw(e.bytes, "limit.isw", limit);
+    ASSERT_EQ(same.coefficients, d.coefficients) << n;
+  }
+}
+
+TEST(IswFormat2, ErrorFallsAtEveryPlaneBoundary) {
+  const Encoded e = encode_sample(test::genus_slab(2), 3, 1e-4);
+  const IswDecoded full = decode_isw(e.bytes, "test.isw");
+  double previous = INFINITY;
+  for (std::uint64_t end : full.stream.packet_ends) {
+    IswDecodeOptions limit;
+    limit.max_stream_bytes = end;
+    const double error = weighted_error(decode_isw(e.bytes, "limit.isw", limit), e.surface.coefficients);
+    EXPECT_LT(error, previous) << end;
+    previous = error;
+  }
+}
+
+TEST(IswFormat2, SizeLimitCutsTheStreamAndRateTableChoosesThePrefix) {
+  const Encoded e = encode_sample(test::genus_slab(2), 3, 1e-4);
+  const IswDecoded full = decode_isw(e.bytes, "test.isw");
+  IswEncodeOptions options = e.options;
+  options.max_bytes = full.stream.offset + full.stream.bytes / 3;
+  const std::string cut = encode_isw(*e.surface.hierarchy, e.surface.coefficients, sample_metadata(), options);
+  EXPECT_LE(cut.size(), options.max_bytes);
+  EXPECT_GT(cut.size(), options.max_bytes - 16);
+  const IswDecoded d = decode_isw(cut, "cut.isw");
+  EXPECT_FALSE(d.truncated);  // cut by its encoder, not damaged
+  EXPECT_LT(d.stream.planes_decoded, full.stream.planes);
+  options.max_bytes = 100;
+  EXPECT_THROW(encode_isw(*e.surface.hierarchy, e.surface.coefficients, sample_metadata(), options), Error);
+
+  // A rate table: decode --max-error takes the first row within the error.
+  IswRewrite rewrite;
+  rewrite.rate_table = {{full.stream.packet_ends[2], 0.3}, {full.stream.packet_ends[4], 0.1}, {full.stream.bytes, 0.01}};
+  const std::string tabled = rewrite_isw(e.bytes, rewrite);
+  IswDecodeOptions within;
+  within.max_error = 0.2;
+  const IswDecoded chosen = decode_isw(tabled, "tabled.isw", within);
+  EXPECT_EQ(chosen.stream.rate_table.size(), 3u);
+  EXPECT_EQ(chosen.stream.decoded, full.stream.packet_ends[4]);
+  within.max_error = 0.001;  // no row reaches it: the whole stream
+  EXPECT_EQ(decode_isw(tabled, "tabled.isw", within).stream.decoded, full.stream.bytes);
+}
+
+TEST(IswFormat2, PercentKeepsTheMostImportantOfTheDecodedCoefficients) {
+  const Encoded e = encode_sample(test::genus_slab(2), 3, 1e-4);
+  const IswDecoded full = decode_isw(e.bytes, "test.isw");
+  IswDecodeOptions options;
+  options.max_percent = 10;
+  const IswDecoded d = decode_isw(e.bytes, "test.isw", options);
+  ASSERT_EQ(d.ranked.size(), coefficients_for_percent(*d.hierarchy, 10));
+  const CoefficientClasses classes(*d.hierarchy);
+  const auto importance = [&](std::size_t i) {
+    return norm(full.coefficients[i]) * d.class_weights[static_cast<std::size_t>(classes.of(i))];
+  };
+  double least_kept = INFINITY;
+  std::vector<std::uint8_t> kept(d.coefficients.size(), 0);
+  for (std::uint32_t i : d.ranked) {
+    kept[i] = 1;
+    least_kept = std::min(least_kept, importance(i));
+    ASSERT_EQ(d.coefficients[i], full.coefficients[i]);
+  }
+  for (std::size_t i = classes.base(); i < d.coefficients.size(); ++i)
+    if (!kept[i]) {
+      ASSERT_LE(importance(i), least_kept) << i;
+      ASSERT_EQ(d.coefficients[i], Vec3{}) << i;
+    }
+}
+
+TEST(IswFormat2, RandomPacketsOfAValidFileDecodeWithoutCrashing) {
+  const Encoded e = encode_sample(test::genus_slab(2), 3, 1e-4);
+  const IswDecoded full = decode_isw(e.bytes, "test.isw");
+  // PLNS is the section before END: rewrite its packets with noise and fix its CRC.
+  const IswSectionInfo& planes = full.sections[full.sections.size() - 2];
+  ASSERT_EQ(planes.tag, "PLNS");
+  std::mt19937 rng(5);
+  for (int trial = 0; trial < 20; ++trial) {
+    std::string bytes = e.bytes;
+    for (std::uint64_t k = full.stream.offset; k < full.stream.offset + full.stream.bytes; ++k)
+      bytes[k] = static_cast<char>(rng() & 0xFF);
+    const std::size_t payload = static_cast<std::size_t>(planes.offset) + 16;
+    const std::size_t size = static_cast<std::size_t>(planes.bytes) - 20;
+    const std::string tagged = "PLNS" + bytes.substr(payload, size);
+    const auto crc = static_cast<std::uint32_t>(
+        crc32(0, reinterpret_cast<const Bytef*>(tagged.data()), static_cast<uInt>(tagged.size())));
+    std::memcpy(&bytes[payload + size], &crc, 4);
+    const IswDecoded d = decode_isw(bytes, "noise.isw");
+    for (const Vec3& c : d.coefficients) ASSERT_TRUE(is_finite(c));
+  }
+}
+
+TEST(IswFormat2, DamagedSectionsAreFormatErrorsAndCutHeadersToo) {
+  const Encoded e = encode_sample(test::cube(), 2, 1e-3);
+  const IswDecoded full = decode_isw(e.bytes, "test.isw");
+  // Cut before the base control points are whole: an error; after them the
+  // base mesh alone decodes.
+  const IswSectionInfo& base_points = full.sections[3];
+  ASSERT_EQ(base_points.tag, "BPTS");
+  for (std::uint64_t n = 0; n < base_points.offset + base_points.bytes; n += 7)
+    EXPECT_THROW(decode_isw(e.bytes.substr(0, n), "cut.isw"), Error) << n;
+  std::mt19937 rng(3);
+  for (int trial = 0; trial < 200; ++trial) {
+    std::string bytes = e.bytes;
+    bytes[rng() % bytes.size()] ^= static_cast<char>(1 + rng() % 255);
+    try {
+      decode_isw(bytes, "damaged.isw");
+    } catch (const Error& error) {
+      EXPECT_TRUE(error.kind() == ErrorKind::Format || error.kind() == ErrorKind::Unsupported) << error.what();
+    }
+  }
+}
+
+TEST(IswFormat2, EncodingIsDeterministicAndRejectsBadOptions) {
+  const Encoded e = encode_sample(test::genus_slab(2), 3, 1e-3);
+  EXPECT_EQ(encode_isw(*e.surface.hierarchy, e.surface.coefficients, sample_metadata(), e.options), e.bytes);
+  IswEncodeOptions bad = e.options;
+  bad.tangential_factor = 0.5;
+  EXPECT_THROW(encode_isw(*e.surface.hierarchy, e.surface.coefficients, sample_metadata(), bad), Error);
+  bad = e.options;
+  bad.major_version = 3;
+  EXPECT_THROW(encode_isw(*e.surface.hierarchy, e.surface.coefficients, sample_metadata(), bad), Error);
+  std::vector<Vec3> infinite = e.surface.coefficients;
+  infinite.back().x = INFINITY;
+  EXPECT_THROW(encode_isw(*e.surface.hierarchy, infinite, sample_metadata(), e.options), Error);
+}
+
+}  // namespace
+}  // namespace isowave
