@@ -70,7 +70,8 @@ BenchOptions parse_options(int argc, char** argv, const char* program, BenchOpti
         const std::string fit = next();
         if (fit == "shrink-wrap") o.fits = {FitMethod::ShrinkWrap};
         else if (fit == "parametrization") o.fits = {FitMethod::Parametrization};
-        else if (fit != "both") usage("--fit expects shrink-wrap, parametrization or both");
+        else if (fit == "both") o.fits = {FitMethod::ShrinkWrap, FitMethod::Parametrization};
+        else usage("--fit expects shrink-wrap, parametrization or both");
       } else if (arg.rfind("--", 0) == 0 || !o.input.empty()) {
         usage("unexpected argument " + arg);
       } else {
