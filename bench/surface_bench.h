@@ -1,7 +1,7 @@
 #pragma once
-// The side bench_surface_error and bench_fit_rate_distortion share (issue
-// #33): their options, each fit's whole `convert` in a forked child, and the
-// surfaces D is measured between: the marching-cubes mesh of the field and
+// The side bench_surface_error, bench_fit_rate_distortion and
+// bench_rate_distortion share (issues #33, #34): their options, each fit's
+// whole `convert` in a forked child, Draco as a subprocess, and the surfaces D is measured between: the marching-cubes mesh of the field and
 // the reference, the marching-cubes mesh of a 2x trilinear upsample of the
 // field (2n - 1 samples per axis, spacing halved, same origin; the same
 // extractor and isovalue), closer to the true isosurface than any coder's
@@ -39,7 +39,7 @@ struct BenchOptions {
   std::vector<double> summary_percents{100, 20, 10, 5};
 };
 
-// The options both programs take (VOLUME --iso V [--levels N]
+// The options the programs take (VOLUME --iso V [--levels N]
 // [--min-component-vertices N] [--smooth S] [--topology-tolerance T] [--fit ...]);
 // anything else prints the usage under `program`'s name and exits with 2.
 // `defaults` holds what the program does without an option (e.g. its fits);
