@@ -1,8 +1,9 @@
 #pragma once
 // The side bench_surface_error, bench_fit_rate_distortion and
 // bench_rate_distortion share (issues #33, #34): their options, each fit's
-// whole `convert` in a forked child, Draco as a subprocess, and the surfaces D is measured between: the marching-cubes mesh of the field and
-// the reference, the marching-cubes mesh of a 2x trilinear upsample of the
+// whole `convert` in a forked child, Draco as a subprocess, and the surfaces
+// D is measured between: the marching-cubes mesh of the field and the
+// reference, the marching-cubes mesh of a 2x trilinear upsample of the
 // field (2n - 1 samples per axis, spacing halved, same origin; the same
 // extractor and isovalue), closer to the true isosurface than any coder's
 // output. With --smooth the field is the pre-filtered one, as for the fit.
