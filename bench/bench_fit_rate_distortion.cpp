@@ -19,10 +19,6 @@
 //
 // usage: bench_fit_rate_distortion VOLUME --iso V [--levels N] [--min-component-vertices N] [--smooth S] [--topology-tolerance T]
 //                                  [--fit shrink-wrap|parametrization|both]
-#include <stdlib.h>
-#include <sys/stat.h>
-#include <unistd.h>
-
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -30,13 +26,13 @@
 #include <cstdlib>
 #include <exception>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "isowave/codec/isw_format.h"
 #include "isowave/codec/statistics.h"
-#include "isowave/core/mesh_io.h"
 #include "surface_bench.h"
 
 using namespace isowave;
@@ -127,32 +123,14 @@ Curve fit_curve(FitMethod fit, const FitOutcome& outcome, const Surfaces& s) {
   return curve;
 }
 
-bool on_path(const char* tool) {
-  return std::system(("command -v " + std::string(tool) + " >/dev/null 2>&1").c_str()) == 0;
-}
-
 // Draco's curve: the marching-cubes mesh encoded at each quantization,
 // decoded, and measured like the fits'.
 Curve draco_curve(const Surfaces& s) {
   Curve curve{"draco", {}};
-  char directory[] = "/tmp/bench_fit_rate_distortion_XXXXXX";
-  if (!mkdtemp(directory)) throw std::runtime_error("mkdtemp() failed");
-  const std::string dir = directory, surface = dir + "/surface.ply", coded = dir + "/q.drc", decoded = dir + "/q.ply";
-  write_mesh(surface, s.marching_cubes);
-  for (const int qp : kDracoQuantization) {
-    const std::string encode = "draco_encoder -i '" + surface + "' -o '" + coded + "' -qp " + std::to_string(qp) +
-                               " -cl " + std::to_string(kDracoLevel) + " >/dev/null";
-    const std::string decode = "draco_decoder -i '" + coded + "' -o '" + decoded + "' >/dev/null";
-    if (std::system(encode.c_str()) != 0 || std::system(decode.c_str()) != 0) {
-      std::printf("(draco at -qp %d failed)\n", qp);
-      continue;
-    }
-    struct stat info {};
-    stat(coded.c_str(), &info);
-    add_point(curve, "-qp " + std::to_string(qp), std::uint64_t(info.st_size), read_mesh(decoded), s);
-  }
-  for (const std::string& file : {surface, coded, decoded}) unlink(file.c_str());
-  rmdir(directory);
+  const DracoCoder draco(s.marching_cubes);
+  for (const int qp : kDracoQuantization)
+    if (const std::optional<DracoCoded> coded = draco.code(qp, kDracoLevel))
+      add_point(curve, "-qp " + std::to_string(qp), coded->bytes, coded->decoded, s);
   return curve;
 }
 
@@ -236,7 +214,7 @@ int main(int argc, char** argv) {
         curves.push_back(fit_curve(o.fits[i], runs.outcomes[i], s));
         std::printf("\n");
       }
-    if (on_path("draco_encoder") && on_path("draco_decoder")) {
+    if (DracoCoder::available()) {
       std::printf("draco on the marching-cubes mesh (-cl %d):\n\n", kDracoLevel);
       print_table_head();
       curves.push_back(draco_curve(s));

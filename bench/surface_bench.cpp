@@ -1,6 +1,9 @@
 #include "surface_bench.h"
 
+#include <fcntl.h>
+#include <stdlib.h>
 #include <sys/resource.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -16,6 +19,7 @@
 #include <tbb/parallel_for.h>
 
 #include "isowave/core/error.h"
+#include "isowave/core/mesh_io.h"
 #include "isowave/core/mesh_topology.h"
 #include "isowave/fit/fold_repair.h"
 #include "isowave/fit/wrap_level_mesh.h"
@@ -29,19 +33,20 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
 
-[[noreturn]] void exit_with_usage(const char* program, const std::string& problem) {
+[[noreturn]] void exit_with_usage(const char* program, const std::string& problem, const char* extra_usage) {
   std::fprintf(stderr,
                "%s: %s\nusage: %s VOLUME --iso V [--levels N] [--min-component-vertices N] [--smooth S] "
-               "[--topology-tolerance T] [--fit shrink-wrap|parametrization|both]\n",
-               program, problem.c_str(), program);
+               "[--topology-tolerance T] [--fit shrink-wrap|parametrization|both]%s\n",
+               program, problem.c_str(), program, extra_usage);
   std::exit(2);
 }
 
 }  // namespace
 
-BenchOptions parse_options(int argc, char** argv, const char* program) {
-  const auto usage = [program](const std::string& problem) { exit_with_usage(program, problem); };
-  BenchOptions o;
+BenchOptions parse_options(int argc, char** argv, const char* program, BenchOptions defaults,
+                           const char* extra_usage) {
+  const auto usage = [&](const std::string& problem) { exit_with_usage(program, problem, extra_usage); };
+  BenchOptions o = std::move(defaults);
   bool has_iso = false;
   for (int a = 1; a < argc; ++a) {
     const std::string arg = argv[a];
@@ -65,7 +70,8 @@ BenchOptions parse_options(int argc, char** argv, const char* program) {
         const std::string fit = next();
         if (fit == "shrink-wrap") o.fits = {FitMethod::ShrinkWrap};
         else if (fit == "parametrization") o.fits = {FitMethod::Parametrization};
-        else if (fit != "both") usage("--fit expects shrink-wrap, parametrization or both");
+        else if (fit == "both") o.fits = {FitMethod::ShrinkWrap, FitMethod::Parametrization};
+        else usage("--fit expects shrink-wrap, parametrization or both");
       } else if (arg.rfind("--", 0) == 0 || !o.input.empty()) {
         usage("unexpected argument " + arg);
       } else {
@@ -366,6 +372,69 @@ bool print_fit(FitMethod fit, const FitOutcome& outcome, const Surfaces& s, doub
                 kept / kept_marching_cubes_d);
   }
   return true;
+}
+
+// ---------------------------------------------------------------------------
+// Draco.
+
+namespace {
+
+// Runs `command` (found on PATH, output discarded) and waits for it; its
+// wall-clock seconds, or a negative number if it could not run or failed.
+double run_quietly(const std::vector<std::string>& command) {
+  std::vector<char*> args;
+  for (const std::string& arg : command) args.push_back(const_cast<char*>(arg.c_str()));
+  args.push_back(nullptr);
+  std::fflush(stdout);
+  const auto start = Clock::now();
+  const pid_t child = fork();
+  if (child < 0) return -1;
+  if (child == 0) {
+    const int null = open("/dev/null", O_WRONLY);
+    dup2(null, STDOUT_FILENO);
+    dup2(null, STDERR_FILENO);
+    execvp(args[0], args.data());
+    _exit(127);
+  }
+  int status = 0;
+  if (waitpid(child, &status, 0) != child || !WIFEXITED(status) || WEXITSTATUS(status) != 0) return -1;
+  return seconds_since(start);
+}
+
+}  // namespace
+
+bool DracoCoder::available() {
+  return std::system("command -v draco_encoder >/dev/null 2>&1 && command -v draco_decoder >/dev/null 2>&1") == 0;
+}
+
+DracoCoder::DracoCoder(const PolygonMesh& mesh) {
+  char directory[] = "/tmp/isowave_bench_draco_XXXXXX";
+  if (!mkdtemp(directory)) throw std::runtime_error("mkdtemp() failed");
+  directory_ = directory;
+  write_mesh(directory_ + "/surface.ply", mesh);
+}
+
+DracoCoder::~DracoCoder() {
+  for (const char* file : {"/surface.ply", "/coded.drc", "/decoded.ply"}) unlink((directory_ + file).c_str());
+  rmdir(directory_.c_str());
+}
+
+std::optional<DracoCoded> DracoCoder::code(int quantization_bits, int level) const {
+  const std::string surface = directory_ + "/surface.ply", coded = directory_ + "/coded.drc",
+                    decoded = directory_ + "/decoded.ply";
+  DracoCoded result;
+  result.encode_seconds = run_quietly({"draco_encoder", "-i", surface, "-o", coded, "-qp",
+                                       std::to_string(quantization_bits), "-cl", std::to_string(level)});
+  result.decode_seconds =
+      result.encode_seconds < 0 ? -1 : run_quietly({"draco_decoder", "-i", coded, "-o", decoded});
+  struct stat info {};
+  if (result.decode_seconds < 0 || stat(coded.c_str(), &info) != 0) {
+    std::printf("(draco at -qp %d -cl %d failed)\n", quantization_bits, level);
+    return std::nullopt;
+  }
+  result.bytes = std::uint64_t(info.st_size);
+  result.decoded = read_mesh(decoded);
+  return result;
 }
 
 }  // namespace isowave::bench

@@ -1,8 +1,9 @@
 #pragma once
-// The side bench_surface_error and bench_fit_rate_distortion share (issue
-// #33): their options, each fit's whole `convert` in a forked child, and the
-// surfaces D is measured between: the marching-cubes mesh of the field and
-// the reference, the marching-cubes mesh of a 2x trilinear upsample of the
+// The side bench_surface_error, bench_fit_rate_distortion and
+// bench_rate_distortion share (issues #33, #34): their options, each fit's
+// whole `convert` in a forked child, Draco as a subprocess, and the surfaces
+// D is measured between: the marching-cubes mesh of the field and the
+// reference, the marching-cubes mesh of a 2x trilinear upsample of the
 // field (2n - 1 samples per axis, spacing halved, same origin; the same
 // extractor and isovalue), closer to the true isosurface than any coder's
 // output. With --smooth the field is the pre-filtered one, as for the fit.
@@ -18,6 +19,7 @@
 // D is surface_error() (core/surface_error.h): area-uniform samples on both
 // surfaces, RMS distance each way, D the larger; printed in % of a cell.
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -38,10 +40,14 @@ struct BenchOptions {
   std::vector<double> summary_percents{100, 20, 10, 5};
 };
 
-// The options both programs take (VOLUME --iso V [--levels N]
+// The options the programs take (VOLUME --iso V [--levels N]
 // [--min-component-vertices N] [--smooth S] [--topology-tolerance T] [--fit ...]);
 // anything else prints the usage under `program`'s name and exits with 2.
-BenchOptions parse_options(int argc, char** argv, const char* program);
+// `defaults` holds what the program does without an option (e.g. its fits);
+// `extra_usage` ends the usage line (the program's own options, which it
+// takes out of argv before).
+BenchOptions parse_options(int argc, char** argv, const char* program, BenchOptions defaults = {},
+                           const char* extra_usage = "");
 
 const char* fit_name(FitMethod fit);
 
@@ -100,5 +106,32 @@ SurfaceError print_error(const char* what, const PolygonMesh& mesh, const Polygo
 // fit did not run (the line says why).
 bool print_fit(FitMethod fit, const FitOutcome& outcome, const Surfaces& s, double marching_cubes_d,
                double kept_marching_cubes_d = 0);
+
+// Draco, the issue's peer, on one mesh: draco_encoder and draco_decoder run
+// as subprocesses (output discarded) on the mesh written as PLY.
+struct DracoCoded {
+  std::uint64_t bytes = 0;  // the .drc file
+  PolygonMesh decoded;      // what draco_decoder wrote
+  double encode_seconds = 0, decode_seconds = 0;  // wall clock of each subprocess
+};
+
+class DracoCoder {
+ public:
+  // Both tools on PATH.
+  static bool available();
+  // Writes `mesh` as PLY into a fresh temporary directory, removed by the
+  // destructor. Throws std::runtime_error if the directory cannot be made.
+  explicit DracoCoder(const PolygonMesh& mesh);
+  ~DracoCoder();
+  DracoCoder(const DracoCoder&) = delete;
+  DracoCoder& operator=(const DracoCoder&) = delete;
+
+  // Encodes with `-qp quantization_bits -cl level` and decodes; nothing when
+  // either tool fails (a line says so).
+  std::optional<DracoCoded> code(int quantization_bits, int level) const;
+
+ private:
+  std::string directory_;
+};
 
 }  // namespace isowave::bench
