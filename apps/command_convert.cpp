@@ -139,7 +139,6 @@ cli::CommandSpec convert_spec() {
       {"no-flips", false, "base mesh by the paper's collapse rules only (no valence-lowering flips)", ""},
       {"no-coverage-pull", false, "fit without pulling the fine levels toward isosurface parts they leave out", ""},
       {"allow-folded", false, "write the file even when most of the fit's faces fold (unusable)", ""},
-      {"verify", false, "decode each encoded file once more before writing it and check it gives exactly the coded coefficients", ""},
       {"step", true, "the step of the stream's last bit plane in cells (default 0.01): the finest it goes", "CELLS"},
       {"output", true, "output file (one input and one isovalue)", "OUT.isw"},
       {"out-dir", true, "output directory: NAME.isw, or NAME_isoV.isw with several isovalues", "DIR"},
@@ -202,7 +201,6 @@ ConvertOptions convert_options_from(const cli::Arguments& args) {
   options.step_cells = args.get_double("step", options.step_cells);
   if (!(options.step_cells > 0)) throw Error(ErrorKind::InvalidArgument, "--step must be positive");
   options.folded_fit = args.has("allow-folded") ? FoldedFit::Keep : FoldedFit::Refuse;
-  options.file_check = args.has("verify") ? FileCheck::DecodeAgain : FileCheck::None;
   return options;
 }
 

@@ -70,15 +70,9 @@ int decode(const Args& raw) {
   }
   const std::string& input = args.positional()[0];
   if (args.has("max-error")) {
-    const double cells = args.get_double("max-error", 0);
-    if (!(cells > 0) || !std::isfinite(cells)) throw Error(ErrorKind::InvalidArgument, "--max-error must be a positive number of cells");
-    IswDecodeOptions headers;
-    headers.headers_only = true;
-    const IswDecoded file = read_isw(input, headers);
-    const double cell = file.metadata.number("cell_size", 0);
-    if (file.major_version < 2 || !(cell > 0))
-      throw Error(ErrorKind::InvalidArgument, input + ": --max-error needs a version 2 file that records its errors and cell size");
-    options.max_error = cells * cell;
+    options.max_error_cells = args.get_double("max-error", 0);
+    if (!(options.max_error_cells > 0) || !std::isfinite(options.max_error_cells))
+      throw Error(ErrorKind::InvalidArgument, "--max-error must be a positive number of cells");
   }
   IswDecoded decoded = read_isw(input, options);
   if (args.has("max-error") && decoded.stream.rate_table.empty())

@@ -82,12 +82,17 @@ PolygonMesh finest_mesh(IswDecoded& decoded) {
   return decoded.hierarchy->control_mesh(decoded.levels, take_reconstruction(decoded, decoded.ranked.size()));
 }
 
-// The prefix byte counts: the first coefficient section's offset, every
-// chunk's end, kLogPrefixes counts log-spaced from the first to the whole
-// file, and the whole file; ascending, distinct.
+// The prefix byte counts: where the coefficients start (version 2: the
+// first packet byte; 1: the first chunk), every plane's (chunk's) end,
+// kLogPrefixes counts log-spaced from the first to the whole file, and the
+// whole file; ascending, distinct.
 std::vector<std::uint64_t> prefix_sizes(const IswDecoded& full, std::uint64_t size) {
   std::set<std::uint64_t> sizes{size};
   std::uint64_t first = size;
+  if (full.major_version >= 2) {
+    first = full.stream.offset;
+    for (const std::uint64_t end : full.stream.packet_ends) sizes.insert(first + end);
+  }
   for (const IswSectionInfo& section : full.sections)
     if (section.tag == "CHNK") {
       first = std::min(first, section.offset);
@@ -110,7 +115,8 @@ Curve isowave_curve(const std::string& name, const std::string& file, const Refe
       IswDecoded decoded = decode_isw(file.substr(0, size), name, options);
       const std::string label = size == file.size() ? "whole file"
                                                     : "prefix, " + std::to_string(decoded.chunks_decoded) + "/" +
-                                                          std::to_string(decoded.chunks_total) + " chunks";
+                                                          std::to_string(decoded.chunks_total) +
+                                                          (decoded.major_version >= 2 ? " planes" : " chunks");
       curve.points.push_back(measure(label, size, finest_mesh(decoded), r));
     } catch (const std::exception& e) {
       ++failures;

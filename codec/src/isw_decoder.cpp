@@ -334,10 +334,13 @@ void await_hierarchy(DecodeState& state) {
 // RDTB row that reaches max_error).
 std::uint64_t stream_limit(const DecodeState& state) {
   std::uint64_t limit = state.options.max_stream_bytes;
-  if (state.options.max_error > 0) {
+  if (state.options.max_error_cells > 0) {
+    const double cell = state.result.metadata.number("cell_size", 0);
+    if (!(cell > 0) || !std::isfinite(1 / cell))
+      throw Error(ErrorKind::InvalidArgument, state.name + ": a maximum error needs the cell size, which the file does not record");
     const std::vector<IswRatePoint>& table = state.result.stream.rate_table;
     for (const IswRatePoint& row : table)
-      if (row.error <= state.options.max_error) {
+      if (row.error <= state.options.max_error_cells * cell) {
         limit = std::min(limit, row.stream_bytes);
         break;
       }
@@ -488,6 +491,8 @@ IswDecoded decode_isw(const std::string& bytes, const std::string& name, const I
     throw;
   }
   await_hierarchy(state);
+  if (state.major == 1 && options.max_error_cells > 0)
+    throw Error(ErrorKind::InvalidArgument, name + ": a maximum error needs a version 2 file, which records its errors");
   if (state.major == 1) {
     note_truncation(state, sections.truncated());
     dequantize_kept(state);

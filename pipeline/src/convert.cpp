@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
 #include <cstdint>
 #include <future>
 #include <iomanip>
@@ -445,6 +446,8 @@ Coded analyze_and_encode(const std::shared_ptr<const SubdivisionHierarchy>& hier
   IswEncodeOptions encode_options;
   encode_options.step = options.step_cells * result.cell_size;
   encode_options.frame_step = kFrameStepCells * result.cell_size;
+  if (const char* k = std::getenv("ISOWAVE_K")) encode_options.tangential_factor = std::atof(k);  // EXPERIMENT
+  if (const char* f = std::getenv("ISOWAVE_FRAME")) encode_options.frame_step = std::atof(f) * result.cell_size;  // EXPERIMENT
   const std::string whole = encode_isw(*hierarchy, coefficients, metadata, encode_options);
   std::vector<Vec3>().swap(coefficients);
   const detail::RatePlan plan =

@@ -21,11 +21,6 @@ namespace fs = std::filesystem;
 
 bool is_path(const py::object& value) { return py::isinstance<py::str>(value) || py::hasattr(value, "__fspath__"); }
 
-[[noreturn]] void not_implemented(const std::string& message) {
-  PyErr_SetString(PyExc_NotImplementedError, message.c_str());
-  throw py::error_already_set();
-}
-
 // The volume convert() works on: a file read with the reader's keywords, or
 // a field with spacing, origin and source (its name in the file's metadata).
 struct ConvertInput {
@@ -155,12 +150,8 @@ py::tuple decode(const fs::path& file, const py::object& percent, const py::obje
                  const py::object& max_error, const py::object& bytes, const py::object& level, bool limit,
                  bool triangulate) {
   const std::string path = file.string();
-  if (!max_error.is_none())
-    not_implemented("decode(max_error=...) is not supported: the .isw decoder stops at a percentage or a "
-                    "coefficient count (stats(path) lists the error at each percentage)");
-  if (!bytes.is_none())
-    not_implemented("decode(bytes=...) is not supported: the .isw decoder stops at a percentage or a coefficient "
-                    "count (stats(path) lists the bytes each percentage needs)");
+  if (!max_error.is_none() && !bytes.is_none())
+    throw Error(ErrorKind::InvalidArgument, "give at most one of max_error and bytes");
   if (!percent.is_none() && !coefficients.is_none())
     throw Error(ErrorKind::InvalidArgument, "give at most one of percent and coefficients");
   IswDecodeOptions options;
@@ -170,6 +161,12 @@ py::tuple decode(const fs::path& file, const py::object& percent, const py::obje
       throw Error(ErrorKind::InvalidArgument, "percent must be in 0..100");
   }
   if (!coefficients.is_none()) options.max_coefficients = coefficients.cast<std::uint64_t>();
+  if (!bytes.is_none()) options.max_file_bytes = bytes.cast<std::uint64_t>();
+  if (!max_error.is_none()) {
+    options.max_error_cells = max_error.cast<double>();
+    if (!(options.max_error_cells > 0) || !std::isfinite(options.max_error_cells))
+      throw Error(ErrorKind::InvalidArgument, "max_error must be a positive number of cells");
+  }
   const int requested_level = level.is_none() ? -1 : level.cast<int>();
   PolygonMesh mesh;
   std::string truncation;

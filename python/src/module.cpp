@@ -41,8 +41,8 @@ constexpr const char* kConvertDoc = R"(convert(field_or_path, iso, path, **optio
 Converts the isosurface at iso of a volume (a path or builtin: name as read_volume takes, or a 3-D
 array indexed [z, y, x], copied as extract() copies it) into the .isw file `path`, as `isowave
 convert -o path`. Options are the CLI's with '_' for '-': levels=1..6|'auto', fit='shrink-wrap'|
-'parametrization', max_error (cells), base_vertices, base_ratio, step (cells), smooth,
-min_component_vertices, flip, verify, allow_folded, force (replace an existing file); for a path
+'parametrization', max_error (cells), size (bytes), bits_per_vertex, base_vertices, base_ratio,
+step (cells), smooth, min_component_vertices, flip, allow_folded, force (replace an existing file); for a path
 the reader options of read_volume; for an array spacing, origin and source (its name in the
 file's metadata, default 'numpy array'). Returns the result `isowave convert --json` prints for it
 (bytes, vertex counts, levels, seconds per stage, fit quality, the rate-distortion rows with D, the
@@ -55,9 +55,9 @@ wavelet coefficients, at most one of percent (0..100 of full resolution, counted
 the default is 100) or coefficients (a count besides the base mesh). level: the control mesh of this
 level (default the finest; 0 is the base mesh); limit=True moves the vertices to the limit surface;
 triangulate=True splits quads. vertices (n, 3) float64 and faces (m, k) uint32 (k = 4 above level
-0) own the decoder's buffers (no copy). max_error and bytes raise NotImplementedError: the decoder
-stops at a percentage or a coefficient count (stats() lists error and bytes per percentage). A file
-cut inside its coefficients decodes what it holds, with a UserWarning.)";
+0) own the decoder's buffers (no copy). bytes reads only the file's first bytes (any prefix of a
+version 2 stream decodes); max_error (cells) reads the shortest prefix whose error the file records
+within it. A file cut inside its coefficients decodes what it holds, with a UserWarning.)";
 
 constexpr const char* kStatsDoc = R"(stats(path, percents=(100, 20, 10, 5)) -> list of dict
 

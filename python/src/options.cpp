@@ -68,7 +68,10 @@ ConvertOptions take_convert_options(py::dict& kwargs) {
   if (fit == "parametrization") options.fit = FitMethod::Parametrization;
   else if (fit != "shrink-wrap")
     throw Error(ErrorKind::InvalidArgument, "fit must be 'shrink-wrap' or 'parametrization', not '" + fit + "'");
-  options.max_error_cells = take_as<double>(kwargs, "max_error", 0.0);
+  options.rate.max_error_cells = take_as<double>(kwargs, "max_error", 0.0);
+  options.max_error_cells = kLevelShareOfMaxError * options.rate.max_error_cells;
+  options.rate.max_bytes = take_as<std::uint64_t>(kwargs, "size", 0);
+  options.rate.bits_per_vertex = take_as<double>(kwargs, "bits_per_vertex", 0.0);
   const py::object base_vertices = take(kwargs, "base_vertices");
   const py::object base_ratio = take(kwargs, "base_ratio");
   if (!base_vertices.is_none() && !base_ratio.is_none())
@@ -85,7 +88,6 @@ ConvertOptions take_convert_options(py::dict& kwargs) {
   extract.smooth_sigma = take_as<double>(kwargs, "smooth", 0.0);
   extract.min_component_vertices = take_as<std::size_t>(kwargs, "min_component_vertices", 0);
   extract.flip = take_as<bool>(kwargs, "flip", false);
-  options.file_check = take_as<bool>(kwargs, "verify", false) ? FileCheck::DecodeAgain : FileCheck::None;
   options.folded_fit = take_as<bool>(kwargs, "allow_folded", false) ? FoldedFit::Keep : FoldedFit::Refuse;
   return options;
 }

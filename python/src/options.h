@@ -20,7 +20,7 @@ namespace py = pybind11;
 VolumeReadOptions take_read_options(py::dict& kwargs);
 
 // The same for convert's options: levels, fit, max_error, base_vertices,
-// base_ratio, step, smooth, min_component_vertices, flip, verify,
+// base_ratio, step, smooth, min_component_vertices, flip, size, bits_per_vertex,
 // allow_folded.
 ConvertOptions take_convert_options(py::dict& kwargs);
 

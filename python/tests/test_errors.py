@@ -42,12 +42,22 @@ def test_corrupt_file_raises_a_format_error(sphere_isw, tmp_path):
     assert str(corrupt) in str(caught.value)
 
 
-def test_unsupported_decode_limits_raise_not_implemented(sphere_isw):
+def test_decode_limits_by_bytes_and_error(sphere_isw):
     path, _ = sphere_isw
-    with pytest.raises(NotImplementedError, match="max_error"):
-        isowave.decode(path, max_error=0.01)
-    with pytest.raises(NotImplementedError, match="bytes"):
-        isowave.decode(path, bytes=4000)
+    size = path.stat().st_size
+    whole, _ = isowave.decode(path)
+    # A prefix decodes to a surface as large as the whole one; the whole file's bytes give the whole one.
+    part, _ = isowave.decode(path, bytes=size * 3 // 4)
+    assert part.shape == whole.shape
+    assert (isowave.decode(path, bytes=size)[0] == whole).all()
+    # An error below every recorded one reads the whole stream; a huge one the shortest prefix.
+    assert (isowave.decode(path, max_error=1e-9)[0] == whole).all()
+    coarse, _ = isowave.decode(path, max_error=1e9)
+    assert coarse.shape == whole.shape
+    with pytest.raises(isowave.Error, match="at most one of max_error and bytes"):
+        isowave.decode(path, bytes=4000, max_error=0.1)
+    with pytest.raises(isowave.Error, match="max_error must be a positive"):
+        isowave.decode(path, max_error=-1)
 
 
 def test_bad_arguments(sphere_isw, tmp_path):

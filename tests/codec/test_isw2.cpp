@@ -128,11 +128,11 @@ TEST(IswFormat2, SizeLimitCutsTheStreamAndRateTableChoosesThePrefix) {
   rewrite.rate_table = {{full.stream.packet_ends[2], 0.3}, {full.stream.packet_ends[4], 0.1}, {full.stream.bytes, 0.01}};
   const std::string tabled = rewrite_isw(e.bytes, rewrite);
   IswDecodeOptions within;
-  within.max_error = 0.2;
+  within.max_error_cells = 0.2 / 0.05;  // sample_metadata()'s cell
   const IswDecoded chosen = decode_isw(tabled, "tabled.isw", within);
   EXPECT_EQ(chosen.stream.rate_table.size(), 3u);
   EXPECT_EQ(chosen.stream.decoded, full.stream.packet_ends[4]);
-  within.max_error = 0.001;  // no row reaches it: the whole stream
+  within.max_error_cells = 0.001 / 0.05;  // no row reaches it: the whole stream
   EXPECT_EQ(decode_isw(tabled, "tabled.isw", within).stream.decoded, full.stream.bytes);
 }
 

@@ -197,10 +197,12 @@ struct IswDecodeOptions {
   // does (see coefficients_for_percent), in [0, 100]; the smaller limit applies.
   double max_percent = 100;
   // Version 2: decode at most this many bytes of the plane stream, or the
-  // prefix the file's RDTB gives for D <= max_error (world units, > 0;
-  // the whole stream when no row reaches it or there is no RDTB); the smaller applies.
+  // prefix the file's RDTB gives for D <= max_error_cells (cells of the
+  // file's cell_size; > 0; the whole stream when no row reaches it or there
+  // is no RDTB; Error(InvalidArgument) for a file without a cell size or of
+  // version 1); the smaller applies.
   std::uint64_t max_stream_bytes = UINT64_MAX;
-  double max_error = 0;
+  double max_error_cells = 0;
   // Decode only the first max_file_bytes bytes of the file (a prefix; for
   // version 2 any prefix past BPTS decodes). Not reported as truncated.
   std::uint64_t max_file_bytes = UINT64_MAX;

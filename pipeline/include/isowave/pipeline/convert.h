@@ -53,16 +53,6 @@ enum class FoldedFit {
   Keep,    // code it anyway (the warning stays)
 };
 
-// Whether convert_volume() decodes its own file once more.
-enum class FileCheck {
-  None,
-  // Decode the encoded bytes again and require exactly the coded
-  // coefficients in the coded order (a self-check; the round-trip tests
-  // check the coder; serial, linear in the file's size). The summary never
-  // needs it: it is made from what the encoder stored.
-  DecodeAgain,
-};
-
 // How the fine control points are fitted to the isosurface.
 enum class FitMethod {
   ShrinkWrap,       // the paper's shrink-wrap (Sec. 4.2; fit/shrink_wrap.h)
@@ -115,7 +105,6 @@ struct ConvertOptions {
   // Percentages for the error summary (the base-mesh row is added).
   std::vector<double> summary_percents{100, 20, 10, 5};
   FoldedFit folded_fit = FoldedFit::Refuse;
-  FileCheck file_check = FileCheck::None;
   // Keep the extracted triangle mesh in the result (for comparisons).
   bool keep_extracted_mesh = false;
 };
