@@ -12,6 +12,9 @@ namespace isowave::detail {
 namespace {
 
 constexpr std::uint32_t kNone = ~std::uint32_t{0};
+// Far above any base mesh's face or hole, and small enough that corner
+// counts stay in 32 bits.
+constexpr std::uint64_t kMaxFaceSize = std::uint64_t{1} << 28;
 
 // ------------------------------------------------------------ the border machine
 
@@ -110,13 +113,15 @@ class Border {
       if (!consume(last)) return "a face wraps around its border loop";
       forward_.push_back(slots_[slots_[last].next].vertex);
     }
+    std::uint32_t corners = 2 + shape.back + shape.forward;
+    for (const MiddleRun& run : shape.middle) corners += 1 + run.chain;
+    if (corners != shape.size) return "a face of another size than stated";
     if (const char* problem = consume_middle(shape)) return problem;
     const std::uint32_t before = slots_[first].prev, after = slots_[last].next;
     if (slots_[before].consumed_by == operation_ || slots_[after].consumed_by == operation_)
       return "a face consumes its whole border loop and has more corners";
     link_path(shape, slots_[first].vertex, before, after, face);
     face.insert(face.end(), forward_.rbegin(), forward_.rend());
-    if (face.size() != shape.size) return "a face of another size than stated";
     finish(face);
     gate_ = after;
     return nullptr;
@@ -232,6 +237,11 @@ class Border {
 
 // ------------------------------------------------------------ symbols
 
+// Split slots this close to the gate along the border are coded by their
+// distance (the decoder walks at most this far per split).
+constexpr int kNearBits = 4;
+constexpr std::uint32_t kNearSlots = 1u << kNearBits;
+
 // Adaptive contexts, fresh for every stream.
 struct Models {
   Probability component = kProbabilityHalf;                 // another component follows
@@ -242,7 +252,10 @@ struct Models {
   // A chain decision by chain (back, forward, middle), hole, and the faces already at its corner.
   std::array<std::array<std::array<Probability, Border::kFacesAtCap + 1>, 2>, 3> chain{};
   std::array<Probability, 2> existing{};                     // by hole
-  IntegerModel slot_age;                                     // slots made since the split slot
+  Probability near = kProbabilityHalf;                       // the split slot is near the gate
+  Probability near_backward = kProbabilityHalf;
+  std::array<Probability, kNearSlots> near_distance{};       // distance - 1
+  IntegerModel slot_age;                                     // else: slots made since the split slot
   Probability any_sharp = kProbabilityHalf;
   std::array<Probability, 2> sharp{};                        // by the previous vertex's flag
 
@@ -252,6 +265,7 @@ struct Models {
     for (auto& by_hole : chain)
       for (auto& row : by_hole) row.fill(kProbabilityHalf);
     existing.fill(kProbabilityHalf);
+    near_distance.fill(kProbabilityHalf);
     sharp.fill(kProbabilityHalf);
   }
 };
@@ -279,18 +293,19 @@ struct DecodeChannel {
   bool exhausted() const { return rc.overran(); }
 };
 
-template <typename Channel>
-std::uint32_t code_tree(Channel& io, std::array<Probability, 8>& tree, std::uint32_t value) {
+// A value below 2^Bits through an adaptive binary tree.
+template <int Bits, typename Channel>
+std::uint32_t code_tree(Channel& io, std::array<Probability, 1u << Bits>& tree, std::uint32_t value) {
   std::uint32_t node = 1;
-  for (int i = 2; i >= 0; --i) node = 2 * node + static_cast<std::uint32_t>(io.bit(tree[node], (value >> i) & 1u));
-  return node - 8;
+  for (int i = Bits - 1; i >= 0; --i) node = 2 * node + static_cast<std::uint32_t>(io.bit(tree[node], (value >> i) & 1u));
+  return node - (1u << Bits);
 }
 
 // A face's size: real faces by a tree of 3..9 sides with an escape, holes as integers.
 template <typename Channel>
 std::int64_t code_size(Channel& io, Models& m, FaceKind owner, bool hole, std::int64_t size) {
   if (hole) return 3 + io.integer(m.hole_size, size - 3);
-  const std::uint32_t symbol = code_tree(io, m.size[owner], static_cast<std::uint32_t>(std::min<std::int64_t>(size - 3, 7)));
+  const std::uint32_t symbol = code_tree<3>(io, m.size[owner], static_cast<std::uint32_t>(std::min<std::int64_t>(size - 3, 7)));
   return symbol < 7 ? 3 + symbol : 10 + io.integer(m.large_size, size - 10);
 }
 
@@ -312,6 +327,35 @@ std::uint32_t code_chain(Channel& io, Models& m, const Border& border, Chain cha
   return count;
 }
 
+// The slot starting an existing run: near the gate as a direction and a
+// distance along the border, else by its age.
+template <typename Channel>
+const char* code_split_slot(Channel& io, Models& m, const Border& border, std::uint32_t& slot) {
+  const std::uint32_t g = border.gate();
+  std::uint32_t distance = 0;
+  int backward = 0;
+  for (std::uint32_t d = 1, ahead = g, behind = g; d <= kNearSlots && slot != kNone && distance == 0; ++d) {
+    ahead = border.slot(ahead).next;
+    behind = border.slot(behind).prev;
+    if (ahead == slot || behind == slot) {
+      distance = d;
+      backward = ahead != slot;
+    }
+  }
+  if (io.bit(m.near, distance != 0)) {
+    backward = io.bit(m.near_backward, backward);
+    distance = 1 + code_tree<kNearBits>(io, m.near_distance, distance - 1);
+    slot = g;
+    for (std::uint32_t d = 0; d < distance; ++d) slot = backward ? border.slot(slot).prev : border.slot(slot).next;
+    return nullptr;
+  }
+  const std::int64_t slots = border.slot_count();
+  const std::int64_t age = io.integer(m.slot_age, slot == kNone ? 0 : slots - 1 - slot);
+  if (age < 0 || age >= slots || !border.alive(static_cast<std::uint32_t>(slots - 1 - age))) return "a border slot out of range";
+  slot = static_cast<std::uint32_t>(slots - 1 - age);
+  return nullptr;
+}
+
 // The face across the gate. The encoder passes its shape; the decoder an
 // empty one and the largest sizes it may still take. Returns nullptr or what
 // is impossible.
@@ -321,7 +365,8 @@ const char* code_face(Channel& io, Models& m, const Border& border, std::uint64_
   const FaceKind owner = border.slot(border.gate()).owner;
   shape.hole = io.bit(m.hole[owner], shape.hole) != 0;
   const std::int64_t size = code_size(io, m, owner, shape.hole, shape.size);
-  if (size < 3 || static_cast<std::uint64_t>(size) > (shape.hole ? max_hole : max_face)) return "an impossible face size";
+  if (size < 3 || static_cast<std::uint64_t>(size) > std::min(kMaxFaceSize, shape.hole ? max_hole : max_face))
+    return "an impossible face size";
   shape.size = static_cast<std::uint32_t>(size);
   const std::uint32_t g = border.gate();
   shape.back = code_chain(io, m, border, kBack, g, shape.hole, shape.size - 1, shape.back);
@@ -333,11 +378,7 @@ const char* code_face(Channel& io, Models& m, const Border& border, std::uint64_
     if (io.exhausted()) return "the coded data ends early";
     MiddleRun run = i < shape.middle.size() ? shape.middle[i] : MiddleRun{};
     if (io.bit(m.existing[shape.hole], run.slot != kNone)) {
-      const std::int64_t slots = border.slot_count();
-      const std::int64_t age = io.integer(m.slot_age, run.slot == kNone ? 0 : slots - 1 - run.slot);
-      if (age < 0 || age >= slots || !border.alive(static_cast<std::uint32_t>(slots - 1 - age)))
-        return "a border slot out of range";
-      run.slot = static_cast<std::uint32_t>(slots - 1 - age);
+      if (const char* problem = code_split_slot(io, m, border, run.slot)) return problem;
       run.chain = code_chain(io, m, border, kMiddle, run.slot, shape.hole, remaining - 1, run.chain);
     } else {
       run = MiddleRun{};
@@ -479,10 +520,11 @@ class Traversal {
     const std::uint32_t f = closed_.face_of[across];
     const std::uint32_t start = across - closed_.offsets[f];
     read_shape(f, start);
-    [[maybe_unused]] const char* problem = code_face(io_, models_, border_, kNone, kNone, shape_);
-    assert(!problem);
-    problem = border_.attach(shape_, face_);
-    assert(!problem);
+    // Neither fails on a manifold mesh; a broken precondition stops here
+    // instead of looping.
+    const char* problem = code_face(io_, models_, border_, kNone, kNone, shape_);
+    if (!problem) problem = border_.attach(shape_, face_);
+    if (problem) throw Error(ErrorKind::Topology, std::string("base mesh connectivity: not a manifold mesh: ") + problem);
     // The new slots are the face's unconsumed edges after x_back, in order.
     for (std::uint32_t k = shape_.back + 1; border_.slot_count() > slot_half_.size(); ++k) {
       const std::uint32_t h = closed_.corner(f, start + k);
@@ -603,7 +645,7 @@ class Decoder {
   void decode_seed() {
     if (io_.exhausted()) fail("the coded data ends early");
     const std::int64_t n = code_size(io_, models_, kFaceKinds, false, 0);
-    if (n < 3 || static_cast<std::uint64_t>(n) > remaining_corners()) fail("an impossible face size");
+    if (n < 3 || static_cast<std::uint64_t>(n) > std::min(kMaxFaceSize, remaining_corners())) fail("an impossible face size");
     border_.seed(static_cast<std::uint32_t>(n), face_);
     append_face();
   }

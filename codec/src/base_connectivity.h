@@ -8,9 +8,11 @@
 // processed faces are bounded by border loops of half-edges ("slots"). The
 // face across the current gate slot is coded as: hole or not, its size, how
 // many border slots it consumes backward and forward of the gate, and for each
-// remaining corner whether it is a new vertex or an existing one (given by the
-// border slot whose wedge it lies in: a split or, for a handle, a merge of
-// loops). The gate then moves to the next slot along the border (a spiral).
+// remaining corner whether it is a new vertex or an existing one -- given by
+// the border slot whose wedge it lies in (by distance along the border when
+// near the gate, else by age), with the slots the face consumes from there: a
+// split of the loop or, for a handle, a merge of two. The gate then moves to
+// the next slot along the border (a spiral), or to a pending loop.
 //
 // The decoder reproduces the mesh exactly, which fixes the numbering:
 // canonical_order() renumbers vertices in order of first appearance, faces in
