@@ -67,7 +67,7 @@ class Border {
   const Slot& slot(std::uint32_t s) const { return slots_[s]; }
   bool alive(std::uint32_t s) const { return s < slots_.size() && slots_[s].next != kNone; }
   // Faces processed around vertex v so far (holes included), at most kFacesAtCap.
-  static constexpr int kFacesAtCap = 3;
+  static constexpr int kFacesAtCap = 4;
   int faces_at(std::uint32_t v) const { return faces_at_[v]; }
 
   // A component's seed face of `size` new vertices; its slots are the border
