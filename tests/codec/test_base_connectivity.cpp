@@ -5,6 +5,7 @@
 // manifold mesh or throw Error(Format).
 #include <algorithm>
 #include <array>
+#include <chrono>
 #include <random>
 #include <string>
 #include <vector>
@@ -235,6 +236,25 @@ TEST(BaseConnectivity, RegularQuadMeshCostsUnderOneBitPerVertex) {
   const PolygonMesh canonical = canonical_order(test::quad_grid(64, 64, true, true)).mesh;
   const std::string bytes = encode(canonical);
   EXPECT_LT(8.0 * static_cast<double>(bytes.size()) / static_cast<double>(canonical.vertex_count()), 1.0);
+}
+
+// Decoding takes time linear in the mesh: four times the faces in under
+// eight times the time (a ratio, so the host's speed does not matter).
+TEST(BaseConnectivity, DecodingTimeIsLinear) {
+  const auto seconds_to_decode = [](int n) {
+    const PolygonMesh canonical = canonical_order(test::quad_grid(n, n, true, true)).mesh;
+    const std::string bytes = encode(canonical);
+    double best = 1e30;
+    for (int run = 0; run < 3; ++run) {
+      const auto start = std::chrono::steady_clock::now();
+      const PolygonMesh decoded = decode(bytes, connectivity_counts(canonical));
+      best = std::min(best, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+      EXPECT_EQ(decoded.face_vertices, canonical.face_vertices);
+    }
+    return best;
+  };
+  const double small = seconds_to_decode(150), large = seconds_to_decode(300);
+  EXPECT_LT(large, 8 * small) << small << " s for 22,500 faces, " << large << " s for 90,000";
 }
 
 // Decoding a hostile stream either gives a mesh require_manifold() accepts
