@@ -9,6 +9,8 @@
 #include <zlib.h>
 
 #include "isowave/core/mesh_topology.h"
+#include "base_connectivity.h"
+#include "isowave/core/error.h"
 #include "range_coder.h"
 
 namespace isowave::detail {
@@ -22,6 +24,21 @@ std::string sanitize(const std::string& text, bool key) {
   for (char& c : s)
     if (c == '\n' || c == '\r' || (key && c == '=')) c = ' ';
   return s;
+}
+
+// Version 2, coder 1: the cut-border machine of base_connectivity.h.
+void put_base_traversal(std::string& out, const PolygonMesh& base) {
+  std::string payload(1, static_cast<char>(kBaseCoderTraversal));
+  const ConnectivityCounts counts = connectivity_counts(base);
+  put_u32(payload, static_cast<std::uint32_t>(counts.vertices));
+  put_u32(payload, static_cast<std::uint32_t>(counts.faces));
+  put_u32(payload, static_cast<std::uint32_t>(counts.corners));
+  std::string coded;
+  RangeEncoder rc(coded);
+  encode_connectivity(rc, base);
+  rc.finish();
+  put_coded(payload, coded);
+  put_section(out, "BASE", payload);
 }
 
 }  // namespace
@@ -52,8 +69,12 @@ void put_coded(std::string& payload, const std::string& coded) {
 }
 
 void put_base(std::string& out, const PolygonMesh& base, int major) {
+  if (major >= 2 && is_canonical(base)) {
+    put_base_traversal(out, base);
+    return;
+  }
   std::string payload;
-  if (major >= 2) payload.push_back(0);  // the coder: face sizes and index differences
+  if (major >= 2) payload.push_back(static_cast<char>(kBaseCoderIndices));
   put_u32(payload, static_cast<std::uint32_t>(base.vertex_count()));
   put_u32(payload, static_cast<std::uint32_t>(base.face_count()));
   put_u32(payload, static_cast<std::uint32_t>(base.face_vertices.size()));
@@ -102,6 +123,26 @@ void put_base_points(std::string& out, const PolygonMesh& base, const std::vecto
 
 
 
+namespace {
+
+void decode_base_traversal(PayloadReader& reader, PolygonMesh& base) {
+  ConnectivityCounts counts;
+  counts.vertices = reader.read<std::uint32_t>();
+  counts.faces = reader.read<std::uint32_t>();
+  counts.corners = reader.read<std::uint32_t>();
+  const auto coded_size = reader.read<std::uint64_t>();
+  if (coded_size != reader.remaining()) reader.fail("has an inconsistent size");
+  const std::string_view coded = reader.bytes(coded_size);
+  RangeDecoder rc(reinterpret_cast<const std::uint8_t*>(coded.data()), coded.size());
+  try {
+    base = decode_connectivity(rc, counts);
+  } catch (const Error& error) {
+    reader.fail(std::string("holds an invalid base mesh: ") + error.what());
+  }
+}
+
+}  // namespace
+
 void decode_meta(PayloadReader& reader, std::string_view payload, IswMetadata& metadata, int major) {
   std::string text;
   if (major >= 2) {
@@ -129,7 +170,11 @@ void decode_meta(PayloadReader& reader, std::string_view payload, IswMetadata& m
 
 
 void decode_base(PayloadReader& reader, PolygonMesh& base, int major) {
-  if (major >= 2 && reader.read<std::uint8_t>() != 0) reader.fail("uses an unknown coder");
+  if (major >= 2) {
+    const auto coder = reader.read<std::uint8_t>();
+    if (coder == kBaseCoderTraversal) return decode_base_traversal(reader, base);
+    if (coder != kBaseCoderIndices) reader.fail("uses an unknown coder");
+  }
   const auto vertices = reader.read<std::uint32_t>();
   const auto faces = reader.read<std::uint32_t>();
   const auto corners = reader.read<std::uint32_t>();

@@ -16,8 +16,11 @@ namespace isowave::detail {
 void put_meta(std::string& out, const IswMetadata& metadata, int major);
 void decode_meta(PayloadReader& reader, std::string_view payload, IswMetadata& metadata, int major);
 
-// BASE: counts and the range-coded faces and sharp flags (version 2 first
-// writes a u8 coder id, 0 for this coder).
+// BASE: counts and the range-coded faces and sharp flags. Version 2 first
+// writes a u8 coder id: kBaseCoderTraversal (base_connectivity.h) for a base
+// in its canonical order, else kBaseCoderIndices (version 1's coder).
+constexpr std::uint8_t kBaseCoderIndices = 0;
+constexpr std::uint8_t kBaseCoderTraversal = 1;
 void put_base(std::string& out, const PolygonMesh& base, int major);
 void decode_base(PayloadReader& reader, PolygonMesh& base, int major);
 

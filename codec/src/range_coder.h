@@ -94,6 +94,20 @@ class RangeEncoder {
   std::uint64_t cache_size_ = 1;
 };
 
+// One adaptive binary decision of a decoder: the bit, with its code value,
+// range and probability updated (normalization is the caller's).
+inline int decide(std::uint32_t& code, std::uint32_t& range, Probability& p, std::uint32_t bound) {
+  if (code < bound) {
+    range = bound;
+    p = static_cast<Probability>(p + (((1 << kProbabilityBits) - p) >> kAdaptShift));
+    return 0;
+  }
+  code -= bound;
+  range -= bound;
+  p = static_cast<Probability>(p - (p >> kAdaptShift));
+  return 1;
+}
+
 class RangeDecoder {
  public:
   RangeDecoder(const std::uint8_t* data, std::size_t size) : data_(data), size_(size) {
@@ -101,18 +115,7 @@ class RangeDecoder {
   }
 
   int decode_bit(Probability& p) {
-    const std::uint32_t bound = (range_ >> kProbabilityBits) * p;
-    int bit;
-    if (code_ < bound) {
-      range_ = bound;
-      p = static_cast<Probability>(p + (((1 << kProbabilityBits) - p) >> kAdaptShift));
-      bit = 0;
-    } else {
-      code_ -= bound;
-      range_ -= bound;
-      p = static_cast<Probability>(p - (p >> kAdaptShift));
-      bit = 1;
-    }
+    const int bit = decide(code_, range_, p, (range_ >> kProbabilityBits) * p);
     while (range_ < kTop) {
       range_ <<= 8;
       code_ = (code_ << 8) | next_byte();
@@ -170,17 +173,7 @@ class PrefixRangeDecoder {
     if (stopped_) return 0;
     const std::uint32_t bound = (range_ >> kProbabilityBits) * p;
     if (unknown_ != 0 && code_ < bound && std::uint64_t{code_} + unknown_ >= bound) return stop();
-    int bit;
-    if (code_ < bound) {
-      range_ = bound;
-      p = static_cast<Probability>(p + (((1 << kProbabilityBits) - p) >> kAdaptShift));
-      bit = 0;
-    } else {
-      code_ -= bound;
-      range_ -= bound;
-      p = static_cast<Probability>(p - (p >> kAdaptShift));
-      bit = 1;
-    }
+    const int bit = decide(code_, range_, p, bound);
     while (range_ < kTop) {
       range_ <<= 8;
       code_ = (code_ << 8) | next_byte();

@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <cstdlib>
 #include <cstdint>
 #include <future>
 #include <iomanip>
@@ -15,6 +14,7 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
+#include "isowave/codec/base_order.h"
 #include "isowave/codec/importance.h"
 #include "isowave/codec/statistics.h"
 #include "isowave/core/error.h"
@@ -427,6 +427,33 @@ struct Coded {
   std::vector<Vec3> full_decode;  // its coefficients synthesized: what a 100% decode gives
 };
 
+// The file at the plan's cut, its metadata recording the quantization error
+// of that cut (the full decode against the fitted points). Under a size limit
+// the final metadata's numbers may deflate to a few bytes more than the
+// plan's: the cut then moves back by the excess.
+Coded write_planned_file(const std::string& whole, detail::RatePlan plan, IswMetadata metadata,
+                         const std::shared_ptr<const SubdivisionHierarchy>& hierarchy,
+                         const SurfaceErrorReference& against_surface, const std::string& source,
+                         const ConvertOptions& options, ConvertResult& result) {
+  const std::uint64_t limit = detail::byte_limit(options.rate, result.extracted_vertices);
+  for (int attempt = 0;; ++attempt) {
+    IswDecodeOptions decode_options;
+    decode_options.hierarchy = hierarchy;
+    decode_options.max_stream_bytes = plan.stream_bytes;
+    Coded coded{decode_isw(whole, source, decode_options), {}};
+    coded.full_decode = reconstruct(coded.decoded, SIZE_MAX);
+    record_quantization_error(point_errors(coded.full_decode, result.fit.positions, coded.full_decode.size()), metadata);
+    result.bytes = rewrite_isw(whole, IswRewrite{plan.stream_bytes, plan.table, &metadata});
+    result.rate_table = plan.table;
+    result.file_error = plan.error;
+    if (limit == 0 || result.bytes.size() <= limit) return coded;
+    const std::uint64_t excess = result.bytes.size() - limit + 8;
+    if (attempt == 3 || plan.stream_bytes <= excess)
+      throw std::logic_error(source + ": the file does not fit the size its stream was cut for");
+    detail::move_cut(plan, plan.stream_bytes - excess, whole, hierarchy, against_surface);
+  }
+}
+
 // Analysis (Sec. 3), the embedded stream down to the finest step, the cut
 // the rate target asks for (rate_control.h), and the file: its metadata
 // records the quantization error of the cut stream (the full decode against
@@ -446,8 +473,6 @@ Coded analyze_and_encode(const std::shared_ptr<const SubdivisionHierarchy>& hier
   IswEncodeOptions encode_options;
   encode_options.step = options.step_cells * result.cell_size;
   encode_options.frame_step = kFrameStepCells * result.cell_size;
-  if (const char* k = std::getenv("ISOWAVE_K")) encode_options.tangential_factor = std::atof(k);  // EXPERIMENT
-  if (const char* f = std::getenv("ISOWAVE_FRAME")) encode_options.frame_step = std::atof(f) * result.cell_size;  // EXPERIMENT
   const std::string whole = encode_isw(*hierarchy, coefficients, metadata, encode_options);
   std::vector<Vec3>().swap(coefficients);
   const detail::RatePlan plan =
@@ -456,15 +481,7 @@ Coded analyze_and_encode(const std::shared_ptr<const SubdivisionHierarchy>& hier
     result.warnings.push_back("the whole stream lies " + number(plan.error / result.cell_size) +
                               " cells from the isosurface, more than the maximum error asked for: the fit's own error "
                               "is the floor (more levels or a larger base mesh lower it)");
-  IswDecodeOptions decode_options;
-  decode_options.hierarchy = hierarchy;
-  decode_options.max_stream_bytes = plan.stream_bytes;
-  Coded coded{decode_isw(whole, source, decode_options), {}};
-  coded.full_decode = reconstruct(coded.decoded, SIZE_MAX);
-  record_quantization_error(point_errors(coded.full_decode, result.fit.positions, coded.full_decode.size()), metadata);
-  result.bytes = rewrite_isw(whole, IswRewrite{plan.stream_bytes, plan.table, &metadata});
-  result.rate_table = plan.table;
-  result.file_error = plan.error;
+  Coded coded = write_planned_file(whole, plan, std::move(metadata), hierarchy, against_surface, source, options, result);
   progress.end_stage();
   result.seconds.encode = seconds_since(start);
   return coded;
@@ -531,11 +548,15 @@ ConvertResult convert_volume(Volume volume, const std::string& source, const Con
   const SurfaceErrorReference against_surface(prepared.isosurface.mesh, kErrorSamples);
   result.max_error_cells = level_error_bound(prepared, options);
   result.seconds.fit = seconds_since(reference_start);
-  const std::shared_ptr<const SubdivisionHierarchy> hierarchy =
+  const std::shared_ptr<const SubdivisionHierarchy> fitted =
       fit_surface(prepared, against_surface, options, result, target, progress);
-  result.hierarchy = hierarchy;
   add_fit_warnings(options, target, result);
   refuse_unusable_fit(source, options, result);
+  // The same surface over the base in the order its coder sends compactly.
+  CanonicalSurface canonical = canonical_surface(fitted, std::move(result.fit.positions));
+  const std::shared_ptr<const SubdivisionHierarchy> hierarchy = canonical.hierarchy;
+  result.fit.positions = std::move(canonical.fine);
+  result.hierarchy = hierarchy;
   IswMetadata metadata = metadata_of(prepared.field, source, options, result);
 
   // What the coding stages no longer need goes before their peak.

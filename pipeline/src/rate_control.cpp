@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include <tbb/parallel_for.h>
+
 #include "isowave/codec/statistics.h"
 #include "isowave/core/error.h"
 
@@ -60,13 +62,14 @@ RatePlan plan_rate(const std::string& file, const std::shared_ptr<const Subdivis
                    std::size_t extracted_vertices, double cell_size) {
   PrefixMeter meter(file, hierarchy, against_surface);
   RatePlan plan;
-  for (std::uint64_t end : meter.packet_ends()) plan.table.push_back({end, meter.error(end)});
+  // The last kRateTablePlanes plane boundaries, measured two at a time.
+  std::vector<std::uint64_t> ends = meter.packet_ends();
+  if (ends.size() > kRateTablePlanes) ends.erase(ends.begin(), ends.end() - kRateTablePlanes);
+  plan.table.resize(ends.size());
+  tbb::parallel_for(std::size_t{0}, ends.size(), [&](std::size_t k) { plan.table[k] = {ends[k], meter.error(ends[k])}; });
   const std::uint64_t whole = plan.table.empty() ? 0 : plan.table.back().stream_bytes;
   plan.error = plan.table.empty() ? meter.error(0) : plan.table.back().error;
-  std::uint64_t bytes = target.max_bytes;
-  if (target.bits_per_vertex > 0)
-    bytes = std::max<std::uint64_t>(1, static_cast<std::uint64_t>(target.bits_per_vertex * double(extracted_vertices) / 8));
-  if (bytes > 0) {
+  if (const std::uint64_t bytes = byte_limit(target, extracted_vertices); bytes > 0) {
     const std::size_t rows = plan.table.size() + 1;
     const std::uint64_t within = stream_bytes_within(file, bytes, rows);
     if (within < whole) {
@@ -92,6 +95,22 @@ RatePlan plan_rate(const std::string& file, const std::shared_ptr<const Subdivis
     plan.table.push_back({plan.stream_bytes, plan.error});
   }
   return plan;
+}
+
+std::uint64_t byte_limit(const RateTarget& target, std::size_t extracted_vertices) {
+  if (target.bits_per_vertex > 0)
+    return std::max<std::uint64_t>(1, static_cast<std::uint64_t>(target.bits_per_vertex * double(extracted_vertices) / 8));
+  return target.max_bytes;
+}
+
+void move_cut(RatePlan& plan, std::uint64_t stream_bytes, const std::string& file,
+              const std::shared_ptr<const SubdivisionHierarchy>& hierarchy,
+              const SurfaceErrorReference& against_surface) {
+  PrefixMeter meter(file, hierarchy, against_surface);
+  plan.stream_bytes = stream_bytes;
+  plan.error = meter.error(stream_bytes);
+  while (!plan.table.empty() && plan.table.back().stream_bytes >= stream_bytes) plan.table.pop_back();
+  plan.table.push_back({stream_bytes, plan.error});
 }
 
 }  // namespace isowave::detail

@@ -12,9 +12,11 @@
 #include <zlib.h>
 
 #include "codec_test_data.h"
+#include "isowave/codec/base_order.h"
 #include "isowave/codec/importance.h"
 #include "isowave/codec/isw_format.h"
 #include "isowave/core/error.h"
+#include "isowave/transform/wavelet_transform.h"
 
 namespace isowave {
 namespace {
@@ -216,6 +218,53 @@ TEST(IswFormat2, EncodingIsDeterministicAndRejectsBadOptions) {
   std::vector<Vec3> infinite = e.surface.coefficients;
   infinite.back().x = INFINITY;
   EXPECT_THROW(encode_isw(*e.surface.hierarchy, infinite, sample_metadata(), e.options), Error);
+}
+
+// The canonical base order renumbers the hierarchy: the transform commutes
+// with it, so the analysis of S^L(base), renumbered, gives the base points
+// back (renumbered) and zero details; the coded base then costs a fraction
+// of version 1's.
+TEST(IswFormat2, CanonicalSurfaceIsTheSameSurfaceRenumbered) {
+  PolygonMesh base = test::genus_slab(2);
+  test::jitter(base, 0.1, 4);
+  // A non-canonical order: faces reversed, each rotated by one corner.
+  PolygonMesh shuffled;
+  shuffled.positions = base.positions;
+  for (std::size_t f = base.face_count(); f-- > 0;) {
+    std::vector<std::uint32_t> face(base.face_begin(f), base.face_begin(f) + base.face_size(f));
+    std::rotate(face.begin(), face.begin() + 1, face.end());
+    shuffled.add_face(face.data(), face.size());
+  }
+  const auto hierarchy = std::make_shared<const SubdivisionHierarchy>(shuffled, 3);
+  const std::vector<Vec3> fine = subdivide(*hierarchy, shuffled.positions);
+  const CanonicalSurface canonical = canonical_surface(hierarchy, fine);
+  ASSERT_NE(canonical.hierarchy, hierarchy);
+  std::vector<Vec3> analysed = canonical.fine;
+  analyze(*canonical.hierarchy, analysed);
+  const std::size_t base_count = shuffled.vertex_count();
+  auto less = [](const Vec3& a, const Vec3& b) { return a.x < b.x || (a.x == b.x && (a.y < b.y || (a.y == b.y && a.z < b.z))); };
+  std::vector<Vec3> got(analysed.begin(), analysed.begin() + static_cast<std::ptrdiff_t>(base_count));
+  std::vector<Vec3> want = shuffled.positions;
+  std::sort(want.begin(), want.end(), less);
+  for (Vec3& p : got)  // round off the analysis' last bits before matching
+    for (const Vec3& w : want)
+      if (norm(p - w) < 1e-9) p = w;
+  std::sort(got.begin(), got.end(), less);
+  EXPECT_EQ(got, want);
+  for (std::size_t i = base_count; i < analysed.size(); ++i) ASSERT_LT(norm(analysed[i]), 1e-9) << i;
+  // Canonical already: the same hierarchy back.
+  EXPECT_EQ(canonical_surface(canonical.hierarchy, canonical.fine).hierarchy, canonical.hierarchy);
+  // Its file's base section is the traversal coder's, far below version 1's.
+  std::vector<Vec3> coefficients = canonical.fine;
+  analyze(*canonical.hierarchy, coefficients);
+  IswEncodeOptions options;
+  const IswDecoded compact = decode_isw(encode_isw(*canonical.hierarchy, coefficients, sample_metadata(), options), "c");
+  std::vector<Vec3> original = fine;
+  analyze(*hierarchy, original);
+  const IswDecoded loose = decode_isw(encode_isw(*hierarchy, original, sample_metadata(), options), "l");
+  EXPECT_EQ(compact.sections[1].tag, "BASE");
+  EXPECT_LT(2 * compact.sections[1].bytes, loose.sections[1].bytes);
+  EXPECT_EQ(compact.base.face_vertices, canonical.hierarchy->base().face_vertices);
 }
 
 }  // namespace

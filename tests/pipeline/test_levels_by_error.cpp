@@ -103,10 +103,12 @@ TEST_P(LevelsByError, ReportsTheFittedAndDecodedSurfacesError) {
   const PolygonMesh fitted = fitted_mesh(result);
   EXPECT_EQ(report.fine_vertices, fitted.vertex_count());
 
-  // D both ways: surface_error() of the fitted fine mesh (the same samples).
+  // D both ways: surface_error() of the fitted fine mesh. The result holds it
+  // renumbered for the file's base coder (canonical_surface), so its faces
+  // are sampled in another order: the same surface, other samples.
   const SurfaceError error = surface_error(fitted, result.extracted_mesh, kErrorSamples);
-  EXPECT_DOUBLE_EQ(report.forward_rms_cells, error.forward_rms / result.cell_size);
-  EXPECT_DOUBLE_EQ(report.backward_rms_cells, error.backward_rms / result.cell_size);
+  EXPECT_NEAR(report.forward_rms_cells, error.forward_rms / result.cell_size, 0.05 * report.forward_rms_cells);
+  EXPECT_NEAR(report.backward_rms_cells, error.backward_rms / result.cell_size, 0.05 * report.backward_rms_cells);
   // The decoded file's fine mesh is the fitted one moved by the quantization
   // (at most its maximum error): its D, from other samples, differs by about that.
   const IswDecoded decoded = decode_isw(result.bytes, "torus");
