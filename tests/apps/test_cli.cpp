@@ -81,7 +81,7 @@ TEST_F(CliTest, ConvertDecodeStatsAndInfoRoundTrip) {
   EXPECT_NE(stats.out.find("\"base\": true"), std::string::npos);
   std::ifstream svg(path("plot.svg"));
   const std::string svg_text((std::istreambuf_iterator<char>(svg)), {});
-  EXPECT_NE(svg_text.find("RMSE [% of cell edge]"), std::string::npos);
+  EXPECT_NE(svg_text.find("D [% of cell edge]"), std::string::npos);  // D against bits per vertex (RDTB)
 
   const RunResult info = run({"info", path("g.isw")}, dir_);
   ASSERT_EQ(info.exit_code, 0) << info.err;
