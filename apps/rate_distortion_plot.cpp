@@ -20,18 +20,18 @@ std::string xml_escaped(const std::string& text) {
   return out;
 }
 
-// The points to draw: one per distinct reconstruction, in increasing percent.
-std::vector<RateDistortionRow> distinct_points(const std::vector<RateDistortionRow>& rows) {
+// The rows to draw: one per distinct reconstruction, in increasing percent.
+std::vector<RateDistortionRow> distinct_rows(const std::vector<RateDistortionRow>& rows) {
   std::size_t base_kept = 0;
   for (const RateDistortionRow& r : rows)
     if (r.is_base) base_kept = r.kept;
-  std::vector<RateDistortionRow> points;
+  std::vector<RateDistortionRow> distinct;
   for (const RateDistortionRow& r : rows)
-    if (r.is_base || r.kept != base_kept) points.push_back(r);
-  std::sort(points.begin(), points.end(), [](const auto& a, const auto& b) { return a.percent < b.percent; });
-  points.erase(std::unique(points.begin(), points.end(), [](const auto& a, const auto& b) { return a.kept == b.kept; }),
-               points.end());
-  return points;
+    if (r.is_base || r.kept != base_kept) distinct.push_back(r);
+  std::sort(distinct.begin(), distinct.end(), [](const auto& a, const auto& b) { return a.percent < b.percent; });
+  distinct.erase(std::unique(distinct.begin(), distinct.end(), [](const auto& a, const auto& b) { return a.kept == b.kept; }),
+                 distinct.end());
+  return distinct;
 }
 
 }  // namespace
@@ -52,14 +52,15 @@ std::vector<double> nice_ticks(double max, int max_intervals) {
   return ticks;
 }
 
-std::string rate_distortion_svg(const std::vector<RateDistortionRow>& rows, double cell, const std::string& title) {
-  const std::vector<RateDistortionRow> points = distinct_points(rows);
+std::string plot_svg(const Plot& plot) {
+  std::vector<PlotPoint> points;
+  for (const PlotPoint& p : plot.points)
+    if (std::isfinite(p.x) && std::isfinite(p.y)) points.push_back(p);
   const double width = 640, height = 420, left = 70, right = 20, top = 40, bottom = 60;
-  const auto error = [&](const RateDistortionRow& r) { return 100 * r.rms / cell; };
   double max_x = 0, max_y = 0;
-  for (const RateDistortionRow& r : points) {
-    if (std::isfinite(r.percent)) max_x = std::max(max_x, r.percent);
-    if (std::isfinite(error(r))) max_y = std::max(max_y, error(r));
+  for (const PlotPoint& p : points) {
+    max_x = std::max(max_x, p.x);
+    max_y = std::max(max_y, p.y);
   }
   const std::vector<double> x_ticks = nice_ticks(max_x > 0 ? max_x : 1, 5);
   const std::vector<double> y_ticks = nice_ticks(max_y > 0 ? max_y : 1, 5);
@@ -73,7 +74,7 @@ std::string rate_distortion_svg(const std::vector<RateDistortionRow>& rows, doub
                 width, height);
   svg += buffer;
   std::snprintf(buffer, sizeof buffer, "<text x=\"%.0f\" y=\"22\" text-anchor=\"middle\" font-size=\"14\">", width / 2);
-  svg += buffer + xml_escaped(title) + "</text>\n";
+  svg += buffer + xml_escaped(plot.title) + "</text>\n";
   std::snprintf(buffer, sizeof buffer,
                 "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"black\"/>\n"
                 "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"black\"/>\n",
@@ -93,29 +94,38 @@ std::string rate_distortion_svg(const std::vector<RateDistortionRow>& rows, doub
                   left, y(v), width - right, y(v), left - 6, y(v) + 4, v);
     svg += buffer;
   }
-  std::snprintf(buffer, sizeof buffer,
-                "<text x=\"%.1f\" y=\"%.1f\" text-anchor=\"middle\">coefficients kept [%% of full resolution]</text>\n"
-                "<text x=\"18\" y=\"%.1f\" text-anchor=\"middle\" transform=\"rotate(-90 18 %.1f)\">RMSE [%% of cell "
-                "edge]</text>\n",
-                (left + width - right) / 2, height - 18, (top + height - bottom) / 2, (top + height - bottom) / 2);
-  svg += buffer;
+  std::snprintf(buffer, sizeof buffer, "<text x=\"%.1f\" y=\"%.1f\" text-anchor=\"middle\">", (left + width - right) / 2,
+                height - 18);
+  svg += buffer + xml_escaped(plot.x_label) + "</text>\n";
+  std::snprintf(buffer, sizeof buffer, "<text x=\"18\" y=\"%.1f\" text-anchor=\"middle\" transform=\"rotate(-90 18 %.1f)\">",
+                (top + height - bottom) / 2, (top + height - bottom) / 2);
+  svg += buffer + xml_escaped(plot.y_label) + "</text>\n";
   svg += "<polyline fill=\"none\" stroke=\"#1f5fbf\" stroke-width=\"2\" points=\"";
-  for (const RateDistortionRow& r : points) {
-    std::snprintf(buffer, sizeof buffer, "%.1f,%.1f ", x(r.percent), y(error(r)));
+  for (const PlotPoint& p : points) {
+    std::snprintf(buffer, sizeof buffer, "%.1f,%.1f ", x(p.x), y(p.y));
     svg += buffer;
   }
   svg += "\"/>\n";
-  for (const RateDistortionRow& r : points) {
-    std::snprintf(buffer, sizeof buffer, "<circle cx=\"%.1f\" cy=\"%.1f\" r=\"3.5\" fill=\"#1f5fbf\"/>\n", x(r.percent),
-                  y(error(r)));
+  for (const PlotPoint& p : points) {
+    std::snprintf(buffer, sizeof buffer, "<circle cx=\"%.1f\" cy=\"%.1f\" r=\"3.5\" fill=\"#1f5fbf\"/>\n", x(p.x), y(p.y));
     svg += buffer;
-    if (!r.is_base) continue;
-    std::snprintf(buffer, sizeof buffer, "<text x=\"%.1f\" y=\"%.1f\">base mesh</text>\n", x(r.percent) + 8,
-                  y(error(r)) + 4);
-    svg += buffer;
+    if (p.label.empty()) continue;
+    // Right of the point, or above and left of it in the right half (inside the plot).
+    const bool right_half = x(p.x) > (left + width - right) / 2;
+    std::snprintf(buffer, sizeof buffer, "<text x=\"%.1f\" y=\"%.1f\"%s>", x(p.x) + (right_half ? -8 : 8),
+                  y(p.y) + (right_half ? -8 : 4), right_half ? " text-anchor=\"end\"" : "");
+    svg += buffer + xml_escaped(p.label) + "</text>\n";
   }
   svg += "</svg>\n";
   return svg;
+}
+
+Plot truncation_plot(const std::vector<RateDistortionRow>& rows, double cell, const std::string& y_unit,
+                     const std::string& title) {
+  Plot plot{title, "coefficients kept [% of full resolution]", "RMSE [" + y_unit + "]", {}};
+  for (const RateDistortionRow& r : distinct_rows(rows))
+    plot.points.push_back({r.percent, 100 * r.rms / cell, r.is_base ? "base mesh" : ""});
+  return plot;
 }
 
 }  // namespace isowave::cli

@@ -64,7 +64,10 @@ std::vector<Vec3> take_reconstruction(IswDecoded& decoded, std::size_t keep, int
 
 std::vector<RateDistortionRow> rate_distortion(const IswDecoded& decoded, const std::vector<double>& percents,
                                                const std::vector<Vec3>* reference, const PointErrors* all_decoded_errors) {
-  if (!decoded.hierarchy || decoded.truncated || decoded.chunks_decoded != decoded.chunks_total)
+  // Version 2: a stream its encoder cut (convert --size) ends inside a plane; complete is every byte read.
+  const bool partial = decoded.major_version >= 2 ? decoded.stream.decoded < decoded.stream.bytes
+                                                  : decoded.chunks_decoded != decoded.chunks_total;
+  if (!decoded.hierarchy || decoded.truncated || partial)
     throw Error(ErrorKind::InvalidArgument, "statistics need a complete decode of the file");
   const SubdivisionHierarchy& h = *decoded.hierarchy;
   const std::size_t fine = h.fine_vertex_count();

@@ -81,7 +81,7 @@ TEST_F(CliTest, ConvertDecodeStatsAndInfoRoundTrip) {
   EXPECT_NE(stats.out.find("\"base\": true"), std::string::npos);
   std::ifstream svg(path("plot.svg"));
   const std::string svg_text((std::istreambuf_iterator<char>(svg)), {});
-  EXPECT_NE(svg_text.find("RMSE [% of cell edge]"), std::string::npos);
+  EXPECT_NE(svg_text.find("D [% of cell edge]"), std::string::npos);  // D against bits per vertex (RDTB)
 
   const RunResult info = run({"info", path("g.isw")}, dir_);
   ASSERT_EQ(info.exit_code, 0) << info.err;
@@ -118,8 +118,8 @@ TEST_F(CliTest, BatchSkipsAFailingInputAndExitsNonZero) {
   ASSERT_EQ(stats.exit_code, 0) << stats.err;
   std::istringstream table(stats.out.substr(stats.out.find("coefficients")));
   std::vector<std::size_t> kept;
-  for (std::string row; std::getline(table, row);)
-    if (!row.empty() && row.find("coefficients") == std::string::npos) kept.push_back(std::stoul(row));
+  for (std::string row; std::getline(table, row) && !row.empty();)  // Table 1 ends at a blank line
+    if (row.find("coefficients") == std::string::npos) kept.push_back(std::stoul(row));
   ASSERT_EQ(kept.size(), percents.size()) << stats.out;
   for (std::size_t k = 1; k < kept.size(); ++k) EXPECT_LT(kept[k], kept[k - 1]) << stats.out;
   EXPECT_NE(stats.out.find("(base mesh, also for 5%"), std::string::npos) << stats.out;

@@ -230,17 +230,20 @@ TEST_F(CliTest, DecodeSaysWhenAPercentageIsBelowTheBaseMesh) {
   EXPECT_EQ(above.out.find("below the base mesh's share"), std::string::npos) << above.out;
 }
 
-// The SVG plot: titled with the source's file name (not its directories);
-// tick labels 0, s, 2s, ... with s from the 1-2-5 series; each point drawn
-// once, and the base mesh labelled once.
+// The SVG plot of a file without a rate table (RDTB): RMSE against percent,
+// titled with the source's file name (not its directories); tick labels 0,
+// s, 2s, ... with s from the 1-2-5 series; each point drawn once, and the
+// base mesh labelled once.
 TEST_F(CliTest, StatsPlotHasRoundTicksAndOneLabelledBasePoint) {
   std::filesystem::create_directories(path("a/long/directory"));
   write_sphere_nrrd(path("a/long/directory/ball.nrrd"), 24, 7);
-  ASSERT_EQ(run({"convert", path("a/long/directory/ball.nrrd"), "--iso", "0", "--levels", "2", "-o", path("b.isw"),
+  ASSERT_EQ(run({"convert", path("a/long/directory/ball.nrrd"), "--iso", "0", "--levels", "2", "-o", path("rd.isw"),
                  "--quiet"},
                 dir_)
                 .exit_code,
             0);
+  std::ifstream in(path("rd.isw"), std::ios::binary);
+  std::ofstream(path("b.isw"), std::ios::binary) << rewrite_isw({std::istreambuf_iterator<char>(in), {}}, IswRewrite{});
   ASSERT_EQ(run({"stats", path("b.isw"), "--plot", path("b.svg")}, dir_).exit_code, 0);
   std::ifstream file(path("b.svg"));
   const std::string svg((std::istreambuf_iterator<char>(file)), {});
@@ -298,8 +301,9 @@ TEST_F(CliTest, EveryHelpFitsIn100ColumnsAndGivesAnExample) {
 
 
 // A damaged or hostile file whose metadata says the cell is 0 wide: stats
-// and its plot treat the cell size as unknown instead of dividing by it (the
-// plot's ticks were computed from infinities and it read past an empty
+// and its plots (RMSE against percent without an RDTB, D against bits per
+// vertex with one) treat the cell size as unknown instead of dividing by it
+// (the plot's ticks were computed from infinities and it read past an empty
 // vector).
 TEST_F(CliTest, StatsSurvivesAZeroCellSizeInTheMetadata) {
   write_sphere_nrrd(path("ball.nrrd"), 20, 6);
@@ -307,22 +311,29 @@ TEST_F(CliTest, StatsSurvivesAZeroCellSizeInTheMetadata) {
                 .exit_code,
             0);
   std::ifstream in(path("b.isw"), std::ios::binary);
-  std::string bytes((std::istreambuf_iterator<char>(in)), {});
-  IswMetadata metadata = decode_isw(bytes, "b.isw").metadata;
+  const std::string bytes((std::istreambuf_iterator<char>(in)), {});
+  const IswDecoded decoded = decode_isw(bytes, "b.isw");
+  ASSERT_FALSE(decoded.stream.rate_table.empty());
+  IswMetadata metadata = decoded.metadata;
   ASSERT_GT(metadata.number("cell_size", 0), 0);
   metadata.values["cell_size"] = "0";
-  IswRewrite rewrite;
-  rewrite.metadata = &metadata;
-  bytes = rewrite_isw(bytes, rewrite);
-  std::ofstream(path("zero.isw"), std::ios::binary) << bytes;
+  for (const bool rate_table : {false, true}) {
+    SCOPED_TRACE(rate_table ? "with an RDTB" : "without an RDTB");
+    IswRewrite rewrite;
+    rewrite.metadata = &metadata;
+    if (rate_table) rewrite.rate_table = decoded.stream.rate_table;
+    std::ofstream(path("zero.isw"), std::ios::binary | std::ios::trunc) << rewrite_isw(bytes, rewrite);
 
-  const RunResult r = run({"stats", path("zero.isw"), "--plot", path("zero.svg")}, dir_);
-  EXPECT_EQ(r.exit_code, 0) << r.err;
-  std::ifstream file(path("zero.svg"));
-  const std::string svg((std::istreambuf_iterator<char>(file)), {});
-  EXPECT_NE(svg.find("</svg>"), std::string::npos) << svg;
-  EXPECT_EQ(svg.find("nan"), std::string::npos) << svg;
-  EXPECT_EQ(svg.find("inf"), std::string::npos) << svg;
+    const RunResult r = run({"stats", path("zero.isw"), "--plot", path("zero.svg"), "--force"}, dir_);
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_FALSE(std::regex_search(r.out, std::regex("\\b(-?nan|inf)\\b"))) << r.out;
+    std::ifstream file(path("zero.svg"));
+    const std::string svg((std::istreambuf_iterator<char>(file)), {});
+    EXPECT_NE(svg.find("</svg>"), std::string::npos) << svg;
+    EXPECT_NE(svg.find(rate_table ? ">D [world units x 100]<" : ">RMSE [world units x 100]<"), std::string::npos) << svg;
+    EXPECT_EQ(svg.find("nan"), std::string::npos) << svg;
+    EXPECT_EQ(svg.find("inf"), std::string::npos) << svg;
+  }
 }
 
 }  // namespace
