@@ -26,12 +26,11 @@ using namespace detail;
 
 namespace {
 
-void check_v2_options(const IswEncodeOptions& options, const std::vector<double>& weights) {
+void check_v2_options(const IswEncodeOptions& options) {
   if (!(options.tangential_factor >= 1) || !std::isfinite(options.tangential_factor))
     throw Error(ErrorKind::InvalidArgument, "the tangential factor must be at least 1");
   if (options.frame_step < 0 || !std::isfinite(options.frame_step))
     throw Error(ErrorKind::InvalidArgument, "the frame step must be positive (or 0: automatic)");
-  (void)weights;
 }
 
 // One component in step units: magnitude and sign; false when it is not
@@ -100,7 +99,7 @@ namespace detail {
 
 std::string encode_isw_v2(const SubdivisionHierarchy& hierarchy, const std::vector<Vec3>& coefficients,
                           const IswMetadata& metadata, const IswEncodeOptions& options, std::vector<double> weights) {
-  check_v2_options(options, weights);
+  check_v2_options(options);
   const std::size_t base_count = hierarchy.vertex_count(0);
   V2Scales scales{options.step, options.frame_step > 0 ? options.frame_step : 16 * options.step / weights[0],
                   options.tangential_factor, std::move(weights)};

@@ -102,7 +102,7 @@ class SectionWalker {
 
  private:
   const std::string& bytes_;
-  const std::string& name_;
+  std::string name_;
   int major_;
   std::size_t position_ = kFileHeaderBytes;
   std::size_t headers_read_ = 0;  // of META, BASE, QUAN, BPTS
