@@ -91,6 +91,7 @@ void decode_plane_stream(const Section& section, const SubdivisionHierarchy& hie
 
 void rank_and_keep(IswDecoded& result, const CoefficientClasses& layout, std::uint64_t keep) {
   std::vector<RankedEntry> keyed;
+  keyed.reserve(static_cast<std::size_t>(std::min<std::uint64_t>(result.coefficients_total, result.coefficients.size())));
   for (std::size_t i = layout.base(); i < result.coefficients.size(); ++i) {
     const Vec3& c = result.coefficients[i];
     if (c == Vec3{}) continue;

@@ -3,6 +3,7 @@
 // details at every level, analysed into coefficients.
 #include <random>
 
+#include "isowave/codec/isw_format.h"
 #include "isowave/transform/hierarchy.h"
 #include "isowave/transform/wavelet_transform.h"
 #include "support/test_meshes.h"
@@ -16,6 +17,14 @@ struct CodedSurface {
   std::vector<Vec3> fine;          // fine control points
   std::vector<Vec3> coefficients;  // their analysis
 };
+
+// Metadata for coded test surfaces: a source and a cell edge of 0.05.
+inline IswMetadata sample_metadata() {
+  IswMetadata m;
+  m.values["source"] = "generated";
+  m.values["cell_size"] = "0.05";
+  return m;
+}
 
 inline CodedSurface make_coded_surface(PolygonMesh base, int levels, double detail, std::uint32_t seed) {
   CodedSurface s;

@@ -21,12 +21,7 @@
 namespace isowave {
 namespace {
 
-IswMetadata sample_metadata() {
-  IswMetadata m;
-  m.values["source"] = "generated";
-  m.values["cell_size"] = "0.05";
-  return m;
-}
+using test::sample_metadata;
 
 struct Encoded {
   test::CodedSurface surface;

@@ -19,12 +19,7 @@
 namespace isowave {
 namespace {
 
-IswMetadata sample_metadata() {
-  IswMetadata m;
-  m.values["source"] = "generated";
-  m.values["cell_size"] = "0.05";
-  return m;
-}
+using test::sample_metadata;
 
 // A genus-2 slab with one sharp vertex: sharp flags are coded with the base mesh.
 PolygonMesh slab_with_sharp_vertex(std::uint32_t sharp_vertex) {
