@@ -52,6 +52,7 @@ int decode(const Args& raw) {
   const auto start = std::chrono::steady_clock::now();
 
   IswDecodeOptions options;
+  options.order = IswOrder::Index;  // the surface needs no ranking unless a limit asks for it
   if (args.has("percent")) {
     options.max_percent = args.get_double("percent", 100);
     if (!(options.max_percent >= 0 && options.max_percent <= 100))

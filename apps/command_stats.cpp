@@ -63,7 +63,7 @@ std::vector<StreamRow> stream_rows(const IswDecoded& decoded) {
     row.bytes = point.stream_bytes > UINT64_MAX - stream.offset ? UINT64_MAX : stream.offset + point.stream_bytes;
     row.error = point.error;
     // Packets that end within the prefix, less a last one its encoder cut (which the whole decode leaves incomplete).
-    const auto ended = std::count_if(stream.packet_ends.begin(), stream.packet_ends.end(),
+    const auto ended = std::count_if(stream.plane_ends.begin(), stream.plane_ends.end(),
                                      [&](std::uint64_t end) { return end <= point.stream_bytes; });
     row.planes = std::min(static_cast<int>(ended), stream.planes_decoded);
     rows.push_back(row);

@@ -214,6 +214,7 @@ void run_decode_only(const std::string& path, double percent) {
     const auto start = Clock::now();
     IswDecodeOptions options;
     options.max_percent = percent;
+    options.order = IswOrder::Index;  // as `isowave decode`: ranks only below 100%
     IswDecoded d = read_isw(path, options);
     const auto synthesis_start = Clock::now();
     std::vector<Vec3> points = take_reconstruction(d, d.ranked.size());

@@ -91,7 +91,7 @@ std::vector<std::uint64_t> prefix_sizes(const IswDecoded& full, std::uint64_t si
   std::uint64_t first = size;
   if (full.major_version >= 2) {
     first = full.stream.offset;
-    for (const std::uint64_t end : full.stream.packet_ends) sizes.insert(first + end);
+    for (const std::uint64_t end : full.stream.plane_ends) sizes.insert(first + end);
   }
   for (const IswSectionInfo& section : full.sections)
     if (section.tag == "CHNK") {
@@ -110,6 +110,7 @@ Curve isowave_curve(const std::string& name, const std::string& file, const Refe
   IswDecoded full = decode_isw(file, name);
   IswDecodeOptions options;
   options.hierarchy = full.hierarchy;  // the same for every prefix: built once
+  options.order = IswOrder::Index;     // as `isowave decode` without --percent
   for (const std::uint64_t size : prefix_sizes(full, file.size())) {
     try {
       IswDecoded decoded = decode_isw(file.substr(0, size), name, options);
@@ -236,7 +237,9 @@ struct Speeds {
 Speeds measure_speeds(const std::string& name, const std::string& file, const DracoCoder& draco) {
   Speeds speeds;
   speeds.isowave_decode = best_seconds([&] {
-    IswDecoded decoded = decode_isw(file, name);
+    IswDecodeOptions options;
+    options.order = IswOrder::Index;  // as `isowave decode` without --percent
+    IswDecoded decoded = decode_isw(file, name, options);
     finest_mesh(decoded);
   });
   const IswDecoded full = decode_isw(file, name);

@@ -85,8 +85,12 @@ def mesh():
 
 
 def isw():
-    shutil.copy(os.path.join(HERE, "..", "tests", "codec", "data", "golden_1_0.isw"),
-                os.path.join(CORPUS, "isw", "golden_1_0.isw"))
+    data = os.path.join(HERE, "..", "tests", "codec", "data")
+    shutil.copy(os.path.join(data, "golden_1_0.isw"), os.path.join(CORPUS, "isw", "golden_1_0.isw"))
+    shutil.copy(os.path.join(data, "golden_2_0.isw"), os.path.join(CORPUS, "isw", "golden_2_0.isw"))
+    # Version 2 decodes any prefix past its headers: one cut inside the plane stream.
+    with open(os.path.join(data, "golden_2_0.isw"), "rb") as f:
+        write("isw", "golden_2_0_cut_in_stream.isw", f.read()[:600])
 
 
 def npy():

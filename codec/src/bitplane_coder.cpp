@@ -2,6 +2,9 @@
 
 #include <algorithm>
 #include <cassert>
+#include <memory>
+
+#include <tbb/parallel_for.h>
 
 #include "range_coder.h"
 
@@ -33,113 +36,195 @@ struct Contexts {
   std::size_t node_end, component_end, sign_end, descendant_end, size;
 };
 
-struct PassState {
-  std::vector<std::uint8_t>& flags;
-  std::vector<std::uint32_t>& active;
-  std::vector<std::uint32_t>& next;
-  std::vector<std::uint32_t>& lsp;
-  std::vector<Probability>& models;
+// Where a plane stopped: the position and the mask of its components refined.
+struct PlaneCut {
+  std::uint32_t position = 0;
+  std::uint8_t refined = 0;
 };
 
-// One plane, shared by encoder and decoder: `Io` supplies every decision
-// (the encoder from the magnitudes, the decoder from the stream) and learns
-// the decoded bits. Returns false when the decoder stopped; `refined`
-// receives the refinement entries done.
+// The tree in group order: position p is the p-th entry of the groups'
+// member lists, so each group's nodes are contiguous and ascending (parents
+// before children), and a plane's scan reads every array in order.
+struct GroupedTree {
+  std::vector<std::uint32_t> group_offsets;  // group g: positions [group_offsets[g], group_offsets[g + 1])
+  std::vector<std::uint32_t> node;           // position -> node
+  std::vector<std::uint32_t> parent;         // position -> the parent's position, or kNoParent
+  std::vector<std::uint32_t> child_offsets;  // children of p: children[child_offsets[p] .. child_offsets[p + 1]]
+  std::vector<std::uint32_t> children;       // positions, ascending per node
+  std::vector<std::uint8_t> node_class;      // position -> context class
+  std::size_t groups() const { return group_offsets.size() - 1; }
+};
+
+GroupedTree group_tree(const CoefficientTree& tree, const std::vector<std::uint8_t>& node_class, std::size_t groups) {
+  TreeGroups split = split_tree(tree, groups);
+  GroupedTree t;
+  t.group_offsets = std::move(split.offsets);
+  t.node = std::move(split.members);
+  const std::size_t n = tree.nodes;
+  std::vector<std::uint32_t> position(n);
+  for (std::size_t p = 0; p < n; ++p) position[t.node[p]] = static_cast<std::uint32_t>(p);
+  t.parent.resize(n);
+  t.node_class.resize(n);
+  t.child_offsets.resize(n + 1);
+  t.children.reserve(tree.children.size());
+  for (std::size_t p = 0; p < n; ++p) {
+    const std::uint32_t i = t.node[p];
+    t.parent[p] = tree.parent[i] == kNoParent ? kNoParent : position[tree.parent[i]];
+    t.node_class[p] = node_class[i];
+    t.child_offsets[p] = static_cast<std::uint32_t>(t.children.size());
+    for (std::uint32_t k = tree.child_begin(i); k < tree.child_end(i); ++k) t.children.push_back(position[tree.children[k]]);
+  }
+  t.child_offsets[n] = static_cast<std::uint32_t>(t.children.size());
+  return t;
+}
+
+// A group's open nodes (the roots, and the children of nodes whose
+// descendants were found significant): one bit per position of the group.
+std::vector<std::uint64_t> roots_open(const GroupedTree& t, std::size_t g) {
+  const std::uint32_t first = t.group_offsets[g], last = t.group_offsets[g + 1];
+  std::vector<std::uint64_t> open((last - first + 63) / 64, 0);
+  for (std::uint32_t p = first; p < last; ++p)
+    if (t.parent[p] == kNoParent) open[(p - first) / 64] |= std::uint64_t{1} << ((p - first) % 64);
+  return open;
+}
+
+// One group's coding state, in positions.
+struct GroupCoder {
+  const GroupedTree& t;
+  const Contexts& c;
+  std::vector<std::uint8_t>& flags;  // all groups' (each writes its own positions)
+  std::vector<std::uint64_t>& open;  // this group's
+  std::vector<Probability>& models;  // this group's
+  std::uint32_t first;               // the group's first position
+};
+
+// One open node of plane b: refinement, significance, descendants. Returns
+// false when the decoder stopped; `cut` then says where.
 template <class Io>
-bool code_plane(Io& io, const CoefficientTree& tree, const std::vector<std::uint8_t>& node_class, const Contexts& c,
-                PassState s, int b, std::size_t& refined) {
-  const std::size_t lsp_before = s.lsp.size();
-  s.next.clear();
-  for (std::size_t idx = 0; idx < s.active.size(); ++idx) {
-    const std::uint32_t i = s.active[idx];
-    const std::uint32_t parent = tree.parent[i];
-    const std::uint8_t pf = parent == kNoParent ? 0 : s.flags[parent];
-    const int pstate = parent == kNoParent ? 0 : ((pf & kSignificant) ? 2 : 1);
-    const int cls = node_class[i];
-    std::uint8_t f = s.flags[i];
-    const int own = (f & kSignificant) ? 1 : 0;
-    if ((f & kSignificant) != kSignificant) {
-      const int z = io.bit(s.models[c.node(cls, pstate, own)], [&] { return io.any_reaches(i, f, b); });
-      if (z) {
-        std::uint8_t nf = f;
-        int insignificant = 0;
-        for (int k = 0; k < 3; ++k) insignificant += (f >> k) & 1 ? 0 : 1;
-        int seen_one = 0;
-        for (int k = 0; k < 3; ++k) {
-          if ((f >> k) & 1) continue;
-          --insignificant;
-          const int pk = parent == kNoParent ? 0 : (((pf >> k) & 1) ? 2 : 1);
-          const int bit = insignificant == 0 && !seen_one
-                              ? 1
-                              : io.bit(s.models[c.component(k, pk, own)], [&] { return io.reaches(i, k, b); });
-          if (!bit) continue;
-          seen_one = 1;
-          const int ps = pk == 2 ? 1 + ((pf >> (kSignShift + k)) & 1) : 0;
-          const int negative = io.bit(s.models[c.sign(k, ps)], [&] { return io.negative(i, k); });
-          nf = static_cast<std::uint8_t>(nf | (1 << k) | (negative << (kSignShift + k)));
-        }
-        if (io.stopped()) return false;
-        for (int k = 0; k < 3; ++k)
-          if (((nf & ~f) >> k) & 1) {
-            io.set_significant(i, k, b);
-            s.lsp.push_back(i * 4 + static_cast<std::uint32_t>(k));
-          }
-        s.flags[i] = f = nf;
-      } else if (io.stopped()) {
+bool code_node(Io& io, GroupCoder& s, std::uint32_t i, int b, PlaneCut& cut) {
+  const Contexts& c = s.c;
+  std::vector<std::uint8_t>& flags = s.flags;
+  std::vector<Probability>& models = s.models;
+  const std::uint32_t parent = s.t.parent[i];
+  const std::uint8_t pf = parent == kNoParent ? 0 : flags[parent];
+  const int cls = s.t.node_class[i];
+  std::uint8_t f = flags[i];
+  // Refinement: bit b of every component significant before the plane (a
+  // node's flags change only on its own visit, after this).
+  if (f & kSignificant) {
+    std::uint8_t refined = 0;
+    for (int k = 0; k < 3; ++k) {
+      if (!((f >> k) & 1)) continue;
+      const int bit = io.bit(models[c.refinement(k, parent == kNoParent && cls == 0)], [&] { return io.reaches(i, k, b); });
+      if (io.stopped()) {
+        cut = {i, refined};
         return false;
       }
+      io.refine(i, k, b, bit);
+      refined = static_cast<std::uint8_t>(refined | (1 << k));
     }
-    const std::uint32_t first = tree.child_begin(i), last = tree.child_end(i);
-    if (first != last && !(f & kDescendants)) {
-      const int own_now = (f & kSignificant) ? 1 : 0;
-      const int d = io.bit(s.models[c.descendants(cls, own_now)], [&] { return io.descendants_reach(i, b); });
-      if (io.stopped()) return false;
-      if (d) {
-        s.flags[i] = f = static_cast<std::uint8_t>(f | kDescendants);
-        s.active.insert(s.active.end(), tree.children.begin() + first, tree.children.begin() + last);
+  }
+  const int pstate = parent == kNoParent ? 0 : ((pf & kSignificant) ? 2 : 1);
+  const int own = (f & kSignificant) ? 1 : 0;
+  // Significance of the components not yet significant, and their signs.
+  if ((f & kSignificant) != kSignificant) {
+    const int z = io.bit(models[c.node(cls, pstate, own)], [&] { return io.any_reaches(i, f, b); });
+    if (io.stopped()) {
+      cut = {i, kSignificant};
+      return false;
+    }
+    if (z) {
+      std::uint8_t nf = f;
+      int insignificant = 0;
+      for (int k = 0; k < 3; ++k) insignificant += (f >> k) & 1 ? 0 : 1;
+      int seen_one = 0;
+      for (int k = 0; k < 3; ++k) {
+        if ((f >> k) & 1) continue;
+        --insignificant;
+        const int pk = parent == kNoParent ? 0 : (((pf >> k) & 1) ? 2 : 1);
+        const int bit = insignificant == 0 && !seen_one
+                            ? 1
+                            : io.bit(models[c.component(k, pk, own)], [&] { return io.reaches(i, k, b); });
+        if (!bit) continue;
+        seen_one = 1;
+        const int ps = pk == 2 ? 1 + ((pf >> (kSignShift + k)) & 1) : 0;
+        const int negative = io.bit(models[c.sign(k, ps)], [&] { return io.negative_bit(i, k); });
+        nf = static_cast<std::uint8_t>(nf | (1 << k) | (negative << (kSignShift + k)));
+      }
+      if (io.stopped()) {
+        cut = {i, kSignificant};
+        return false;
+      }
+      for (int k = 0; k < 3; ++k)
+        if (((nf & ~f) >> k) & 1) io.set_significant(i, k, b);
+      flags[i] = f = nf;
+    }
+  }
+  // Whether some descendant reaches 2^b, which opens the children.
+  const std::uint32_t first = s.t.child_offsets[i], last = s.t.child_offsets[i + 1];
+  if (first != last && !(f & kDescendants)) {
+    const int own_now = (f & kSignificant) ? 1 : 0;
+    const int d = io.bit(models[c.descendants(cls, own_now)], [&] { return io.descendants_reach(i, b); });
+    if (io.stopped()) {
+      cut = {i, kSignificant};
+      return false;
+    }
+    if (d) {
+      flags[i] = static_cast<std::uint8_t>(f | kDescendants);
+      for (std::uint32_t k = first; k < last; ++k) {
+        const std::uint32_t q = s.t.children[k] - s.first;
+        s.open[q / 64] |= std::uint64_t{1} << (q % 64);
       }
     }
-    if ((f & kSignificant) != kSignificant || (first != last && !(f & kDescendants))) s.next.push_back(i);
-  }
-  std::swap(s.active, s.next);
-  for (refined = 0; refined < lsp_before; ++refined) {
-    const std::uint32_t e = s.lsp[refined];
-    const std::uint32_t i = e >> 2;
-    const int k = static_cast<int>(e & 3);
-    const int bit = io.bit(s.models[c.refinement(k, tree.parent[i] == kNoParent && node_class[i] == 0)],
-                           [&] { return io.reaches(i, k, b); });
-    if (io.stopped()) return false;
-    io.refine(i, k, b, bit);
   }
   return true;
 }
 
-// The encoder's side: decisions from the magnitudes.
+// One plane of group g, shared by encoder and decoder: `Io` supplies every
+// decision (the encoder from the magnitudes, the decoder from the stream) and
+// learns the decoded bits. A scan over the open bits in position order; a
+// node opened in the pass lies after its parent, so the pass reaches it.
+template <class Io>
+bool code_plane(Io& io, GroupCoder& s, int b, PlaneCut& cut) {
+  for (std::size_t w = 0; w < s.open.size(); ++w) {
+    std::uint64_t bits = s.open[w];
+    while (bits != 0) {
+      const int bit = __builtin_ctzll(bits);
+      if (!code_node(io, s, s.first + static_cast<std::uint32_t>(w * 64 + static_cast<std::size_t>(bit)), b, cut))
+        return false;
+      bits = bit == 63 ? 0 : s.open[w] & (~std::uint64_t{0} << (bit + 1));
+    }
+  }
+  return true;
+}
+
+// The encoder's side: decisions from the magnitudes (in positions).
 struct EncoderIo {
   RangeEncoder& rc;
-  const PlaneSymbols& symbols;
-  const std::vector<std::uint32_t>& descendant_max;  // per node with children
+  const std::vector<std::uint32_t>& magnitude;       // 3 per position
+  const std::vector<std::uint8_t>& negative;         // per position
+  const std::vector<std::uint32_t>& descendant_max;  // per position
   template <class Value>
   int bit(Probability& p, Value value) {
     const int v = value();
     rc.encode_bit(p, v);
     return v;
   }
-  std::uint32_t m(std::uint32_t i, int k) const { return symbols.magnitude[3 * std::size_t{i} + static_cast<std::size_t>(k)]; }
+  std::uint32_t m(std::uint32_t i, int k) const { return magnitude[3 * std::size_t{i} + static_cast<std::size_t>(k)]; }
   int reaches(std::uint32_t i, int k, int b) const { return static_cast<int>((m(i, k) >> b) & 1u); }
   int any_reaches(std::uint32_t i, std::uint8_t f, int b) const {
     for (int k = 0; k < 3; ++k)
       if (!((f >> k) & 1) && reaches(i, k, b)) return 1;
     return 0;
   }
-  int negative(std::uint32_t i, int k) const { return (symbols.negative[i] >> k) & 1; }
+  int negative_bit(std::uint32_t i, int k) const { return (negative[i] >> k) & 1; }
   int descendants_reach(std::uint32_t i, int b) const { return (descendant_max[i] >> b) != 0 ? 1 : 0; }
   bool stopped() const { return false; }
   void set_significant(std::uint32_t, int, int) {}
   void refine(std::uint32_t, int, int, int) {}
 };
 
-// The decoder's side: decisions from the stream, magnitudes built from them.
+// The decoder's side: decisions from the stream, magnitudes (in positions) built from them.
 struct DecoderIo {
   PrefixRangeDecoder& rc;
   std::vector<std::uint32_t>& magnitude;
@@ -149,7 +234,7 @@ struct DecoderIo {
   }
   int reaches(std::uint32_t, int, int) const { return 0; }
   int any_reaches(std::uint32_t, std::uint8_t, int) const { return 0; }
-  int negative(std::uint32_t, int) const { return 0; }
+  int negative_bit(std::uint32_t, int) const { return 0; }
   int descendants_reach(std::uint32_t, int) const { return 0; }
   bool stopped() const { return rc.stopped(); }
   void set_significant(std::uint32_t i, int k, int b) { magnitude[3 * std::size_t{i} + static_cast<std::size_t>(k)] = 1u << b; }
@@ -158,87 +243,145 @@ struct DecoderIo {
   }
 };
 
-// Per node with children: the largest magnitude among its descendants.
-std::vector<std::uint32_t> descendant_maxima(const CoefficientTree& tree, const PlaneSymbols& symbols) {
-  const std::size_t parents = tree.child_offsets.empty() ? 0 : tree.child_offsets.size() - 1;
-  std::vector<std::uint32_t> below(parents, 0);
-  for (std::size_t i = tree.nodes; i-- > tree.roots_end;) {
-    std::uint32_t m = std::max({symbols.magnitude[3 * i], symbols.magnitude[3 * i + 1], symbols.magnitude[3 * i + 2]});
-    if (i < parents) m = std::max(m, below[i]);
-    std::uint32_t& p = below[tree.parent[i]];
-    p = std::max(p, m);
+// The symbols in positions, and per position the largest magnitude among its
+// descendants (a reverse scan: children lie after their parents).
+struct PositionSymbols {
+  std::vector<std::uint32_t> magnitude;
+  std::vector<std::uint8_t> negative;
+  std::vector<std::uint32_t> descendant_max;
+};
+PositionSymbols position_symbols(const GroupedTree& t, const PlaneSymbols& symbols) {
+  const std::size_t n = t.node.size();
+  PositionSymbols s{std::vector<std::uint32_t>(3 * n), std::vector<std::uint8_t>(n), std::vector<std::uint32_t>(n, 0)};
+  for (std::size_t p = 0; p < n; ++p) {
+    const std::size_t i = t.node[p];
+    for (std::size_t k = 0; k < 3; ++k) s.magnitude[3 * p + k] = symbols.magnitude[3 * i + k];
+    s.negative[p] = symbols.negative[i];
   }
-  return below;
-}
-
-std::vector<std::uint32_t> roots(const CoefficientTree& tree) {
-  std::vector<std::uint32_t> list(tree.roots_end);
-  for (std::size_t i = 0; i < list.size(); ++i) list[i] = static_cast<std::uint32_t>(i);
-  return list;
+  for (std::size_t p = n; p-- > 0;) {
+    if (t.parent[p] == kNoParent) continue;
+    const std::uint32_t m = std::max({s.magnitude[3 * p], s.magnitude[3 * p + 1], s.magnitude[3 * p + 2], s.descendant_max[p]});
+    std::uint32_t& above = s.descendant_max[t.parent[p]];
+    above = std::max(above, m);
+  }
+  return s;
 }
 
 }  // namespace
 
-PlanePackets encode_planes(const CoefficientTree& tree, const PlaneSymbols& symbols, int lowest_plane) {
+PlanePackets encode_planes(const CoefficientTree& tree, const PlaneSymbols& symbols, std::size_t groups,
+                           int lowest_plane) {
   assert(symbols.magnitude.size() == 3 * tree.nodes && symbols.negative.size() == tree.nodes);
   PlanePackets result;
   const std::uint32_t largest =
       symbols.magnitude.empty() ? 0 : *std::max_element(symbols.magnitude.begin(), symbols.magnitude.end());
   result.top_plane = bit_length(largest) - 1;
+  const int planes = std::max(0, result.top_plane + 1 - std::max(lowest_plane, 0));
+  result.packets.resize(static_cast<std::size_t>(planes) * groups);
   const Contexts c(symbols.classes);
-  std::vector<Probability> models(c.size, kProbabilityHalf);
+  const GroupedTree t = group_tree(tree, symbols.node_class, groups);
+  const PositionSymbols s = position_symbols(t, symbols);
   std::vector<std::uint8_t> flags(tree.nodes, 0);
-  std::vector<std::uint32_t> active = roots(tree), next, lsp;
-  const std::vector<std::uint32_t> descendant_max = descendant_maxima(tree, symbols);
-  for (int b = result.top_plane; b >= std::max(lowest_plane, 0); --b) {
-    std::string packet;
-    RangeEncoder rc(packet);
-    EncoderIo io{rc, symbols, descendant_max};
-    std::size_t refined = 0;
-    code_plane(io, tree, symbols.node_class, c, PassState{flags, active, next, lsp, models}, b, refined);
-    rc.finish_trimmed(0);
-    result.packets.push_back(std::move(packet));
-  }
+  tbb::parallel_for(std::size_t{0}, groups, [&](std::size_t g) {
+    std::vector<Probability> models(c.size, kProbabilityHalf);
+    std::vector<std::uint64_t> open = roots_open(t, g);
+    GroupCoder coder{t, c, flags, open, models, t.group_offsets[g]};
+    for (int p = 0; p < planes; ++p) {
+      std::string& packet = result.packets[static_cast<std::size_t>(p) * groups + g];
+      RangeEncoder rc(packet);
+      EncoderIo io{rc, s.magnitude, s.negative, s.descendant_max};
+      PlaneCut cut;
+      code_plane(io, coder, result.top_plane - p, cut);
+      rc.finish_trimmed(0);
+    }
+  });
   return result;
 }
 
-PlaneDecoder::PlaneDecoder(const CoefficientTree& tree, std::vector<std::uint8_t> node_class, int classes, int top_plane)
-    : tree_(tree), node_class_(std::move(node_class)), classes_(classes), top_plane_(top_plane),
-      magnitude_(3 * tree.nodes, 0), flags_(tree.nodes, 0), active_(roots(tree)),
-      models_(Contexts(classes).size, kProbabilityHalf) {}
+struct PlaneDecoder::State {
+  GroupedTree tree;
+  Contexts contexts;
+  std::vector<std::uint32_t> magnitude;  // 3 per position
+  std::vector<std::uint8_t> flags;       // per position
+};
 
-bool PlaneDecoder::decode_packet(std::string_view packet, bool cut) {
-  const int b = top_plane_ - planes_done_;
-  if (stopped_ || b < 0) return false;
-  PrefixRangeDecoder rc(reinterpret_cast<const std::uint8_t*>(packet.data()), packet.size(),
-                        cut ? PrefixRangeDecoder::Ending::Cut : PrefixRangeDecoder::Ending::Complete);
-  DecoderIo io{rc, magnitude_};
-  lsp_before_ = lsp_.size();
-  std::size_t refined = 0;
-  const bool done = code_plane(io, tree_, node_class_, Contexts(classes_), PassState{flags_, active_, next_, lsp_, models_}, b, refined);
-  if (!done) {
-    stopped_ = true;
-    cut_plane_ = b;
-    refined_ = refined;
-    return false;
+PlaneDecoder::PlaneDecoder(const CoefficientTree& tree, const std::vector<std::uint8_t>& node_class, int classes,
+                           int top_plane, std::size_t groups)
+    : top_plane_(top_plane),
+      state_(std::make_unique<State>(State{group_tree(tree, node_class, groups), Contexts(classes),
+                                           std::vector<std::uint32_t>(3 * tree.nodes, 0),
+                                           std::vector<std::uint8_t>(tree.nodes, 0)})),
+      group_state_(groups) {
+  for (std::size_t g = 0; g < groups; ++g) {
+    group_state_[g].models.assign(state_->contexts.size, kProbabilityHalf);
+    group_state_[g].open = roots_open(state_->tree, g);
   }
-  ++planes_done_;
-  return b > 0;
+}
+
+PlaneDecoder::~PlaneDecoder() = default;
+
+void PlaneDecoder::decode(const std::vector<std::string_view>& packets, bool last_cut) {
+  tbb::parallel_for(std::size_t{0}, group_state_.size(), [&](std::size_t g) { decode_group(g, packets, last_cut); });
+}
+
+void PlaneDecoder::decode_group(std::size_t g, const std::vector<std::string_view>& packets, bool last_cut) {
+  Group& group = group_state_[g];
+  State& state = *state_;
+  GroupCoder coder{state.tree, state.contexts, state.flags, group.open, group.models, state.tree.group_offsets[g]};
+  const std::size_t groups = group_state_.size();
+  for (std::size_t j = g; j < packets.size(); j += groups) {
+    const int b = top_plane_ - group.planes_done;
+    if (b < 0) return;
+    const bool cut = last_cut && j + 1 == packets.size();
+    PrefixRangeDecoder rc(reinterpret_cast<const std::uint8_t*>(packets[j].data()), packets[j].size(),
+                          cut ? PrefixRangeDecoder::Ending::Cut : PrefixRangeDecoder::Ending::Complete);
+    DecoderIo io{rc, state.magnitude};
+    PlaneCut where;
+    if (!code_plane(io, coder, b, where)) {
+      group.cut_plane = b;
+      group.cut_position = where.position;
+      group.cut_refined = where.refined;
+      return;
+    }
+    ++group.planes_done;
+  }
+}
+
+int PlaneDecoder::planes_done() const {
+  int done = top_plane_ + 1;
+  for (const Group& g : group_state_) done = std::min(done, g.planes_done);
+  return done;
 }
 
 void PlaneDecoder::values(std::vector<double>& out) const {
-  out.assign(3 * tree_.nodes, 0.0);
-  // The lowest plane known of each significant component: the last complete
-  // plane, or, after a cut, the cut plane for what it reached.
-  const int complete_low = top_plane_ - planes_done_ + 1;
+  out.assign(3 * state_->tree.node.size(), 0.0);
+  tbb::parallel_for(std::size_t{0}, group_state_.size(), [&](std::size_t g) { group_values(g, out); });
+}
+
+void PlaneDecoder::group_values(std::size_t g, std::vector<double>& out) const {
+  // The lowest plane known of each significant component: the group's last
+  // complete plane, or, after a cut, the cut plane for the components it
+  // reached (those it made significant, and those it refined: at positions
+  // before the cut's, and the cut node's refined ones).
+  const Group& group = group_state_[g];
+  const State& state = *state_;
+  const int complete_low = top_plane_ - group.planes_done + 1;
+  const int cut = group.cut_plane;
   const auto half = [](int low) { return low <= 0 ? 0.5 : double(1u << (low - 1)); };
-  for (std::size_t j = 0; j < lsp_.size(); ++j) {
-    const std::uint32_t e = lsp_[j];
-    const std::size_t i = e >> 2, k = e & 3;
-    int low = complete_low;
-    if (stopped_ && (j < refined_ || j >= lsp_before_)) low = cut_plane_;
-    const double v = magnitude_[3 * i + k] + half(low);
-    out[3 * i + k] = (flags_[i] >> (kSignShift + k)) & 1 ? -v : v;
+  for (std::uint32_t p = state.tree.group_offsets[g]; p < state.tree.group_offsets[g + 1]; ++p) {
+    const std::uint8_t f = state.flags[p];
+    if (!(f & kSignificant)) continue;
+    const std::size_t i = state.tree.node[p];
+    for (std::size_t k = 0; k < 3; ++k) {
+      if (!((f >> k) & 1)) continue;
+      const std::uint32_t m = state.magnitude[3 * std::size_t{p} + k];
+      int low = complete_low;
+      if (cut >= 0 &&
+          (m == 1u << cut || p < group.cut_position || (p == group.cut_position && ((group.cut_refined >> k) & 1))))
+        low = cut;
+      const double v = m + half(low);
+      out[3 * i + k] = (f >> (kSignShift + k)) & 1 ? -v : v;
+    }
   }
 }
 

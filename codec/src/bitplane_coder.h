@@ -1,23 +1,30 @@
 #pragma once
 // Private: the embedded bit-plane coder of .isw 2.0 (docs/FORMAT.md, PLNS;
 // issue #34). Every node of the coefficient tree carries three non-negative
-// integer magnitudes (its components in step units) and their signs. Plane b
-// (from the top plane down to 0) is one packet of adaptive binary decisions:
-//   sorting pass: for each node of the active list (roots first, then nodes
-//     whose parent's descendants became significant, in the order they were
-//     found): whether a not-yet-significant component reaches 2^b (one
+// integer magnitudes (its components in step units) and their signs. The
+// nodes form independent groups (split_tree), each coded on its own. Plane b
+// (from the top plane down to 0) is one packet per group, one scan over the
+// group's open nodes in index order (the roots, and the children of nodes
+// whose descendants were found significant; parents come before children, so
+// a node opened in a pass is visited in it). For each open node:
+//   refinement: bit b of every component significant before the plane;
+//   significance: whether a not-yet-significant component reaches 2^b (one
 //     decision for the node, then one per component, then the sign of each
-//     new one); then, for a node with children whose descendants were all
-//     below 2^(b+1), whether some descendant reaches 2^b, which activates its
-//     children within the same pass (set partitioning as in SPIHT, Said and
-//     Pearlman 1996, with the zerotree of Shapiro's EZW);
-//   refinement pass: bit b of every component significant before the plane.
-// Contexts (adaptive, kept across planes): coefficient class, the parent's
-// and the node's own significance, the component, the parent's sign. A
-// decoder stopped anywhere (a cut packet) keeps every unit it completed; a
-// component's value is then the middle of the interval its known bits leave.
-// Cost: O(nodes) per plane for encoder and decoder; at most 32 planes.
+//     new one);
+//   descendants: for a node with children whose descendants were all below
+//     2^(b+1), whether some descendant reaches 2^b, which opens its children
+//     (set partitioning as in SPIHT, Said and Pearlman 1996, with the
+//     zerotree of Shapiro's EZW).
+// Contexts (adaptive, kept across planes, one set per group): coefficient
+// class, the parent's and the node's own significance, the component, the
+// parent's sign. A decoder stopped anywhere (a cut packet) keeps every unit it
+// completed; a component's value is then the middle of the interval its known
+// bits leave. Cost: O(nodes) per plane for encoder and decoder; at most 32
+// planes. Index order keeps the scan's memory access sequential.
+#include <algorithm>
+#include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -29,6 +36,15 @@ namespace isowave::detail {
 // Largest coded magnitude, and so at most 32 planes.
 constexpr std::uint32_t kMaxMagnitude = 0xFFFFFFFFu;
 
+// Independent groups of the tree (split_tree), each with its own packets and
+// contexts, so that a decoder may decode them in parallel: one group per
+// kNodesPerGroup nodes, at most kMaxGroups.
+constexpr std::size_t kNodesPerGroup = std::size_t{1} << 17;
+constexpr std::size_t kMaxGroups = 64;
+inline std::size_t plane_groups(std::size_t nodes) {
+  return std::min(kMaxGroups, std::max<std::size_t>(1, (nodes + kNodesPerGroup / 2) / kNodesPerGroup));
+}
+
 struct PlaneSymbols {
   // Per node: 3 magnitudes (step units) and the sign bits (bit k: component k negative).
   std::vector<std::uint32_t> magnitude;
@@ -39,47 +55,54 @@ struct PlaneSymbols {
 };
 
 // The top plane (bit length of the largest magnitude, minus 1; -1 when all
-// are zero) and one packet per plane from the top down to `lowest_plane`
-// (>= 0), each flushed by RangeEncoder::finish_trimmed().
+// are zero) and, for each plane from the top down to `lowest_plane` (>= 0),
+// one packet per group (packet j: group j mod G of plane top - j / G), each
+// flushed by RangeEncoder::finish_trimmed(). The groups are coded in parallel.
 struct PlanePackets {
   int top_plane = -1;
   std::vector<std::string> packets;
 };
-PlanePackets encode_planes(const CoefficientTree& tree, const PlaneSymbols& symbols, int lowest_plane = 0);
+PlanePackets encode_planes(const CoefficientTree& tree, const PlaneSymbols& symbols, std::size_t groups,
+                           int lowest_plane = 0);
 
-// The decoder's state after any number of packets, complete or cut.
+// The decoder's state after any prefix of the packets.
 class PlaneDecoder {
  public:
-  // `node_class` and `classes` as in PlaneSymbols; top_plane in [-1, 31].
-  PlaneDecoder(const CoefficientTree& tree, std::vector<std::uint8_t> node_class, int classes, int top_plane);
+  // `node_class` and `classes` as in PlaneSymbols; top_plane in [-1, 31];
+  // groups in [1, kMaxGroups]. Keeps no reference to its arguments.
+  PlaneDecoder(const CoefficientTree& tree, const std::vector<std::uint8_t>& node_class, int classes, int top_plane,
+               std::size_t groups);
+  ~PlaneDecoder();
 
-  // Decodes the next plane's packet; a `cut` packet stops at the first
-  // decision its missing bytes could change. Returns false when it stopped
-  // there (then no further packet may be decoded) or when every plane is
-  // done. Any bytes decode (to some values) in O(nodes): the section's CRC
-  // is what detects damage.
-  bool decode_packet(std::string_view packet, bool cut);
-  int planes_done() const { return planes_done_; }  // complete packets decoded
-  bool stopped() const { return stopped_; }
+  // Decodes the packets in the encoder's order, the groups in parallel; a
+  // `last_cut` last packet stops at the first decision its missing bytes
+  // could change. Any bytes decode (to some values) in O(nodes x planes):
+  // the section's CRC is what detects damage. Call once.
+  void decode(const std::vector<std::string_view>& packets, bool last_cut);
+  // Planes complete in every group.
+  int planes_done() const;
 
   // Per node, the three components in step units (0 where not significant).
   void values(std::vector<double>& out) const;
 
  private:
-  const CoefficientTree& tree_;
-  std::vector<std::uint8_t> node_class_;
-  int classes_;
+  struct State;  // the tree in group order, magnitudes and flags
+  struct Group {
+    std::vector<std::uint16_t> models;
+    std::vector<std::uint64_t> open;  // one bit per position of the group
+    int planes_done = 0;
+    // Where a cut stopped: the plane (-1: none), the position, and the mask
+    // of that node's components refined in the plane.
+    int cut_plane = -1;
+    std::uint32_t cut_position = 0;
+    std::uint8_t cut_refined = 0;
+  };
+  void decode_group(std::size_t g, const std::vector<std::string_view>& packets, bool last_cut);
+  void group_values(std::size_t g, std::vector<double>& out) const;
+
   int top_plane_;
-  int planes_done_ = 0;
-  bool stopped_ = false;
-  std::vector<std::uint32_t> magnitude_;
-  std::vector<std::uint8_t> flags_;
-  std::vector<std::uint32_t> active_, next_, lsp_;
-  std::vector<std::uint16_t> models_;
-  // Where a cut stopped: the plane, the significant components refined in
-  // it, and the list length before it.
-  int cut_plane_ = -1;
-  std::size_t refined_ = 0, lsp_before_ = 0;
+  std::unique_ptr<State> state_;
+  std::vector<Group> group_state_;
 };
 
 }  // namespace isowave::detail

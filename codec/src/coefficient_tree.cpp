@@ -1,5 +1,6 @@
 #include "coefficient_tree.h"
 
+#include <algorithm>
 #include <cassert>
 
 namespace isowave::detail {
@@ -47,6 +48,28 @@ CoefficientTree build_coefficient_tree(const SubdivisionHierarchy& hierarchy) {
   std::vector<std::uint32_t> fill(tree.child_offsets.begin(), tree.child_offsets.end() - 1);
   for (std::size_t i = tree.roots_end; i < tree.nodes; ++i) tree.children[fill[tree.parent[i]]++] = static_cast<std::uint32_t>(i);
   return tree;
+}
+
+TreeGroups split_tree(const CoefficientTree& tree, std::size_t groups) {
+  assert(groups >= 1 && groups <= 256);
+  // Subtree sizes (children have larger indices than their parents).
+  std::vector<std::uint32_t> size(tree.nodes, 1);
+  for (std::size_t i = tree.nodes; i-- > tree.roots_end;) size[tree.parent[i]] += size[i];
+  std::vector<std::uint8_t> group(tree.nodes, 0);
+  std::uint64_t before = 0;
+  for (std::size_t r = 0; r < tree.roots_end; ++r) {
+    group[r] = static_cast<std::uint8_t>(std::min<std::uint64_t>(groups - 1, before * groups / tree.nodes));
+    before += size[r];
+  }
+  for (std::size_t i = tree.roots_end; i < tree.nodes; ++i) group[i] = group[tree.parent[i]];
+  TreeGroups result;
+  result.offsets.assign(groups + 1, 0);
+  for (std::size_t i = 0; i < tree.nodes; ++i) ++result.offsets[group[i] + 1u];
+  for (std::size_t g = 0; g < groups; ++g) result.offsets[g + 1] += result.offsets[g];
+  result.members.resize(tree.nodes);
+  std::vector<std::uint32_t> fill(result.offsets.begin(), result.offsets.end() - 1);
+  for (std::size_t i = 0; i < tree.nodes; ++i) result.members[fill[group[i]]++] = static_cast<std::uint32_t>(i);
+  return result;
 }
 
 }  // namespace isowave::detail

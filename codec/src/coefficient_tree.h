@@ -33,4 +33,16 @@ struct CoefficientTree {
 // Cost: O(fine vertices) time and 12 bytes per entry.
 CoefficientTree build_coefficient_tree(const SubdivisionHierarchy& hierarchy);
 
+// The nodes in `groups` independent parts (docs/FORMAT.md, PLNS): the roots
+// in index order cut into runs of about equal subtree size, each with all its
+// descendants. Group g's members, ascending (so parents before children):
+// members[offsets[g] .. offsets[g + 1]]. Requires groups >= 1; groups may
+// exceed the roots (then some are empty). Cost: O(nodes), 9 bytes per node.
+struct TreeGroups {
+  std::vector<std::uint32_t> offsets;
+  std::vector<std::uint32_t> members;
+  std::size_t count() const { return offsets.size() - 1; }
+};
+TreeGroups split_tree(const CoefficientTree& tree, std::size_t groups);
+
 }  // namespace isowave::detail

@@ -23,18 +23,6 @@ using Clock = std::chrono::steady_clock;
 
 double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
 
-// Packets through the decoder; returns the packet bytes read.
-std::uint64_t decode_packets(const PlaneStream& planes, PlaneDecoder& decoder) {
-  std::uint64_t bytes = 0;
-  for (std::size_t p = 0; p < planes.packets.size(); ++p) {
-    const bool cut = planes.last_cut && p + 1 == planes.packets.size();
-    decoder.decode_packet(planes.packets[p], cut);
-    bytes += planes.packets[p].size();
-    if (decoder.stopped()) break;
-  }
-  return bytes;
-}
-
 // The world coefficients from the decoder's step-unit values.
 void to_world(const PlaneDecoder& decoder, const CoefficientClasses& layout, const std::vector<std::uint8_t>& classes,
               const V2Scales& scales, const std::vector<Vec3>& frame_base, const std::vector<Vec3>& normals,
@@ -66,10 +54,11 @@ void decode_plane_stream(const Section& section, const SubdivisionHierarchy& hie
   IswStreamInfo& stream = result.stream;
   stream.offset = section.info.offset + kSectionHeader + planes.data_offset;
   stream.bytes = section.payload.size() > planes.data_offset ? section.payload.size() - planes.data_offset : 0;
-  stream.top_plane = planes.top_plane;
-  stream.planes = static_cast<int>(planes.packets_total);
-  stream.packet_ends = planes.packet_ends;
-  result.chunks_total = planes.packets_total;
+  stream.top_plane = planes.layout.top_plane;
+  stream.planes = static_cast<int>(planes.planes_total);
+  stream.groups = static_cast<int>(planes.layout.groups);
+  stream.plane_ends = planes.plane_ends;
+  result.chunks_total = planes.planes_total;
 
   // The frames need only the base the decoder has: built during the planes.
   const std::vector<Vec3> frame_base = result.base.positions;
@@ -78,8 +67,9 @@ void decode_plane_stream(const Section& section, const SubdivisionHierarchy& hie
   frames.run([&] { normals = frame_normals(hierarchy, frame_base); });
   const CoefficientTree tree = build_coefficient_tree(hierarchy);
   const std::vector<std::uint8_t> classes = node_classes(layout);
-  PlaneDecoder decoder(tree, classes, layout.count(), planes.top_plane);
-  stream.decoded = decode_packets(planes, decoder);
+  PlaneDecoder decoder(tree, classes, layout.count(), planes.layout.top_plane, planes.layout.groups);
+  decoder.decode(planes.packets, planes.last_cut);
+  for (std::string_view packet : planes.packets) stream.decoded += packet.size();
   stream.planes_decoded = decoder.planes_done();
   result.chunks_decoded = static_cast<std::size_t>(decoder.planes_done());
   result.seconds.chunks = seconds_since(start);
@@ -89,7 +79,13 @@ void decode_plane_stream(const Section& section, const SubdivisionHierarchy& hie
   result.seconds.dequantize = seconds_since(world_start);
 }
 
-void rank_and_keep(IswDecoded& result, const CoefficientClasses& layout, std::uint64_t keep) {
+void rank_and_keep(IswDecoded& result, const CoefficientClasses& layout, std::uint64_t keep, IswOrder order) {
+  if (order == IswOrder::Index) {
+    result.ranked.clear();
+    for (std::size_t i = layout.base(); i < result.coefficients.size(); ++i)
+      if (!(result.coefficients[i] == Vec3{})) result.ranked.push_back(static_cast<std::uint32_t>(i));
+    return;
+  }
   std::vector<RankedEntry> keyed;
   keyed.reserve(static_cast<std::size_t>(std::min<std::uint64_t>(result.coefficients_total, result.coefficients.size())));
   for (std::size_t i = layout.base(); i < result.coefficients.size(); ++i) {

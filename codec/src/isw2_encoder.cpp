@@ -114,7 +114,8 @@ std::string encode_isw_v2(const SubdivisionHierarchy& hierarchy, const std::vect
       coarse_base[v][axis] = double(base_q[v][axis]) * scales.frame_step;
     }
   const PlaneSymbols symbols = symbols_of(hierarchy, coefficients, coarse_base, scales);
-  const PlanePackets planes = encode_planes(build_coefficient_tree(hierarchy), symbols);
+  const std::size_t groups = plane_groups(hierarchy.fine_vertex_count());
+  const PlanePackets planes = encode_planes(build_coefficient_tree(hierarchy), symbols, groups);
 
   std::string out;
   put_file_header(out, 2);
@@ -122,7 +123,7 @@ std::string encode_isw_v2(const SubdivisionHierarchy& hierarchy, const std::vect
   put_base(out, hierarchy.base(), 2);
   put_quantization_v2(out, scales, hierarchy.levels(), nonzero_wavelets(hierarchy, symbols));
   put_base_points(out, hierarchy.base(), base_q);
-  put_planes(out, planes.top_plane, planes.packets, PlaneEnding::Complete);
+  put_planes(out, {planes.top_plane, groups}, planes.packets, PlaneEnding::Complete);
   put_section(out, "END ", std::string_view());
   if (options.max_bytes > 0 && out.size() > options.max_bytes)
     return rewrite_isw(out, IswRewrite{stream_bytes_within(out, options.max_bytes), {}, nullptr});
@@ -168,7 +169,7 @@ std::string rewrite_isw(const std::string& file, const IswRewrite& rewrite) {
     for (const IswRatePoint& row : rewrite.rate_table)
       if (row.stream_bytes <= stream_bytes) rows.push_back(row);
     if (!rows.empty()) put_rate_table(out, rows);
-    put_planes(out, planes.top_plane, planes.packets, planes.last_cut ? PlaneEnding::Cut : PlaneEnding::Complete);
+    put_planes(out, planes.layout, planes.packets, planes.last_cut ? PlaneEnding::Cut : PlaneEnding::Complete);
   }
   return out;
 }
@@ -192,6 +193,15 @@ std::uint64_t stream_bytes_within(const std::string& file, std::uint64_t max_byt
                                                 " bytes cannot hold even the base mesh (" + std::to_string(fixed) +
                                                 " bytes)");
   return max_bytes - fixed;
+}
+
+std::vector<std::uint64_t> stream_plane_ends(const std::string& file) {
+  for (const Section& section : sections_of_v2(file)) {
+    if (section.tag != "PLNS") continue;
+    PayloadReader reader = section.reader();
+    return read_planes(reader, section.payload, false, UINT64_MAX).plane_ends;
+  }
+  return {};
 }
 
 }  // namespace isowave

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "isowave/core/error.h"
+#include "bitplane_coder.h"
 
 namespace isowave::detail {
 
@@ -42,10 +43,11 @@ std::vector<std::uint8_t> node_classes(const CoefficientClasses& classes) {
   return result;
 }
 
-void put_planes(std::string& out, int top_plane, const std::vector<std::string_view>& packets, PlaneEnding last) {
+void put_planes(std::string& out, PlaneLayout layout, const std::vector<std::string_view>& packets, PlaneEnding last) {
   std::string payload;
-  payload.push_back(static_cast<char>(static_cast<std::int8_t>(top_plane)));
+  payload.push_back(static_cast<char>(static_cast<std::int8_t>(layout.top_plane)));
   payload.push_back(last == PlaneEnding::Cut ? 1 : 0);
+  put_varint(payload, layout.groups);
   put_varint(payload, packets.size());
   for (std::string_view p : packets) put_varint(payload, p.size());
   for (std::string_view p : packets) payload += p;
@@ -59,15 +61,17 @@ PlaneStream read_planes(PayloadReader& reader, std::string_view payload, bool pa
     if (payload_cut) return stream;
     reader.fail("is truncated");
   }
-  stream.top_plane = reader.read<std::int8_t>();
+  const int top_plane = reader.read<std::int8_t>();
   const auto flags = reader.read<std::uint8_t>();
-  if (stream.top_plane < -1 || stream.top_plane > 31 || flags > 1) reader.fail("has an invalid plane header");
-  std::uint64_t count = 0;
-  if (!read_varint(reader, count)) {
+  if (top_plane < -1 || top_plane > 31 || flags > 1) reader.fail("has an invalid plane header");
+  std::uint64_t groups = 0, count = 0;
+  if (!read_varint(reader, groups) || !read_varint(reader, count)) {
     if (payload_cut) return stream;
     reader.fail("is truncated");
   }
-  if (count > static_cast<std::uint64_t>(stream.top_plane + 1)) reader.fail("holds more packets than planes");
+  if (groups < 1 || groups > kMaxGroups) reader.fail("has an invalid group count");
+  if (count > static_cast<std::uint64_t>(top_plane + 1) * groups) reader.fail("holds more packets than planes");
+  stream.layout = {top_plane, static_cast<std::size_t>(groups)};
   std::vector<std::uint64_t> sizes(static_cast<std::size_t>(count));
   for (std::uint64_t& size : sizes)
     if (!read_varint(reader, size)) {
@@ -75,8 +79,12 @@ PlaneStream read_planes(PayloadReader& reader, std::string_view payload, bool pa
       reader.fail("is truncated");
     }
   stream.packets_total = sizes.size();
+  stream.planes_total = (sizes.size() + stream.layout.groups - 1) / stream.layout.groups;
   std::uint64_t end = 0;
-  for (std::uint64_t size : sizes) stream.packet_ends.push_back(end += std::min<std::uint64_t>(size, payload.size()));
+  for (std::size_t p = 0; p < sizes.size(); ++p) {
+    end += std::min<std::uint64_t>(sizes[p], payload.size());
+    if ((p + 1) % stream.layout.groups == 0 || p + 1 == sizes.size()) stream.plane_ends.push_back(end);
+  }
   stream.data_offset = payload.size() - reader.remaining();
   std::string_view data = payload.substr(static_cast<std::size_t>(stream.data_offset));
   std::uint64_t total = 0;

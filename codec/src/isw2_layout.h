@@ -44,24 +44,30 @@ struct V2Scales {
 std::vector<std::uint8_t> node_classes(const CoefficientClasses& classes);
 
 // PLNS: i8 top plane, u8 flags (bit 0: the last packet is cut), LEB128
-// packet count and sizes, then the packets.
+// group count, LEB128 packet count and sizes, then the packets (plane-major).
 enum class PlaneEnding { Complete, Cut };
-void put_planes(std::string& out, int top_plane, const std::vector<std::string_view>& packets, PlaneEnding last);
-inline void put_planes(std::string& out, int top_plane, const std::vector<std::string>& packets, PlaneEnding last) {
-  put_planes(out, top_plane, std::vector<std::string_view>(packets.begin(), packets.end()), last);
+struct PlaneLayout {
+  int top_plane = -1;
+  std::size_t groups = 1;
+};
+void put_planes(std::string& out, PlaneLayout layout, const std::vector<std::string_view>& packets, PlaneEnding last);
+inline void put_planes(std::string& out, PlaneLayout layout, const std::vector<std::string>& packets,
+                       PlaneEnding last) {
+  put_planes(out, layout, std::vector<std::string_view>(packets.begin(), packets.end()), last);
 }
 
 struct PlaneStream {
-  int top_plane = -1;
-  std::size_t packets_total = 0;        // as the table says
-  std::vector<std::uint64_t> packet_ends;  // cumulative sizes, as the table says
+  PlaneLayout layout;
+  std::size_t packets_total = 0;          // as the table says
+  std::size_t planes_total = 0;           // planes the packets begin
+  std::vector<std::uint64_t> plane_ends;  // cumulative sizes at each plane's end, as the table says
   std::vector<std::string_view> packets;  // those present, the last maybe cut
   bool last_cut = false;                // the last of `packets` is cut (by the encoder or the file's end)
   std::uint64_t data_offset = 0;        // of the first packet in the payload
 };
 // Reads a PLNS payload that may itself be cut (`payload_cut`), keeping at
 // most `max_stream_bytes` bytes of packets. Error(Format) through `reader`
-// for impossible tables.
+// for impossible tables (more than kMaxGroups groups, or packets than planes).
 PlaneStream read_planes(PayloadReader& reader, std::string_view payload, bool payload_cut,
                         std::uint64_t max_stream_bytes);
 
@@ -83,7 +89,8 @@ void decode_plane_stream(const Section& section, const SubdivisionHierarchy& hie
 
 // result.ranked: the non-zero wavelet coefficients by importance (class
 // weight times magnitude, ties by index), the first `keep` of them; the
-// others are zeroed in result.coefficients.
-void rank_and_keep(IswDecoded& result, const CoefficientClasses& layout, std::uint64_t keep);
+// others are zeroed in result.coefficients. IswOrder::Index: all of them in
+// index order (`keep` is then ignored).
+void rank_and_keep(IswDecoded& result, const CoefficientClasses& layout, std::uint64_t keep, IswOrder order);
 
 }  // namespace isowave::detail

@@ -456,7 +456,9 @@ void finish_v2(DecodeState& state, bool cut) {
                              " planes (" + std::to_string(stream.decoded) + " stream bytes)";
   }
   const auto rank_start = Clock::now();
-  rank_and_keep(result, *state.layout, state.limit);
+  const bool unlimited = state.limit >= state.layout->fine() - state.layout->base();
+  rank_and_keep(result, *state.layout, state.limit,
+                unlimited && state.options.order == IswOrder::Index ? IswOrder::Index : IswOrder::Importance);
   result.seconds.rank = seconds_since(rank_start);
 }
 

@@ -7,9 +7,9 @@
 // coefficient, so every prefix of the stream sees the same frames. A frame is
 // (n, t, b): t the unit vector of n x a, a the world axis least aligned with
 // n, and b = n x t; a zero normal (a degenerate patch) takes the world axes.
-// Encoder and decoder must get bit-identical frames: fixed summation order,
-// no threads in the sums, and the codec target compiles without floating
-// contraction.
+// Encoder and decoder must get bit-identical frames: every sum has a fixed
+// order (threads split the vertices, never a sum), and the codec target
+// compiles without floating contraction.
 #include <vector>
 
 #include "isowave/core/vec3.h"
@@ -25,8 +25,11 @@ struct Frame {
 Frame frame_of(const Vec3& normal);
 
 // Per fine vertex: the area-weighted unit normal of S^L(base_points) (zero
-// where the faces around it have no area). L = 0 gives the base mesh's own.
-// Cost: one subdivision and one pass over the fine faces, O(fine vertices).
+// where the faces around it have no area; docs/FORMAT.md, "Local frames"):
+// the vector areas of the level-(L-1) faces, as fans of their e vertices
+// around their f vertex, summed at the f vertex, at the e vertices of the
+// faces' edges and at their corners. L = 0 gives the base mesh's own.
+// Cost: one synthesis and three parallel passes, O(fine vertices).
 std::vector<Vec3> frame_normals(const SubdivisionHierarchy& hierarchy, const std::vector<Vec3>& base_points);
 
 // World vector -> (n, t, b) components, and back.

@@ -29,13 +29,6 @@ class PrefixMeter {
     const PolygonMesh mesh = hierarchy_->control_mesh(levels, take_reconstruction(decoded, SIZE_MAX));
     return against_surface_.measure(mesh).d();
   }
-  // Cumulative packet ends, from a decode of no packet.
-  std::vector<std::uint64_t> packet_ends() {
-    IswDecodeOptions options;
-    options.hierarchy = hierarchy_;
-    options.max_stream_bytes = 0;
-    return decode_isw(file_, "the stream", options).stream.packet_ends;
-  }
 
  private:
   const std::string& file_;
@@ -63,7 +56,7 @@ RatePlan plan_rate(const std::string& file, const std::shared_ptr<const Subdivis
   PrefixMeter meter(file, hierarchy, against_surface);
   RatePlan plan;
   // The last kRateTablePlanes plane boundaries, measured two at a time.
-  std::vector<std::uint64_t> ends = meter.packet_ends();
+  std::vector<std::uint64_t> ends = stream_plane_ends(file);
   if (ends.size() > kRateTablePlanes) ends.erase(ends.begin(), ends.end() - kRateTablePlanes);
   plan.table.resize(ends.size());
   tbb::parallel_for(std::size_t{0}, ends.size(), [&](std::size_t k) { plan.table[k] = {ends[k], meter.error(ends[k])}; });

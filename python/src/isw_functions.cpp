@@ -155,6 +155,7 @@ py::tuple decode(const fs::path& file, const py::object& percent, const py::obje
   if (!percent.is_none() && !coefficients.is_none())
     throw Error(ErrorKind::InvalidArgument, "give at most one of percent and coefficients");
   IswDecodeOptions options;
+  options.order = IswOrder::Index;  // the surface needs no ranking unless a limit asks for it
   if (!percent.is_none()) {
     options.max_percent = percent.cast<double>();
     if (!(options.max_percent >= 0 && options.max_percent <= 100))

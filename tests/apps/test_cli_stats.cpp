@@ -76,9 +76,9 @@ class StatsStreamTest : public CliTest {
 // plane (whose statistics were refused as an incomplete decode).
 TEST_F(StatsStreamTest, StatsTabulatesDAtPrefixesOfTheEmbeddedStream) {
   const IswStreamInfo whole = read_isw(convert_sphere("whole.isw")).stream;
-  ASSERT_GE(whole.packet_ends.size(), 2u);
-  const std::uint64_t last_packet = whole.packet_ends.back() - whole.packet_ends[whole.packet_ends.size() - 2];
-  const std::string size = std::to_string(fs::file_size(path("whole.isw")) - last_packet / 2);
+  ASSERT_GE(whole.plane_ends.size(), 2u);
+  const std::uint64_t last_plane = whole.plane_ends.back() - whole.plane_ends[whole.plane_ends.size() - 2];
+  const std::string size = std::to_string(fs::file_size(path("whole.isw")) - last_plane / 2);
   const std::string cut_file = convert_sphere("cut.isw", {"--size", size});
 
   for (const std::string& file : {path("whole.isw"), cut_file}) {

@@ -97,7 +97,7 @@ TEST(IswFormat2, ErrorFallsAtEveryPlaneBoundary) {
   const Encoded e = encode_sample(test::genus_slab(2), 3, 1e-4);
   const IswDecoded full = decode_isw(e.bytes, "test.isw");
   double previous = INFINITY;
-  for (std::uint64_t end : full.stream.packet_ends) {
+  for (std::uint64_t end : full.stream.plane_ends) {
     IswDecodeOptions limit;
     limit.max_stream_bytes = end;
     const double error = weighted_error(decode_isw(e.bytes, "limit.isw", limit), e.surface.coefficients);
@@ -122,13 +122,13 @@ TEST(IswFormat2, SizeLimitCutsTheStreamAndRateTableChoosesThePrefix) {
 
   // A rate table: decode --max-error takes the first row within the error.
   IswRewrite rewrite;
-  rewrite.rate_table = {{full.stream.packet_ends[2], 0.3}, {full.stream.packet_ends[4], 0.1}, {full.stream.bytes, 0.01}};
+  rewrite.rate_table = {{full.stream.plane_ends[2], 0.3}, {full.stream.plane_ends[4], 0.1}, {full.stream.bytes, 0.01}};
   const std::string tabled = rewrite_isw(e.bytes, rewrite);
   IswDecodeOptions within;
   within.max_error_cells = 0.2 / 0.05;  // sample_metadata()'s cell
   const IswDecoded chosen = decode_isw(tabled, "tabled.isw", within);
   EXPECT_EQ(chosen.stream.rate_table.size(), 3u);
-  EXPECT_EQ(chosen.stream.decoded, full.stream.packet_ends[4]);
+  EXPECT_EQ(chosen.stream.decoded, full.stream.plane_ends[4]);
   within.max_error_cells = 0.001 / 0.05;  // no row reaches it: the whole stream
   EXPECT_EQ(decode_isw(tabled, "tabled.isw", within).stream.decoded, full.stream.bytes);
 }

@@ -11,7 +11,8 @@
 //            RDTB  optional: the surface error D measured at prefixes of the plane stream
 //            PLNS  embedded bit planes of every coefficient in its local frame (normal,
 //                  tangent, bitangent), most significant plane first, set-partitioned over
-//                  the hierarchy's parent-child tree: any prefix decodes
+//                  the hierarchy's parent-child tree, in independent groups (decoded
+//                  in parallel): any prefix decodes
 //   version 1:
 //            CHNK  (several) wavelet coefficients, most important first: chunk k holds the coefficients
 //                  ranked in [start_k, end_k) by importance, coded by significance flags over the
@@ -120,6 +121,9 @@ std::string rewrite_isw(const std::string& file, const IswRewrite& rewrite);
 // bytes in all with an RDTB of `table_rows` rows. Error(InvalidArgument) when
 // the headers alone exceed it.
 std::uint64_t stream_bytes_within(const std::string& file, std::uint64_t max_bytes, std::size_t table_rows = 0);
+// The plane stream bytes at each plane's end in a complete version 2 file
+// (its packet table; nothing is decoded). Error(InvalidArgument) otherwise.
+std::vector<std::uint64_t> stream_plane_ends(const std::string& file);
 
 // The coefficients exactly as encode_isw() stores them (version 1) (quantized per class
 // with step / class_weights[c], then scaled back): lets a caller measure the
@@ -140,9 +144,10 @@ struct IswStreamInfo {
   std::uint64_t bytes = 0;    // packet bytes in the file
   std::uint64_t decoded = 0;  // packet bytes the decode read (complete packets, and the cut one)
   int top_plane = -1;         // -1: every coefficient below the step
-  int planes = 0;             // packets in the file (some may be cut or missing)
-  int planes_decoded = 0;     // complete packets decoded
-  std::vector<std::uint64_t> packet_ends;  // cumulative packet bytes, as the table of the file says
+  int planes = 0;             // planes in the file (the last may be cut, some of its packets missing)
+  int planes_decoded = 0;     // planes decoded completely (every group's packet)
+  int groups = 1;             // independent packet groups per plane
+  std::vector<std::uint64_t> plane_ends;  // cumulative packet bytes at each plane's end, as the file's table says
   double tangential_factor = 1;
   double frame_step = 0;      // world units
   std::vector<IswRatePoint> rate_table;  // RDTB, if the file has one
@@ -171,7 +176,8 @@ struct IswDecoded {
   // coefficients not decoded (not yet sent, or quantized to zero) are zero.
   std::vector<Vec3> coefficients;
   // Importance rank order of the decoded wavelet coefficients: indices into
-  // `coefficients`, most important first (the order the encoder ranked them).
+  // `coefficients`, most important first (the order the encoder ranked them),
+  // or ascending with IswOrder::Index.
   std::vector<std::uint32_t> ranked;
   std::vector<IswSectionInfo> sections;  // in file order, unknown tags included
   IswStreamInfo stream;                  // version 2
@@ -186,6 +192,12 @@ struct IswDecoded {
   bool truncated = false;          // the file ends inside the coefficient chunks or before END
   std::string truncation_note;     // what was decoded, when truncated
   IswDecodeTimings seconds;
+};
+
+// The order of IswDecoded::ranked.
+enum class IswOrder {
+  Importance,  // most important first (the paper's ranking)
+  Index,       // ascending index: no sort (version 2 without a coefficient limit only)
 };
 
 struct IswDecodeOptions {
@@ -206,6 +218,10 @@ struct IswDecodeOptions {
   // Decode only the first max_file_bytes bytes of the file (a prefix; for
   // version 2 any prefix past BPTS decodes). Not reported as truncated.
   std::uint64_t max_file_bytes = UINT64_MAX;
+  // Version 2 without a coefficient limit: IswOrder::Index skips ranking
+  // (a sort of every non-zero coefficient, ~10% of a whole decode) when the
+  // caller needs only the surface. A limit always ranks by importance.
+  IswOrder order = IswOrder::Importance;
   // Read only the metadata, base mesh and section table (for `info`).
   bool headers_only = false;
   // A hierarchy the caller already has (convert checking its own output):
