@@ -52,7 +52,6 @@ struct GroupedTree {
   std::vector<std::uint32_t> child_offsets;  // children of p: children[child_offsets[p] .. child_offsets[p + 1]]
   std::vector<std::uint32_t> children;       // positions, ascending per node
   std::vector<std::uint8_t> node_class;      // position -> context class
-  std::size_t groups() const { return group_offsets.size() - 1; }
 };
 
 GroupedTree group_tree(const CoefficientTree& tree, const std::vector<std::uint8_t>& node_class, std::size_t groups) {
@@ -353,12 +352,12 @@ int PlaneDecoder::planes_done() const {
   return done;
 }
 
-void PlaneDecoder::values(std::vector<double>& out) const {
-  out.assign(3 * state_->tree.node.size(), 0.0);
+void PlaneDecoder::values(std::vector<Vec3>& out) const {
+  assert(out.size() == state_->tree.node.size());
   tbb::parallel_for(std::size_t{0}, group_state_.size(), [&](std::size_t g) { group_values(g, out); });
 }
 
-void PlaneDecoder::group_values(std::size_t g, std::vector<double>& out) const {
+void PlaneDecoder::group_values(std::size_t g, std::vector<Vec3>& out) const {
   // The lowest plane known of each significant component: the group's last
   // complete plane, or, after a cut, the cut plane for the components it
   // reached (those it made significant, and those it refined: at positions
@@ -370,17 +369,17 @@ void PlaneDecoder::group_values(std::size_t g, std::vector<double>& out) const {
   const auto half = [](int low) { return low <= 0 ? 0.5 : double(1u << (low - 1)); };
   for (std::uint32_t p = state.tree.group_offsets[g]; p < state.tree.group_offsets[g + 1]; ++p) {
     const std::uint8_t f = state.flags[p];
-    if (!(f & kSignificant)) continue;
-    const std::size_t i = state.tree.node[p];
-    for (std::size_t k = 0; k < 3; ++k) {
+    Vec3& value = out[state.tree.node[p]];
+    value = Vec3{};
+    for (int k = 0; k < 3; ++k) {
       if (!((f >> k) & 1)) continue;
-      const std::uint32_t m = state.magnitude[3 * std::size_t{p} + k];
+      const std::uint32_t m = state.magnitude[3 * std::size_t{p} + static_cast<std::size_t>(k)];
       int low = complete_low;
       if (cut >= 0 &&
           (m == 1u << cut || p < group.cut_position || (p == group.cut_position && ((group.cut_refined >> k) & 1))))
         low = cut;
       const double v = m + half(low);
-      out[3 * i + k] = (f >> (kSignShift + k)) & 1 ? -v : v;
+      value[k] = (f >> (kSignShift + k)) & 1 ? -v : v;
     }
   }
 }

@@ -30,6 +30,7 @@
 #include <vector>
 
 #include "coefficient_tree.h"
+#include "isowave/core/vec3.h"
 
 namespace isowave::detail {
 
@@ -82,8 +83,9 @@ class PlaneDecoder {
   // Planes complete in every group.
   int planes_done() const;
 
-  // Per node, the three components in step units (0 where not significant).
-  void values(std::vector<double>& out) const;
+  // Per node, its three components in step units (0 where not significant),
+  // into `out` (of one entry per node, every entry written).
+  void values(std::vector<Vec3>& out) const;
 
  private:
   struct State;  // the tree in group order, magnitudes and flags
@@ -98,7 +100,7 @@ class PlaneDecoder {
     std::uint8_t cut_refined = 0;
   };
   void decode_group(std::size_t g, const std::vector<std::string_view>& packets, bool last_cut);
-  void group_values(std::size_t g, std::vector<double>& out) const;
+  void group_values(std::size_t g, std::vector<Vec3>& out) const;
 
   int top_plane_;
   std::unique_ptr<State> state_;

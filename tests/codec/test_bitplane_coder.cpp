@@ -62,9 +62,11 @@ std::vector<double> decode(const Sample& s, int top_plane, std::size_t groups, c
   PlaneDecoder decoder(s.tree, s.symbols.node_class, s.symbols.classes, top_plane, groups);
   decoder.decode(packets, last_cut);
   if (planes_done) *planes_done = decoder.planes_done();
-  std::vector<double> values;
+  std::vector<Vec3> values(s.tree.nodes, Vec3{1, 1, 1});  // every entry must be written
   decoder.values(values);
-  return values;
+  std::vector<double> flat;
+  for (const Vec3& v : values) flat.insert(flat.end(), {v.x, v.y, v.z});
+  return flat;
 }
 
 TEST(PlaneCoder, SplitTreeKeepsSubtreesTogetherAndBalancesThem) {
