@@ -52,6 +52,11 @@ struct GroupedTree {
   std::vector<std::uint32_t> child_offsets;  // children of p: children[child_offsets[p] .. child_offsets[p + 1]]
   std::vector<std::uint32_t> children;       // positions, ascending per node
   std::vector<std::uint8_t> node_class;      // position -> context class
+  // The levels' positions in each group: group g's level s is
+  // [segments[g * (S + 1) + s], segments[g * (S + 1) + s + 1]), S = levels + 1.
+  std::size_t segment_count = 1;
+  std::vector<std::uint32_t> segments;
+  std::uint32_t segment_begin(std::size_t g, std::size_t s) const { return segments[g * (segment_count + 1) + s]; }
 };
 
 GroupedTree group_tree(const CoefficientTree& tree, const std::vector<std::uint8_t>& node_class, std::size_t groups) {
@@ -74,6 +79,14 @@ GroupedTree group_tree(const CoefficientTree& tree, const std::vector<std::uint8
     for (std::uint32_t k = tree.child_begin(i); k < tree.child_end(i); ++k) t.children.push_back(position[tree.children[k]]);
   }
   t.child_offsets[n] = static_cast<std::uint32_t>(t.children.size());
+  // Within a group positions ascend with the node index, so each level is a run.
+  t.segment_count = tree.level_ends.size();
+  for (std::size_t g = 0; g < groups; ++g) {
+    const auto first = t.node.begin() + t.group_offsets[g], last = t.node.begin() + t.group_offsets[g + 1];
+    t.segments.push_back(t.group_offsets[g]);
+    for (const std::uint32_t end : tree.level_ends)
+      t.segments.push_back(static_cast<std::uint32_t>(std::lower_bound(first, last, end) - t.node.begin()));
+  }
   return t;
 }
 
@@ -179,19 +192,23 @@ bool code_node(Io& io, GroupCoder& s, std::uint32_t i, int b, PlaneCut& cut) {
   return true;
 }
 
-// One plane of group g, shared by encoder and decoder: `Io` supplies every
-// decision (the encoder from the magnitudes, the decoder from the stream) and
-// learns the decoded bits. A scan over the open bits in position order; a
-// node opened in the pass lies after its parent, so the pass reaches it.
+// One level of one plane of a group (positions [begin, end)), shared by
+// encoder and decoder: `Io` supplies every decision (the encoder from the
+// magnitudes, the decoder from the stream) and learns the decoded bits. A
+// scan over the open bits in position order; children lie in later levels.
+// Returns false when the decoder stopped; `cut` then says where.
 template <class Io>
-bool code_plane(Io& io, GroupCoder& s, int b, PlaneCut& cut) {
-  for (std::size_t w = 0; w < s.open.size(); ++w) {
-    std::uint64_t bits = s.open[w];
+bool code_segment(Io& io, GroupCoder& s, int b, std::uint32_t begin, std::uint32_t end, PlaneCut& cut) {
+  const std::uint32_t q0 = begin - s.first, q1 = end - s.first;
+  for (std::size_t w = q0 / 64; w * 64 < q1; ++w) {
+    const std::uint64_t low = w == q0 / 64 ? ~std::uint64_t{0} << (q0 % 64) : ~std::uint64_t{0};
+    const std::uint64_t window = (w + 1) * 64 <= q1 ? low : low & ((std::uint64_t{1} << (q1 % 64)) - 1);
+    std::uint64_t bits = s.open[w] & window;
     while (bits != 0) {
       const int bit = __builtin_ctzll(bits);
       if (!code_node(io, s, s.first + static_cast<std::uint32_t>(w * 64 + static_cast<std::size_t>(bit)), b, cut))
         return false;
-      bits = bit == 63 ? 0 : s.open[w] & (~std::uint64_t{0} << (bit + 1));
+      bits = bit == 63 ? 0 : s.open[w] & window & (~std::uint64_t{0} << (bit + 1));
     }
   }
   return true;
@@ -276,21 +293,25 @@ PlanePackets encode_planes(const CoefficientTree& tree, const PlaneSymbols& symb
       symbols.magnitude.empty() ? 0 : *std::max_element(symbols.magnitude.begin(), symbols.magnitude.end());
   result.top_plane = bit_length(largest) - 1;
   const int planes = std::max(0, result.top_plane + 1 - std::max(lowest_plane, 0));
-  result.packets.resize(static_cast<std::size_t>(planes) * groups);
   const Contexts c(symbols.classes);
   const GroupedTree t = group_tree(tree, symbols.node_class, groups);
+  const std::size_t segments = t.segment_count;
+  result.segments = segments;
+  result.packets.resize(static_cast<std::size_t>(planes) * segments * groups);
   const PositionSymbols s = position_symbols(t, symbols);
   std::vector<std::uint8_t> flags(tree.nodes, 0);
   tbb::parallel_for(std::size_t{0}, groups, [&](std::size_t g) {
     std::vector<Probability> models(c.size, kProbabilityHalf);
     std::vector<std::uint64_t> open = roots_open(t, g);
     GroupCoder coder{t, c, flags, open, models, t.group_offsets[g]};
-    for (int p = 0; p < planes; ++p) {
-      std::string& packet = result.packets[static_cast<std::size_t>(p) * groups + g];
+    for (std::size_t k = 0; k < static_cast<std::size_t>(planes) * segments; ++k) {
+      const std::size_t level = k % segments;
+      std::string& packet = result.packets[k * groups + g];
       RangeEncoder rc(packet);
       EncoderIo io{rc, s.magnitude, s.negative, s.descendant_max};
       PlaneCut cut;
-      code_plane(io, coder, result.top_plane - p, cut);
+      code_segment(io, coder, result.top_plane - static_cast<int>(k / segments), t.segment_begin(g, level),
+                   t.segment_begin(g, level + 1), cut);
       rc.finish_trimmed(0);
     }
   });
@@ -327,22 +348,31 @@ void PlaneDecoder::decode_group(std::size_t g, const std::vector<std::string_vie
   Group& group = group_state_[g];
   State& state = *state_;
   GroupCoder coder{state.tree, state.contexts, state.flags, group.open, group.models, state.tree.group_offsets[g]};
-  const std::size_t groups = group_state_.size();
-  for (std::size_t j = g; j < packets.size(); j += groups) {
-    const int b = top_plane_ - group.planes_done;
+  const std::size_t groups = group_state_.size(), segments = state.tree.segment_count;
+  for (std::size_t k = 0;; ++k) {
+    const int b = top_plane_ - static_cast<int>(k / segments);
+    const std::size_t level = k % segments, j = k * groups + g;
     if (b < 0) return;
+    if (j >= packets.size()) {
+      // The stream ends before this level's packet: the plane stops at its start.
+      if (level > 0) {
+        group.cut_plane = b;
+        group.cut_position = state.tree.segment_begin(g, level);
+      }
+      return;
+    }
     const bool cut = last_cut && j + 1 == packets.size();
     PrefixRangeDecoder rc(reinterpret_cast<const std::uint8_t*>(packets[j].data()), packets[j].size(),
                           cut ? PrefixRangeDecoder::Ending::Cut : PrefixRangeDecoder::Ending::Complete);
     DecoderIo io{rc, state.magnitude};
     PlaneCut where;
-    if (!code_plane(io, coder, b, where)) {
+    if (!code_segment(io, coder, b, state.tree.segment_begin(g, level), state.tree.segment_begin(g, level + 1), where)) {
       group.cut_plane = b;
       group.cut_position = where.position;
       group.cut_refined = where.refined;
       return;
     }
-    ++group.planes_done;
+    if (level + 1 == segments) ++group.planes_done;
   }
 }
 

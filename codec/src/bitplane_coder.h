@@ -3,10 +3,11 @@
 // issue #34). Every node of the coefficient tree carries three non-negative
 // integer magnitudes (its components in step units) and their signs. The
 // nodes form independent groups (split_tree), each coded on its own. Plane b
-// (from the top plane down to 0) is one packet per group, one scan over the
-// group's open nodes in index order (the roots, and the children of nodes
-// whose descendants were found significant; parents come before children, so
-// a node opened in a pass is visited in it). For each open node:
+// (from the top plane down to 0) is one packet per level and group, levels
+// first (coarse levels of every group before finer ones), each one scan over
+// the group's open nodes of that level in index order (the roots, and the
+// children of nodes whose descendants were found significant, which lie in
+// finer levels). For each open node:
 //   refinement: bit b of every component significant before the plane;
 //   significance: whether a not-yet-significant component reaches 2^b (one
 //     decision for the node, then one per component, then the sign of each
@@ -42,6 +43,7 @@ constexpr std::uint32_t kMaxMagnitude = 0xFFFFFFFFu;
 // kNodesPerGroup nodes, at most kMaxGroups.
 constexpr std::size_t kNodesPerGroup = std::size_t{1} << 17;
 constexpr std::size_t kMaxGroups = 64;
+constexpr std::size_t kMaxSegments = 32;  // levels + 1
 inline std::size_t plane_groups(std::size_t nodes) {
   return std::min(kMaxGroups, std::max<std::size_t>(1, (nodes + kNodesPerGroup / 2) / kNodesPerGroup));
 }
@@ -57,10 +59,12 @@ struct PlaneSymbols {
 
 // The top plane (bit length of the largest magnitude, minus 1; -1 when all
 // are zero) and, for each plane from the top down to `lowest_plane` (>= 0),
-// one packet per group (packet j: group j mod G of plane top - j / G), each
+// one packet per level and group: packet j is group j mod G of level
+// (j / G) mod S of plane top - j / (G S), S = levels + 1 segments, each
 // flushed by RangeEncoder::finish_trimmed(). The groups are coded in parallel.
 struct PlanePackets {
   int top_plane = -1;
+  std::size_t segments = 1;
   std::vector<std::string> packets;
 };
 PlanePackets encode_planes(const CoefficientTree& tree, const PlaneSymbols& symbols, std::size_t groups,

@@ -37,6 +37,8 @@ CoefficientTree build_coefficient_tree(const SubdivisionHierarchy& hierarchy) {
   const int levels = hierarchy.levels();
   tree.nodes = hierarchy.fine_vertex_count();
   tree.roots_end = hierarchy.vertex_count(levels >= 1 ? 1 : 0);
+  for (int level = 0; level <= levels; ++level)
+    tree.level_ends.push_back(static_cast<std::uint32_t>(hierarchy.vertex_count(level)));
   tree.parent.assign(tree.nodes, UINT32_MAX);
   for (int level = 1; level < levels; ++level) link_level(hierarchy, level, tree.parent);
   // Children in ascending order by a counting sort over the parents.

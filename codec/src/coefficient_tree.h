@@ -18,6 +18,7 @@ namespace isowave::detail {
 struct CoefficientTree {
   std::size_t nodes = 0;      // the hierarchy's fine vertex count: one node per entry
   std::size_t roots_end = 0;  // entries [0, roots_end) are roots: base and level 1
+  std::vector<std::uint32_t> level_ends;  // entries of level l end at level_ends[l] (l = 0..L)
   // Children of node i (ascending): children[child_offsets[i] .. child_offsets[i + 1]]
   // for i < child_offsets.size() - 1; nodes beyond have none. Flat arrays: the
   // coder walks them once per bit plane.

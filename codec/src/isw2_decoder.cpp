@@ -50,6 +50,8 @@ void decode_plane_stream(const Section& section, const SubdivisionHierarchy& hie
   const auto start = Clock::now();
   PayloadReader reader = section.reader();
   const PlaneStream planes = read_planes(reader, section.payload, section.cut, max_stream_bytes);
+  if (planes.packets_total > 0 && planes.layout.segments != static_cast<std::size_t>(hierarchy.levels()) + 1)
+    reader.fail("has a segment count other than the levels + 1");
   IswStreamInfo& stream = result.stream;
   stream.offset = section.info.offset + kSectionHeader + planes.data_offset;
   stream.bytes = section.payload.size() > planes.data_offset ? section.payload.size() - planes.data_offset : 0;

@@ -123,7 +123,7 @@ std::string encode_isw_v2(const SubdivisionHierarchy& hierarchy, const std::vect
   put_base(out, hierarchy.base(), 2);
   put_quantization_v2(out, scales, hierarchy.levels(), nonzero_wavelets(hierarchy, symbols));
   put_base_points(out, hierarchy.base(), base_q);
-  put_planes(out, {planes.top_plane, groups}, planes.packets, PlaneEnding::Complete);
+  put_planes(out, {planes.top_plane, groups, planes.segments}, planes.packets, PlaneEnding::Complete);
   put_section(out, "END ", std::string_view());
   if (options.max_bytes > 0 && out.size() > options.max_bytes)
     return rewrite_isw(out, IswRewrite{stream_bytes_within(out, options.max_bytes), {}, nullptr});
@@ -175,9 +175,9 @@ std::string rewrite_isw(const std::string& file, const IswRewrite& rewrite) {
 }
 
 std::uint64_t stream_bytes_within(const std::string& file, std::uint64_t max_bytes, std::size_t table_rows) {
-  // Every section but the packets themselves, with the packet table at its
-  // longest (a cut one is never longer).
+  // Every section but the packet table's count and sizes and the packets.
   std::uint64_t fixed = kFileHeaderBytes + (table_rows > 0 ? kSectionOverhead + 4 + 16 * table_rows : 0);
+  std::vector<std::uint64_t> sizes;
   for (const Section& section : sections_of_v2(file)) {
     if (section.tag == "RDTB") continue;
     if (section.tag != "PLNS") {
@@ -186,13 +186,29 @@ std::uint64_t stream_bytes_within(const std::string& file, std::uint64_t max_byt
     }
     PayloadReader reader = section.reader();
     const PlaneStream planes = read_planes(reader, section.payload, false, UINT64_MAX);
-    fixed += section.info.bytes - (section.payload.size() - planes.data_offset);
+    for (std::string_view packet : planes.packets) sizes.push_back(packet.size());
+    fixed += section.info.bytes - (section.payload.size() - planes.data_offset) - varint_size(sizes.size());
+    for (const std::uint64_t size : sizes) fixed -= varint_size(size);
   }
-  if (fixed >= max_bytes)
+  // The table of a stream cut to s bytes: the count and the sizes it keeps.
+  const auto table = [&](std::uint64_t s) {
+    std::uint64_t bytes = 0, offset = 0, kept = 0;
+    for (std::size_t p = 0; p < sizes.size() && offset < s; offset += sizes[p++], ++kept)
+      bytes += varint_size(std::min(sizes[p], s - offset));
+    return bytes + varint_size(kept);
+  };
+  if (fixed + table(0) >= max_bytes)
     throw Error(ErrorKind::InvalidArgument, "a file of at most " + std::to_string(max_bytes) +
-                                                " bytes cannot hold even the base mesh (" + std::to_string(fixed) +
-                                                " bytes)");
-  return max_bytes - fixed;
+                                                " bytes cannot hold even the base mesh (" +
+                                                std::to_string(fixed + table(0)) + " bytes)");
+  // The largest s with fixed + table(s) + s <= max_bytes (the left side grows with s).
+  std::uint64_t low = 0, high = max_bytes - fixed;
+  while (low < high) {
+    const std::uint64_t middle = low + (high - low + 1) / 2;
+    if (fixed + table(middle) + middle <= max_bytes) low = middle;
+    else high = middle - 1;
+  }
+  return low;
 }
 
 std::vector<std::uint64_t> stream_plane_ends(const std::string& file) {

@@ -48,6 +48,7 @@ void put_planes(std::string& out, PlaneLayout layout, const std::vector<std::str
   payload.push_back(static_cast<char>(static_cast<std::int8_t>(layout.top_plane)));
   payload.push_back(last == PlaneEnding::Cut ? 1 : 0);
   put_varint(payload, layout.groups);
+  put_varint(payload, layout.segments);
   put_varint(payload, packets.size());
   for (std::string_view p : packets) put_varint(payload, p.size());
   for (std::string_view p : packets) payload += p;
@@ -64,14 +65,16 @@ PlaneStream read_planes(PayloadReader& reader, std::string_view payload, bool pa
   const int top_plane = reader.read<std::int8_t>();
   const auto flags = reader.read<std::uint8_t>();
   if (top_plane < -1 || top_plane > 31 || flags > 1) reader.fail("has an invalid plane header");
-  std::uint64_t groups = 0, count = 0;
-  if (!read_varint(reader, groups) || !read_varint(reader, count)) {
+  std::uint64_t groups = 0, segments = 0, count = 0;
+  if (!read_varint(reader, groups) || !read_varint(reader, segments) || !read_varint(reader, count)) {
     if (payload_cut) return stream;
     reader.fail("is truncated");
   }
-  if (groups < 1 || groups > kMaxGroups) reader.fail("has an invalid group count");
-  if (count > static_cast<std::uint64_t>(top_plane + 1) * groups) reader.fail("holds more packets than planes");
-  stream.layout = {top_plane, static_cast<std::size_t>(groups)};
+  if (groups < 1 || groups > kMaxGroups || segments < 1 || segments > kMaxSegments)
+    reader.fail("has an invalid group or segment count");
+  stream.layout = {top_plane, static_cast<std::size_t>(groups), static_cast<std::size_t>(segments)};
+  if (count > static_cast<std::uint64_t>(top_plane + 1) * stream.layout.packets_per_plane())
+    reader.fail("holds more packets than planes");
   std::vector<std::uint64_t> sizes(static_cast<std::size_t>(count));
   for (std::uint64_t& size : sizes)
     if (!read_varint(reader, size)) {
@@ -79,11 +82,12 @@ PlaneStream read_planes(PayloadReader& reader, std::string_view payload, bool pa
       reader.fail("is truncated");
     }
   stream.packets_total = sizes.size();
-  stream.planes_total = (sizes.size() + stream.layout.groups - 1) / stream.layout.groups;
+  const std::size_t per_plane = stream.layout.packets_per_plane();
+  stream.planes_total = (sizes.size() + per_plane - 1) / per_plane;
   std::uint64_t end = 0;
   for (std::size_t p = 0; p < sizes.size(); ++p) {
     end += std::min<std::uint64_t>(sizes[p], payload.size());
-    if ((p + 1) % stream.layout.groups == 0 || p + 1 == sizes.size()) stream.plane_ends.push_back(end);
+    if ((p + 1) % per_plane == 0 || p + 1 == sizes.size()) stream.plane_ends.push_back(end);
   }
   stream.data_offset = payload.size() - reader.remaining();
   std::string_view data = payload.substr(static_cast<std::size_t>(stream.data_offset));

@@ -44,16 +44,26 @@ struct V2Scales {
 std::vector<std::uint8_t> node_classes(const CoefficientClasses& classes);
 
 // PLNS: i8 top plane, u8 flags (bit 0: the last packet is cut), LEB128
-// group count, LEB128 packet count and sizes, then the packets (plane-major).
+// group and segment (level) counts, LEB128 packet count and sizes, then the
+// packets (plane, then level, then group).
 enum class PlaneEnding { Complete, Cut };
 struct PlaneLayout {
   int top_plane = -1;
   std::size_t groups = 1;
+  std::size_t segments = 1;  // levels + 1
+  std::size_t packets_per_plane() const { return groups * segments; }
 };
 void put_planes(std::string& out, PlaneLayout layout, const std::vector<std::string_view>& packets, PlaneEnding last);
 inline void put_planes(std::string& out, PlaneLayout layout, const std::vector<std::string>& packets,
                        PlaneEnding last) {
   put_planes(out, layout, std::vector<std::string_view>(packets.begin(), packets.end()), last);
+}
+
+// Bytes of the LEB128 encoding of v.
+inline std::uint64_t varint_size(std::uint64_t v) {
+  std::uint64_t bytes = 1;
+  for (; v >= 0x80; v >>= 7) ++bytes;
+  return bytes;
 }
 
 struct PlaneStream {
@@ -67,7 +77,8 @@ struct PlaneStream {
 };
 // Reads a PLNS payload that may itself be cut (`payload_cut`), keeping at
 // most `max_stream_bytes` bytes of packets. Error(Format) through `reader`
-// for impossible tables (more than kMaxGroups groups, or packets than planes).
+// for impossible tables (more than kMaxGroups groups or kMaxSegments
+// segments, more packets than planes).
 PlaneStream read_planes(PayloadReader& reader, std::string_view payload, bool payload_cut,
                         std::uint64_t max_stream_bytes);
 

@@ -1,6 +1,7 @@
 // The embedded plane coder of .isw 2.0 (codec/src/bitplane_coder.h) with
-// several independent groups: split_tree's partition, exact values after the
-// last plane whatever the group count, the bound of the last complete plane
+// several independent groups and one packet per level: split_tree's
+// partition, exact values after the last plane whatever the group count, the
+// bound of the last complete plane
 // at every packet boundary, cuts inside packets that decode only what they
 // are sure of, and hostile packets.
 #include <algorithm>
@@ -99,7 +100,8 @@ TEST(PlaneCoder, EveryGroupCountDecodesTheExactValues) {
   const Sample s = sample(2);
   for (const std::size_t groups : {1, 2, 3, 7}) {
     const PlanePackets planes = encode_planes(s.tree, s.symbols, groups);
-    ASSERT_EQ(planes.packets.size(), static_cast<std::size_t>(planes.top_plane + 1) * groups);
+    ASSERT_EQ(planes.segments, s.tree.level_ends.size());
+    ASSERT_EQ(planes.packets.size(), static_cast<std::size_t>(planes.top_plane + 1) * groups * planes.segments);
     int done = 0;
     const std::vector<double> values =
         decode(s, planes.top_plane, groups, views(planes.packets, planes.packets.size()), false, &done);
@@ -128,12 +130,13 @@ TEST(PlaneCoder, PrefixesOfPacketsAndCutsInsideThemKeepTheBound) {
   const Sample s = sample(3);
   constexpr std::size_t kGroups = 3;
   const PlanePackets planes = encode_planes(s.tree, s.symbols, kGroups);
+  const std::size_t per_plane = kGroups * planes.segments;
   std::vector<double> before;
   for (std::size_t count = 0; count <= planes.packets.size(); ++count) {
     // Complete packets: every group has its planes; the slowest sets the bound.
     int done = 0;
     const std::vector<double> after = decode(s, planes.top_plane, kGroups, views(planes.packets, count), false, &done);
-    EXPECT_EQ(done, static_cast<int>(count / kGroups));
+    EXPECT_EQ(done, static_cast<int>(count / per_plane));
     expect_within_plane_bound(s, after, planes.top_plane + 1 - done, "complete packets");
     // The last packet cut at a few places: every component decodes as without
     // that packet or as with all of it (a cut decodes only what it is sure of).
@@ -152,13 +155,44 @@ TEST(PlaneCoder, PrefixesOfPacketsAndCutsInsideThemKeepTheBound) {
   }
 }
 
+TEST(PlaneCoder, AStreamEndingBetweenALevelsPacketsDecodesThosePacketsOnly) {
+  const Sample s = sample(5);
+  constexpr std::size_t kGroups = 2;
+  const PlanePackets planes = encode_planes(s.tree, s.symbols, kGroups);
+  const std::size_t per_plane = kGroups * planes.segments;
+  ASSERT_GT(planes.segments, 2u);
+  std::vector<std::vector<double>> at_plane_ends;
+  for (std::size_t end = 0; end <= planes.packets.size(); end += per_plane)
+    at_plane_ends.push_back(decode(s, planes.top_plane, kGroups, views(planes.packets, end), false));
+  // Within a plane, a component of a node whose level's packet is present has
+  // the plane's bit; the others are as before the plane.
+  std::vector<std::uint8_t> level(s.tree.nodes);
+  std::vector<std::size_t> group(s.tree.nodes);
+  const TreeGroups split = split_tree(s.tree, kGroups);
+  for (std::size_t g = 0; g < kGroups; ++g)
+    for (std::uint32_t k = split.offsets[g]; k < split.offsets[g + 1]; ++k) group[split.members[k]] = g;
+  for (std::size_t i = 0; i < s.tree.nodes; ++i)
+    level[i] = static_cast<std::uint8_t>(s.surface.hierarchy->level_of_index(i));
+  for (std::size_t count = 0; count < planes.packets.size(); ++count) {
+    const std::size_t plane = count / per_plane, within = count % per_plane;
+    const std::vector<double> values = decode(s, planes.top_plane, kGroups, views(planes.packets, count), false);
+    for (std::size_t i = 0; i < s.tree.nodes; ++i) {
+      const bool present = level[i] * kGroups + group[i] < within;
+      const std::vector<double>& expected = at_plane_ends[plane + (present ? 1 : 0)];
+      for (std::size_t k = 0; k < 3; ++k)
+        ASSERT_EQ(values[3 * i + k], expected[3 * i + k]) << count << " packets: node " << i << " (level " << int(level[i])
+                                                           << ", group " << group[i] << ")";
+    }
+  }
+}
+
 TEST(PlaneCoder, HostilePacketsDecodeToBoundedValues) {
   const Sample s = sample(4);
   std::mt19937 rng(4);
   for (int trial = 0; trial < 20; ++trial) {
     const std::size_t groups = 1 + rng() % 6;
     const int top = static_cast<int>(rng() % 32);
-    std::vector<std::string> packets(groups * static_cast<std::size_t>(top + 1));
+    std::vector<std::string> packets(groups * s.tree.level_ends.size() * static_cast<std::size_t>(top + 1));
     for (std::string& p : packets) {
       p.resize(rng() % 64);
       for (char& c : p) c = static_cast<char>(rng());
