@@ -241,8 +241,9 @@ struct EncoderIo {
 };
 
 // The decoder's side: decisions from the stream, magnitudes (in positions) built from them.
+template <class Decoder>
 struct DecoderIo {
-  PrefixRangeDecoder& rc;
+  Decoder& rc;
   std::vector<std::uint32_t>& magnitude;
   template <class Value>
   int bit(Probability& p, Value) {
@@ -361,12 +362,20 @@ void PlaneDecoder::decode_group(std::size_t g, const std::vector<std::string_vie
       }
       return;
     }
-    const bool cut = last_cut && j + 1 == packets.size();
-    PrefixRangeDecoder rc(reinterpret_cast<const std::uint8_t*>(packets[j].data()), packets[j].size(),
-                          cut ? PrefixRangeDecoder::Ending::Cut : PrefixRangeDecoder::Ending::Complete);
-    DecoderIo io{rc, state.magnitude};
+    const auto* data = reinterpret_cast<const std::uint8_t*>(packets[j].data());
+    const std::uint32_t begin = state.tree.segment_begin(g, level), end = state.tree.segment_begin(g, level + 1);
     PlaneCut where;
-    if (!code_segment(io, coder, b, state.tree.segment_begin(g, level), state.tree.segment_begin(g, level + 1), where)) {
+    bool done;
+    if (last_cut && j + 1 == packets.size()) {
+      PrefixRangeDecoder<PacketEnding::Cut> rc(data, packets[j].size());
+      DecoderIo<decltype(rc)> io{rc, state.magnitude};
+      done = code_segment(io, coder, b, begin, end, where);
+    } else {
+      PrefixRangeDecoder<PacketEnding::Complete> rc(data, packets[j].size());
+      DecoderIo<decltype(rc)> io{rc, state.magnitude};
+      done = code_segment(io, coder, b, begin, end, where);
+    }
+    if (!done) {
       group.cut_plane = b;
       group.cut_position = where.position;
       group.cut_refined = where.refined;

@@ -160,19 +160,23 @@ class RangeDecoder {
 // packet cut short (a file prefix) does not know its missing bytes: the
 // decoder tracks how far they could move its code value and stops at the
 // first decision they could change, so every decision it returns is the
-// encoder's. Once stopped() it returns 0 bits and reads nothing.
+// encoder's. Once stopped() it returns 0 bits and reads nothing. The ending
+// is a template argument: a complete packet's decoder never stops, and its
+// hot loop carries none of the cut's checks.
+enum class PacketEnding { Complete, Cut };
+template <PacketEnding kEnding>
 class PrefixRangeDecoder {
  public:
-  enum class Ending { Complete, Cut };
-  PrefixRangeDecoder(const std::uint8_t* data, std::size_t size, Ending ending)
-      : data_(data), size_(size), cut_(ending == Ending::Cut) {
+  PrefixRangeDecoder(const std::uint8_t* data, std::size_t size) : data_(data), size_(size) {
     for (int i = 0; i < 4; ++i) code_ = (code_ << 8) | next_byte();
   }
 
   int decode_bit(Probability& p) {
-    if (stopped_) return 0;
     const std::uint32_t bound = (range_ >> kProbabilityBits) * p;
-    if (unknown_ != 0 && code_ < bound && std::uint64_t{code_} + unknown_ >= bound) return stop();
+    if constexpr (kEnding == PacketEnding::Cut) {
+      if (stopped_) return 0;
+      if (unknown_ != 0 && code_ < bound && std::uint64_t{code_} + unknown_ >= bound) return stop();
+    }
     const int bit = decide(code_, range_, p, bound);
     while (range_ < kTop) {
       range_ <<= 8;
@@ -181,7 +185,7 @@ class PrefixRangeDecoder {
     return bit;
   }
 
-  bool stopped() const { return stopped_; }
+  bool stopped() const { return kEnding == PacketEnding::Cut && stopped_; }
 
  private:
   int stop() {
@@ -193,13 +197,12 @@ class PrefixRangeDecoder {
     ++position_;
     // Past a cut the byte is unknown: the code value may be up to
     // `unknown_` larger than with zeros (all of it after 4 such bytes).
-    if (cut_) unknown_ = unknown_ >= 0x00FFFFFFu ? 0xFFFFFFFFu : (unknown_ << 8) | 0xFFu;
+    if constexpr (kEnding == PacketEnding::Cut) unknown_ = unknown_ >= 0x00FFFFFFu ? 0xFFFFFFFFu : (unknown_ << 8) | 0xFFu;
     return 0u;
   }
 
   const std::uint8_t* data_;
   std::size_t size_;
-  bool cut_;
   bool stopped_ = false;
   std::size_t position_ = 0;
   std::uint32_t code_ = 0;
