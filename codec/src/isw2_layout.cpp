@@ -97,7 +97,8 @@ PlaneStream read_planes(PayloadReader& reader, std::string_view payload, bool pa
   std::uint64_t offset = 0;
   for (std::size_t p = 0; p < sizes.size(); ++p) {
     const std::uint64_t available = std::min<std::uint64_t>(data.size(), max_stream_bytes);
-    if (offset >= available) break;
+    // An empty packet is complete wherever the bytes end (it needs none).
+    if (offset > available || (offset == available && sizes[p] > 0)) break;
     const std::uint64_t size = std::min(sizes[p], available - offset);
     stream.packets.push_back(data.substr(static_cast<std::size_t>(offset), static_cast<std::size_t>(size)));
     const bool cut_here = size < sizes[p] || (p + 1 == sizes.size() && (flags & 1));
