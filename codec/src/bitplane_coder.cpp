@@ -69,16 +69,19 @@ GroupedTree group_tree(const CoefficientTree& tree, const std::vector<std::uint8
   for (std::size_t p = 0; p < n; ++p) position[t.node[p]] = static_cast<std::uint32_t>(p);
   t.parent.resize(n);
   t.node_class.resize(n);
-  t.child_offsets.resize(n + 1);
-  t.children.reserve(tree.children.size());
+  t.child_offsets.assign(n + 1, 0);
   for (std::size_t p = 0; p < n; ++p) {
     const std::uint32_t i = t.node[p];
     t.parent[p] = tree.parent[i] == kNoParent ? kNoParent : position[tree.parent[i]];
     t.node_class[p] = node_class[i];
-    t.child_offsets[p] = static_cast<std::uint32_t>(t.children.size());
-    for (std::uint32_t k = tree.child_begin(i); k < tree.child_end(i); ++k) t.children.push_back(position[tree.children[k]]);
+    if (t.parent[p] != kNoParent) ++t.child_offsets[t.parent[p] + 1];
   }
-  t.child_offsets[n] = static_cast<std::uint32_t>(t.children.size());
+  // Children by a counting sort over their parents' positions (ascending).
+  for (std::size_t p = 0; p < n; ++p) t.child_offsets[p + 1] += t.child_offsets[p];
+  t.children.resize(t.child_offsets[n]);
+  std::vector<std::uint32_t> fill(t.child_offsets.begin(), t.child_offsets.end() - 1);
+  for (std::size_t p = 0; p < n; ++p)
+    if (t.parent[p] != kNoParent) t.children[fill[t.parent[p]]++] = static_cast<std::uint32_t>(p);
   // Within a group positions ascend with the node index, so each level is a run.
   t.segment_count = tree.level_ends.size();
   for (std::size_t g = 0; g < groups; ++g) {

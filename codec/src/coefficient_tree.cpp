@@ -41,14 +41,6 @@ CoefficientTree build_coefficient_tree(const SubdivisionHierarchy& hierarchy) {
     tree.level_ends.push_back(static_cast<std::uint32_t>(hierarchy.vertex_count(level)));
   tree.parent.assign(tree.nodes, UINT32_MAX);
   for (int level = 1; level < levels; ++level) link_level(hierarchy, level, tree.parent);
-  // Children in ascending order by a counting sort over the parents.
-  const std::size_t parents = levels >= 2 ? hierarchy.vertex_count(levels - 1) : 0;
-  tree.child_offsets.assign(parents + 1, 0);
-  for (std::size_t i = tree.roots_end; i < tree.nodes; ++i) ++tree.child_offsets[tree.parent[i] + 1];
-  for (std::size_t i = 0; i < parents; ++i) tree.child_offsets[i + 1] += tree.child_offsets[i];
-  tree.children.resize(tree.nodes - tree.roots_end);
-  std::vector<std::uint32_t> fill(tree.child_offsets.begin(), tree.child_offsets.end() - 1);
-  for (std::size_t i = tree.roots_end; i < tree.nodes; ++i) tree.children[fill[tree.parent[i]]++] = static_cast<std::uint32_t>(i);
   return tree;
 }
 

@@ -19,19 +19,12 @@ struct CoefficientTree {
   std::size_t nodes = 0;      // the hierarchy's fine vertex count: one node per entry
   std::size_t roots_end = 0;  // entries [0, roots_end) are roots: base and level 1
   std::vector<std::uint32_t> level_ends;  // entries of level l end at level_ends[l] (l = 0..L)
-  // Children of node i (ascending): children[child_offsets[i] .. child_offsets[i + 1]]
-  // for i < child_offsets.size() - 1; nodes beyond have none. Flat arrays: the
-  // coder walks them once per bit plane.
-  std::vector<std::uint32_t> child_offsets;
-  std::vector<std::uint32_t> children;
-  // Parent of node i >= roots_end, or UINT32_MAX for roots.
+  // Parent of node i >= roots_end (always a smaller index), or UINT32_MAX for
+  // roots. The plane coder derives the children in its own node order.
   std::vector<std::uint32_t> parent;
-
-  std::uint32_t child_begin(std::size_t i) const { return i + 1 < child_offsets.size() ? child_offsets[i] : 0; }
-  std::uint32_t child_end(std::size_t i) const { return i + 1 < child_offsets.size() ? child_offsets[i + 1] : 0; }
 };
 
-// Cost: O(fine vertices) time and 12 bytes per entry.
+// Cost: O(fine vertices) time and 4 bytes per entry.
 CoefficientTree build_coefficient_tree(const SubdivisionHierarchy& hierarchy);
 
 // The nodes in `groups` independent parts (docs/FORMAT.md, PLNS): the roots
