@@ -57,7 +57,6 @@ void decode_plane_stream(const Section& section, const SubdivisionHierarchy& hie
   stream.bytes = section.payload.size() > planes.data_offset ? section.payload.size() - planes.data_offset : 0;
   stream.top_plane = planes.layout.top_plane;
   stream.planes = static_cast<int>(planes.planes_total);
-  stream.groups = static_cast<int>(planes.layout.groups);
   stream.plane_ends = planes.plane_ends;
   result.chunks_total = planes.planes_total;
 

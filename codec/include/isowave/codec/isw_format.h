@@ -146,7 +146,6 @@ struct IswStreamInfo {
   int top_plane = -1;         // -1: every coefficient below the step
   int planes = 0;             // planes in the file (the last may be cut, some of its packets missing)
   int planes_decoded = 0;     // planes decoded completely (every group's packet)
-  int groups = 1;             // independent packet groups per plane
   std::vector<std::uint64_t> plane_ends;  // cumulative packet bytes at each plane's end, as the file's table says
   double tangential_factor = 1;
   double frame_step = 0;      // world units
