@@ -218,8 +218,8 @@ struct IswDecodeOptions {
   // version 2 any prefix past BPTS decodes). Not reported as truncated.
   std::uint64_t max_file_bytes = UINT64_MAX;
   // Version 2 without a coefficient limit: IswOrder::Index skips ranking
-  // (a sort of every non-zero coefficient, ~10% of a whole decode) when the
-  // caller needs only the surface. A limit always ranks by importance.
+  // (a sort of every non-zero coefficient) when the caller needs only the
+  // surface. A limit always ranks by importance.
   IswOrder order = IswOrder::Importance;
   // Read only the metadata, base mesh and section table (for `info`).
   bool headers_only = false;
