@@ -5,11 +5,15 @@
 // REFERENCE to the surface of MESH (how much of the reference it covers; a
 // fit that left parts of the surface out shows only here).
 //
-// usage: bench_mesh_distance MESH REFERENCE [CELL] [--worst N]
+// usage: bench_mesh_distance MESH REFERENCE [CELL] [--worst N | --surface-error SAMPLES]
 // prints: rms max reverse_rms reverse_max   (in percent of CELL, default 1);
 // --worst N then lists the N vertices of REFERENCE farthest from MESH (index,
 // position, distance in cells): where a fit left the surface out.
+// --surface-error SAMPLES instead times the surface error D as convert
+// measures it (SurfaceErrorReference: the reference made once, then
+// measure(MESH), best of 3) and prints its directions and D in % of CELL.
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -20,16 +24,46 @@
 #include "isowave/core/huge_page_vector.h"
 #include "isowave/core/mesh_io.h"
 #include "isowave/core/surface_distance.h"
+#include "isowave/core/surface_error.h"
+
+namespace {
+
+double seconds_since(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+// D between the meshes with SurfaceErrorReference, timed.
+void time_surface_error(const isowave::PolygonMesh& mesh, const isowave::PolygonMesh& reference, double cell,
+                        std::size_t samples) {
+  auto start = std::chrono::steady_clock::now();
+  const isowave::SurfaceErrorReference against(reference, samples);
+  std::printf("reference (%zu vertices, %zu samples): %.3f s\n", reference.vertex_count(), samples, seconds_since(start));
+  double best = 1e30;
+  isowave::SurfaceError error;
+  for (int run = 0; run < 3; ++run) {
+    start = std::chrono::steady_clock::now();
+    error = against.measure(mesh);
+    best = std::min(best, seconds_since(start));
+  }
+  std::printf("measure (%zu vertices): %.3f s best of 3; forward %.4f, backward %.4f, D %.4f %% of a cell\n",
+              mesh.vertex_count(), best, 100 * error.forward_rms / cell, 100 * error.backward_rms / cell,
+              100 * error.d() / cell);
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
   isowave::keep_freed_memory_for_reuse();
-  std::size_t worst = 0;
+  std::size_t worst = 0, samples = 0;
   if (argc >= 5 && std::strcmp(argv[argc - 2], "--worst") == 0) {
     worst = static_cast<std::size_t>(std::atol(argv[argc - 1]));
     argc -= 2;
+  } else if (argc >= 5 && std::strcmp(argv[argc - 2], "--surface-error") == 0) {
+    samples = static_cast<std::size_t>(std::atol(argv[argc - 1]));
+    argc -= 2;
   }
   if (argc < 3 || argc > 4) {
-    std::fprintf(stderr, "usage: bench_mesh_distance MESH REFERENCE [CELL] [--worst N]\n");
+    std::fprintf(stderr, "usage: bench_mesh_distance MESH REFERENCE [CELL] [--worst N | --surface-error SAMPLES]\n");
     return 2;
   }
   try {
@@ -37,6 +71,10 @@ int main(int argc, char** argv) {
     const isowave::PolygonMesh reference = isowave::read_mesh(argv[2]);
     const double cell = argc > 3 ? std::atof(argv[3]) : 1.0;
     if (!(cell > 0)) throw std::runtime_error("CELL must be a positive number");
+    if (samples > 0) {
+      time_surface_error(mesh, reference, cell, samples);
+      return 0;
+    }
     const auto rms_and_max = [cell](const std::vector<double>& d) {
       double sum = 0, max = 0;
       for (double x : d) {

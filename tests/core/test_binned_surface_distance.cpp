@@ -17,38 +17,12 @@
 namespace isowave {
 namespace {
 
-// Points around `mesh`: its vertices (distance 0), points jittered off them
-// by up to `near`, uniform points in its bounding box grown by its size on
-// every side, and a few points a thousand sizes away.
-std::vector<Vec3> query_points(const PolygonMesh& mesh, double near, std::uint32_t seed) {
-  Vec3 low = mesh.positions[0], high = low;
-  for (const Vec3& p : mesh.positions) {
-    low = component_min(low, p);
-    high = component_max(high, p);
-  }
-  const Vec3 size = high - low;
-  std::mt19937 random(seed);
-  std::uniform_real_distribution<double> unit(0.0, 1.0), offset(-near, near);
-  std::vector<Vec3> points;
-  for (std::size_t v = 0; v < mesh.positions.size(); v += 1 + mesh.positions.size() / 500) {
-    points.push_back(mesh.positions[v]);
-    points.push_back(mesh.positions[v] + Vec3{offset(random), offset(random), offset(random)});
-  }
-  for (int i = 0; i < 500; ++i)
-    points.push_back(low - size + Vec3{3 * size.x * unit(random), 3 * size.y * unit(random), 3 * size.z * unit(random)});
-  const double far = 1000 * std::max({size.x, size.y, size.z, 1.0});
-  points.push_back(low - Vec3{far, 0, 0});
-  points.push_back(high + Vec3{far, far, far});
-  points.push_back(Vec3{low.x, high.y + far, 0.5 * (low.z + high.z)});
-  return points;
-}
-
 void expect_same_as_cgal(const PolygonMesh& mesh, double near, const std::string& name) {
   SCOPED_TRACE(name);
   const BinnedSurfaceDistance binned(mesh);
   const SurfaceDistance reference(mesh);
   EXPECT_EQ(binned.triangle_count(), reference.triangle_count());
-  const std::vector<Vec3> points = query_points(mesh, near, 7);
+  const std::vector<Vec3> points = test::points_around(mesh, near, 7);
   const std::vector<double> got = binned.distances(points), expected = reference.distances(points);
   ASSERT_EQ(got.size(), points.size());
   for (std::size_t i = 0; i < points.size(); ++i) {
@@ -75,15 +49,7 @@ TEST(BinnedSurfaceDistance, MatchesCgalOnAFineTorus) {
 }
 
 TEST(BinnedSurfaceDistance, MatchesCgalOnFarApartAndStretchedTriangles) {
-  // Small triangles far apart (the grid's bin count is capped) and a long
-  // sliver across them.
-  PolygonMesh mesh;
-  mesh.positions = {{0, 0, 0},     {0.01, 0, 0}, {0, 0.01, 0},    {500, 300, 100}, {500.01, 300, 100},
-                    {500, 300.01, 100}, {0, 0, 1}, {500, 300, 101}, {250, 150, 50}};
-  mesh.add_face({0, 1, 2});
-  mesh.add_face({3, 4, 5});
-  mesh.add_face({6, 7, 8});
-  expect_same_as_cgal(mesh, 1.0, "far apart and stretched");
+  expect_same_as_cgal(test::far_apart_and_stretched(), 1.0, "far apart and stretched");
 }
 
 // Marching cubes makes zero-area triangles where samples equal the isovalue.

@@ -1,5 +1,6 @@
 #include "support/test_meshes.h"
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <map>
@@ -156,6 +157,39 @@ void jitter(PolygonMesh& mesh, double amount, std::uint32_t seed) {
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> offset(-amount, amount);
   for (Vec3& p : mesh.positions) p += Vec3{offset(rng), offset(rng), offset(rng)};
+}
+
+std::vector<Vec3> points_around(const PolygonMesh& mesh, double near, std::uint32_t seed) {
+  Vec3 low = mesh.positions[0], high = low;
+  for (const Vec3& p : mesh.positions) {
+    low = component_min(low, p);
+    high = component_max(high, p);
+  }
+  const Vec3 size = high - low;
+  std::mt19937 random(seed);
+  std::uniform_real_distribution<double> unit(0.0, 1.0), offset(-near, near);
+  std::vector<Vec3> points;
+  for (std::size_t v = 0; v < mesh.positions.size(); v += 1 + mesh.positions.size() / 500) {
+    points.push_back(mesh.positions[v]);
+    points.push_back(mesh.positions[v] + Vec3{offset(random), offset(random), offset(random)});
+  }
+  for (int i = 0; i < 500; ++i)
+    points.push_back(low - size + Vec3{3 * size.x * unit(random), 3 * size.y * unit(random), 3 * size.z * unit(random)});
+  const double far = 1000 * std::max({size.x, size.y, size.z, 1.0});
+  points.push_back(low - Vec3{far, 0, 0});
+  points.push_back(high + Vec3{far, far, far});
+  points.push_back(Vec3{low.x, high.y + far, 0.5 * (low.z + high.z)});
+  return points;
+}
+
+PolygonMesh far_apart_and_stretched() {
+  PolygonMesh mesh;
+  mesh.positions = {{0, 0, 0},     {0.01, 0, 0}, {0, 0.01, 0},    {500, 300, 100}, {500.01, 300, 100},
+                    {500, 300.01, 100}, {0, 0, 1}, {500, 300, 101}, {250, 150, 50}};
+  mesh.add_face({0, 1, 2});
+  mesh.add_face({3, 4, 5});
+  mesh.add_face({6, 7, 8});
+  return mesh;
 }
 
 Volume sampled_volume(std::array<std::size_t, 3> dims, const std::function<double(double, double, double)>& value) {

@@ -35,6 +35,15 @@ std::vector<NamedMesh> generated_corpus();
 // Moves every vertex by a uniform random offset in [-amount, amount]^3.
 void jitter(PolygonMesh& mesh, double amount, std::uint32_t seed);
 
+// Query points around `mesh` for distance tests: about 500 of its vertices
+// (distance 0) and as many jittered off them by up to `near`, 500 uniform
+// points in its bounding box grown by its size on every side, and three
+// points a thousand sizes away.
+std::vector<Vec3> points_around(const PolygonMesh& mesh, double near, std::uint32_t seed);
+// Three small triangles far apart (a grid's bin count is capped) and a long
+// sliver across them.
+PolygonMesh far_apart_and_stretched();
+
 // ../shared/data relative to the repository, or "" if absent.
 // A volume of unit spacing at the origin whose sample (i, j, k) is value(i, j, k).
 Volume sampled_volume(std::array<std::size_t, 3> dims, const std::function<double(double, double, double)>& value);

@@ -15,6 +15,7 @@
 
 #include "isowave/core/binned_surface_distance.h"
 #include "isowave/core/mesh.h"
+#include "isowave/core/point_set_distance.h"
 #include "isowave/core/vec3.h"
 
 namespace isowave {
@@ -22,8 +23,8 @@ namespace isowave {
 // `count` points distributed uniformly over the area of `mesh` (faces fanned
 // from their first vertex; a triangle of zero or non-finite area gets none).
 // Sample i depends only on (seed, i): the result is the same for any thread
-// count. Parallel (TBB); O(triangles + count log triangles) time, 24 bytes
-// per sample and 20 per triangle. Throws Error(InvalidArgument) for a mesh
+// count. Parallel (TBB); O(triangles + count log count) time, about 40
+// bytes per sample and nothing per triangle. Throws Error(InvalidArgument) for a mesh
 // without a triangle of positive finite area.
 std::vector<Vec3> area_samples(const PolygonMesh& mesh, std::size_t count, std::uint64_t seed);
 
@@ -37,9 +38,11 @@ struct SurfaceError {
 
 // D between `mesh` and `reference` from `samples` (>= 1) area-uniform samples
 // on each (fixed seeds: deterministic, and the same for any thread count).
-// Builds a BinnedSurfaceDistance on each mesh: time about linear in the
-// triangles plus the samples, memory about 40 bytes per triangle of the
-// larger mesh. Throws Error(InvalidArgument) for samples == 0, a mesh without
+// The samples on `mesh` go to a BinnedSurfaceDistance of the reference,
+// the reference's samples to `mesh` through a PointSetDistance (nothing
+// stored per triangle of `mesh`): time about linear in the triangles plus
+// the samples, memory about 40 bytes per triangle of the reference and per
+// sample. Throws Error(InvalidArgument) for samples == 0, a mesh without
 // area (see area_samples()) or with a non-finite position.
 SurfaceError surface_error(const PolygonMesh& mesh, const PolygonMesh& reference, std::size_t samples = 200000);
 
@@ -54,8 +57,8 @@ class SurfaceErrorReference {
 
  private:
   std::size_t samples_;
-  std::vector<Vec3> reference_samples_;
-  BinnedSurfaceDistance distance_;
+  PointSetDistance reference_samples_;  // the backward direction, against each mesh
+  BinnedSurfaceDistance distance_;      // the forward direction, from each mesh's samples
 };
 
 }  // namespace isowave
