@@ -408,7 +408,6 @@ void PlaneDecoder::group_values(std::size_t g, std::vector<Vec3>& out) const {
   const State& state = *state_;
   const int complete_low = top_plane_ - group.planes_done + 1;
   const int cut = group.cut_plane;
-  const auto half = [](int low) { return low <= 0 ? 0.5 : double(1u << (low - 1)); };
   for (std::uint32_t p = state.tree.group_offsets[g]; p < state.tree.group_offsets[g + 1]; ++p) {
     const std::uint8_t f = state.flags[p];
     Vec3& value = out[state.tree.node[p]];
@@ -420,7 +419,7 @@ void PlaneDecoder::group_values(std::size_t g, std::vector<Vec3>& out) const {
       if (cut >= 0 &&
           (m == 1u << cut || p < group.cut_position || (p == group.cut_position && ((group.cut_refined >> k) & 1))))
         low = cut;
-      const double v = m + half(low);
+      const double v = known_value(m, low);
       value[k] = (f >> (kSignShift + k)) & 1 ? -v : v;
     }
   }

@@ -48,6 +48,14 @@ inline std::size_t plane_groups(std::size_t nodes) {
   return std::min(kMaxGroups, std::max<std::size_t>(1, (nodes + kNodesPerGroup / 2) / kNodesPerGroup));
 }
 
+// A component's value in step units when its magnitude's bits from plane
+// `low` up are known (`known`, the bits below clear): 0 while none is set,
+// else the middle of the interval the known bits leave. The decoder's rule,
+// and the encoder's for what a prefix ending at a plane decodes to.
+inline double known_value(std::uint32_t known, int low) {
+  return known == 0 ? 0.0 : double(known) + (low <= 0 ? 0.5 : double(1u << (low - 1)));
+}
+
 struct PlaneSymbols {
   // Per node: 3 magnitudes (step units) and the sign bits (bit k: component k negative).
   std::vector<std::uint32_t> magnitude;

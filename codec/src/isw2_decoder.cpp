@@ -27,17 +27,10 @@ double seconds_since(Clock::time_point start) { return std::chrono::duration<dou
 void to_world(const PlaneDecoder& decoder, const CoefficientClasses& layout, const std::vector<std::uint8_t>& classes,
               const V2Scales& scales, const std::vector<Vec3>& frame_base, const std::vector<Vec3>& normals,
               IswDecoded& result) {
-  const std::size_t fine = layout.fine();
-  reserve_fresh_on_huge_pages(result.coefficients, fine);
-  result.coefficients.resize(fine);
+  reserve_fresh_on_huge_pages(result.coefficients, layout.fine());
+  result.coefficients.resize(layout.fine());
   decoder.values(result.coefficients);  // step units, converted in place
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, fine, kParallelGrain), [&](const tbb::blocked_range<std::size_t>& r) {
-    for (std::size_t i = r.begin(); i < r.end(); ++i) {
-      const Vec3 u = result.coefficients[i];
-      const int cls = classes[i];
-      result.coefficients[i] = cls > 0 && u == Vec3{} ? Vec3{} : scales.from_steps(i, cls, u, frame_base, normals);
-    }
-  });
+  steps_to_world(classes, scales, frame_base, normals, result.coefficients);
   std::copy(result.coefficients.begin(), result.coefficients.begin() + static_cast<std::ptrdiff_t>(layout.base()),
             result.base.positions.begin());
 }

@@ -3,6 +3,7 @@
 // and class weight as three step-unit magnitudes, and the embedded bit planes.
 #include <algorithm>
 #include <atomic>
+#include <cassert>
 #include <optional>
 #include <cmath>
 #include <string>
@@ -18,6 +19,7 @@
 #include "coefficient_tree.h"
 #include "isw2_layout.h"
 #include "isw_headers.h"
+#include "isw_models.h"
 #include "local_frames.h"
 
 namespace isowave {
@@ -47,9 +49,8 @@ bool split(double value, std::uint32_t& magnitude, int& negative) {
 // residual from the frame-precision base, wavelet coefficients in their
 // local frames (docs/FORMAT.md, PLNS).
 PlaneSymbols symbols_of(const SubdivisionHierarchy& hierarchy, const std::vector<Vec3>& coefficients,
-                        const std::vector<Vec3>& coarse_base, const V2Scales& scales) {
+                        const std::vector<Vec3>& coarse_base, const std::vector<Vec3>& normals, const V2Scales& scales) {
   const CoefficientClasses classes(hierarchy);
-  const std::vector<Vec3> normals = frame_normals(hierarchy, coarse_base);
   PlaneSymbols s;
   const std::size_t n = hierarchy.fine_vertex_count();
   s.classes = classes.count();
@@ -98,7 +99,8 @@ std::uint64_t nonzero_wavelets(const SubdivisionHierarchy& hierarchy, const Plan
 namespace detail {
 
 std::string encode_isw_v2(const SubdivisionHierarchy& hierarchy, const std::vector<Vec3>& coefficients,
-                          const IswMetadata& metadata, const IswEncodeOptions& options, std::vector<double> weights) {
+                          const IswMetadata& metadata, const IswEncodeOptions& options, std::vector<double> weights,
+                          PlaneValuesState* values) {
   check_v2_options(options);
   const std::size_t base_count = hierarchy.vertex_count(0);
   V2Scales scales{options.step, options.frame_step > 0 ? options.frame_step : 16 * options.step / weights[0],
@@ -113,7 +115,8 @@ std::string encode_isw_v2(const SubdivisionHierarchy& hierarchy, const std::vect
       base_q[v][axis] = std::llround(scaled);
       coarse_base[v][axis] = double(base_q[v][axis]) * scales.frame_step;
     }
-  const PlaneSymbols symbols = symbols_of(hierarchy, coefficients, coarse_base, scales);
+  std::vector<Vec3> normals = frame_normals(hierarchy, coarse_base);
+  PlaneSymbols symbols = symbols_of(hierarchy, coefficients, coarse_base, normals, scales);
   const std::size_t groups = plane_groups(hierarchy.fine_vertex_count());
   const PlanePackets planes = encode_planes(build_coefficient_tree(hierarchy), symbols, groups);
 
@@ -125,8 +128,22 @@ std::string encode_isw_v2(const SubdivisionHierarchy& hierarchy, const std::vect
   put_base_points(out, hierarchy.base(), base_q);
   put_planes(out, {planes.top_plane, groups, planes.segments}, planes.packets, PlaneEnding::Complete);
   put_section(out, "END ", std::string_view());
-  if (options.max_bytes > 0 && out.size() > options.max_bytes)
-    return rewrite_isw(out, IswRewrite{stream_bytes_within(out, options.max_bytes), {}, nullptr});
+  std::uint64_t kept = UINT64_MAX;  // plane stream bytes
+  if (values) values->plane_ends = stream_plane_ends(out);
+  if (options.max_bytes > 0 && out.size() > options.max_bytes) {
+    kept = stream_bytes_within(out, options.max_bytes);
+    out = rewrite_isw(out, IswRewrite{kept, {}, nullptr});
+  }
+  if (values) {
+    // The planes the cut keeps whole.
+    std::vector<std::uint64_t>& ends = values->plane_ends;
+    ends.erase(std::upper_bound(ends.begin(), ends.end(), kept), ends.end());
+    values->top_plane = planes.top_plane;
+    values->symbols = std::move(symbols);
+    values->scales = std::move(scales);
+    values->frame_base = std::move(coarse_base);
+    values->normals = std::move(normals);
+  }
   return out;
 }
 
@@ -148,6 +165,32 @@ std::vector<Section> sections_of_v2(const std::string& file) {
 }
 
 }  // namespace
+
+IswPlaneValues::IswPlaneValues() = default;
+IswPlaneValues::~IswPlaneValues() = default;
+IswPlaneValues::IswPlaneValues(IswPlaneValues&&) noexcept = default;
+IswPlaneValues& IswPlaneValues::operator=(IswPlaneValues&&) noexcept = default;
+
+const std::vector<std::uint64_t>& IswPlaneValues::plane_ends() const {
+  static const std::vector<std::uint64_t> none;
+  return state_ ? state_->plane_ends : none;
+}
+
+void IswPlaneValues::coefficients_at(std::size_t k, std::vector<Vec3>& out) const {
+  assert(state_ && k < state_->plane_ends.size());
+  const PlaneSymbols& s = state_->symbols;
+  const int low = state_->top_plane - static_cast<int>(k);
+  out.resize(s.negative.size());
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, out.size(), kParallelGrain), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t i = r.begin(); i < r.end(); ++i)
+      for (int c = 0; c < 3; ++c) {
+        const std::uint32_t known = s.magnitude[3 * i + static_cast<std::size_t>(c)] >> low << low;
+        const double v = known_value(known, low);
+        out[i][c] = v != 0 && ((s.negative[i] >> c) & 1) ? -v : v;
+      }
+  });
+  steps_to_world(s.node_class, state_->scales, state_->frame_base, state_->normals, out);
+}
 
 std::string rewrite_isw(const std::string& file, const IswRewrite& rewrite) {
   const std::uint64_t stream_bytes = rewrite.stream_bytes;

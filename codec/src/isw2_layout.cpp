@@ -3,8 +3,12 @@
 #include <algorithm>
 #include <cmath>
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include "isowave/core/error.h"
 #include "bitplane_coder.h"
+#include "isw_models.h"
 
 namespace isowave::detail {
 
@@ -41,6 +45,17 @@ std::vector<std::uint8_t> node_classes(const CoefficientClasses& classes) {
               static_cast<std::uint8_t>(c));
   }
   return result;
+}
+
+void steps_to_world(const std::vector<std::uint8_t>& classes, const V2Scales& scales, const std::vector<Vec3>& frame_base,
+                    const std::vector<Vec3>& normals, std::vector<Vec3>& values) {
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, values.size(), kParallelGrain), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t i = r.begin(); i < r.end(); ++i) {
+      const Vec3 u = values[i];
+      const int cls = classes[i];
+      values[i] = cls > 0 && u == Vec3{} ? Vec3{} : scales.from_steps(i, cls, u, frame_base, normals);
+    }
+  });
 }
 
 void put_planes(std::string& out, PlaneLayout layout, const std::vector<std::string_view>& packets, PlaneEnding last) {

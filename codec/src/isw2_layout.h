@@ -11,6 +11,7 @@
 #include "isowave/codec/isw_format.h"
 #include "isowave/core/vec3.h"
 #include "isowave/transform/hierarchy.h"
+#include "bitplane_coder.h"
 #include "isw_sections.h"
 #include "local_frames.h"
 
@@ -39,6 +40,13 @@ struct V2Scales {
     return from_frame(frame_of(normals[i]), c) * (step / weights[static_cast<std::size_t>(cls)]);
   }
 };
+
+// Step-unit values (`values`, one per entry) into world coefficients in
+// place, as the decoder gives them: a base control point is its frame-precision
+// point plus the value, a wavelet coefficient the value in its local frame
+// (zero where every component is). Parallel.
+void steps_to_world(const std::vector<std::uint8_t>& classes, const V2Scales& scales, const std::vector<Vec3>& frame_base,
+                    const std::vector<Vec3>& normals, std::vector<Vec3>& values);
 
 // Per entry, its coefficient class (the plane coder's context class).
 std::vector<std::uint8_t> node_classes(const CoefficientClasses& classes);
@@ -86,9 +94,21 @@ PlaneStream read_planes(PayloadReader& reader, std::string_view payload, bool pa
 void put_rate_table(std::string& out, const std::vector<IswRatePoint>& rows);
 std::vector<IswRatePoint> read_rate_table(PayloadReader& reader);
 
-// The encoder (isw2_encoder.cpp): `weights` are the class weights.
+// What IswPlaneValues keeps of an encoding: every entry's magnitudes and
+// signs, and what turns them into world coefficients.
+struct PlaneValuesState {
+  PlaneSymbols symbols;
+  V2Scales scales;
+  std::vector<Vec3> frame_base, normals;
+  int top_plane = -1;
+  std::vector<std::uint64_t> plane_ends;  // of the file written (a cut one has fewer)
+};
+
+// The encoder (isw2_encoder.cpp): `weights` are the class weights; `values`,
+// if given, receives what the plane ends decode to.
 std::string encode_isw_v2(const SubdivisionHierarchy& hierarchy, const std::vector<Vec3>& coefficients,
-                          const IswMetadata& metadata, const IswEncodeOptions& options, std::vector<double> weights);
+                          const IswMetadata& metadata, const IswEncodeOptions& options, std::vector<double> weights,
+                          PlaneValuesState* values = nullptr);
 
 // The decoder's PLNS (isw2_decoder.cpp): decodes at most `max_stream_bytes`
 // of the section's packets into result.coefficients (world units; base

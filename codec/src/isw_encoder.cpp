@@ -217,6 +217,17 @@ std::string encode_isw(const PolygonMesh& base, int levels, const std::vector<Ve
 }
 
 std::string encode_isw(const SubdivisionHierarchy& hierarchy, const std::vector<Vec3>& coefficients,
+                       const IswMetadata& metadata, const IswEncodeOptions& options, IswPlaneValues& planes) {
+  if (options.major_version != 2) throw Error(ErrorKind::InvalidArgument, "plane values need a version 2 file");
+  std::vector<double> weights = options.class_weights.empty() ? wavelet_norms(hierarchy) : options.class_weights;
+  check_encode_arguments(hierarchy, coefficients, options.step, weights);
+  auto state = std::make_unique<PlaneValuesState>();
+  std::string file = encode_isw_v2(hierarchy, coefficients, metadata, options, std::move(weights), state.get());
+  planes.state_ = std::move(state);
+  return file;
+}
+
+std::string encode_isw(const SubdivisionHierarchy& hierarchy, const std::vector<Vec3>& coefficients,
                        const IswMetadata& metadata, const IswEncodeOptions& options,
                        std::vector<std::uint32_t>* ranked_out) {
   std::vector<double> weights = options.class_weights.empty() ? wavelet_norms(hierarchy) : options.class_weights;

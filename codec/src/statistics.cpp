@@ -63,7 +63,8 @@ std::vector<Vec3> take_reconstruction(IswDecoded& decoded, std::size_t keep, int
 }
 
 std::vector<RateDistortionRow> rate_distortion(const IswDecoded& decoded, const std::vector<double>& percents,
-                                               const std::vector<Vec3>* reference, const PointErrors* all_decoded_errors) {
+                                               const std::vector<Vec3>* reference, const PointErrors* all_decoded_errors,
+                                               const RowSurfaceVisitor& visit) {
   // Version 2: a stream its encoder cut (convert --size) ends inside a plane; complete is every byte read.
   const bool partial = decoded.major_version >= 2 ? decoded.stream.decoded < decoded.stream.bytes
                                                   : decoded.chunks_decoded != decoded.chunks_total;
@@ -112,6 +113,7 @@ std::vector<RateDistortionRow> rate_distortion(const IswDecoded& decoded, const 
     } else {
       reconstruct_into(decoded, wavelets, -1, reconstruction);
       e = point_errors(reconstruction, compare_to, fine);
+      if (visit) visit(rows.size(), reconstruction);
     }
     row.rms = e.rms;
     row.max = e.max;
@@ -124,11 +126,12 @@ std::vector<RateDistortionRow> rate_distortion(const IswDecoded& decoded, const 
   return rows;
 }
 
-ErrorTable error_table(const IswDecoded& decoded, const std::vector<double>& percents, const std::vector<Vec3>* full_decode) {
+ErrorTable error_table(const IswDecoded& decoded, const std::vector<double>& percents, const std::vector<Vec3>* full_decode,
+                       const RowSurfaceVisitor& visit) {
   // Rows keeping every decoded coefficient are the full decode itself.
   const PointErrors none;
   ErrorTable table;
-  table.rows = rate_distortion(decoded, percents, full_decode, full_decode ? &none : nullptr);
+  table.rows = rate_distortion(decoded, percents, full_decode, full_decode ? &none : nullptr, visit);
   table.quantization = recorded_quantization_error(decoded.metadata);
   return table;
 }

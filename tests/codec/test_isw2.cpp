@@ -109,6 +109,37 @@ TEST(IswFormat2, ErrorFallsAtEveryPlaneBoundary) {
   }
 }
 
+TEST(IswFormat2, PlaneValuesAreWhatEachPlaneEndDecodesTo) {
+  // Two groups of the tree (2^17 nodes each): each plane is four packets.
+  const Encoded e = encode_sample(test::genus_slab(2), 3, 1e-4);
+  for (const std::uint64_t max_bytes : {std::uint64_t{0}, std::uint64_t{e.bytes.size() / 2}}) {
+    SCOPED_TRACE("max_bytes " + std::to_string(max_bytes));
+    IswEncodeOptions options = e.options;
+    options.max_bytes = max_bytes;
+    IswPlaneValues planes;
+    const std::string file = encode_isw(*e.surface.hierarchy, e.surface.coefficients, sample_metadata(), options, planes);
+    EXPECT_EQ(file, max_bytes ? encode_isw(*e.surface.hierarchy, e.surface.coefficients, sample_metadata(), options)
+                              : e.bytes);
+    // The planes the file holds whole.
+    std::vector<std::uint64_t> whole = stream_plane_ends(e.bytes);
+    const IswDecoded cut = decode_isw(file, "cut.isw");
+    whole.resize(static_cast<std::size_t>(cut.stream.planes_decoded));
+    ASSERT_EQ(planes.plane_ends(), whole);
+    ASSERT_GE(planes.plane_ends().size(), 5u);
+    std::vector<Vec3> values;
+    for (std::size_t k = 0; k < planes.plane_ends().size(); ++k) {
+      IswDecodeOptions limit;
+      limit.max_stream_bytes = planes.plane_ends()[k];
+      planes.coefficients_at(k, values);
+      ASSERT_EQ(values, decode_isw(file, "limit.isw", limit).coefficients) << "plane end " << k;
+    }
+  }
+  IswEncodeOptions version1 = e.options;
+  version1.major_version = 1;
+  IswPlaneValues planes;
+  EXPECT_THROW(encode_isw(*e.surface.hierarchy, e.surface.coefficients, sample_metadata(), version1, planes), Error);
+}
+
 TEST(IswFormat2, SizeLimitCutsTheStreamAndRateTableChoosesThePrefix) {
   const Encoded e = encode_sample(test::genus_slab(2), 3, 1e-4);
   const IswDecoded full = decode_isw(e.bytes, "test.isw");

@@ -125,6 +125,41 @@ std::uint64_t stream_bytes_within(const std::string& file, std::uint64_t max_byt
 // (its packet table; nothing is decoded). Error(InvalidArgument) otherwise.
 std::vector<std::uint64_t> stream_plane_ends(const std::string& file);
 
+namespace detail {
+struct PlaneValuesState;
+}
+
+// What a version 2 file's plane stream decodes to at each plane's end, known
+// to the encoder without decoding: convert's rate control measures D there.
+// coefficients_at(k, out) gives exactly the coefficients of decode_isw()
+// with max_stream_bytes = plane_ends()[k]. Holds about 40 bytes per fine
+// control point.
+class IswPlaneValues {
+ public:
+  IswPlaneValues();
+  ~IswPlaneValues();
+  IswPlaneValues(IswPlaneValues&&) noexcept;
+  IswPlaneValues& operator=(IswPlaneValues&&) noexcept;
+
+  // Plane stream bytes at each plane's end in the file written, ascending
+  // (as stream_plane_ends()); empty before an encoding.
+  const std::vector<std::uint64_t>& plane_ends() const;
+  // The coefficients (base control points first, world units) after the
+  // first k + 1 planes, into `out` (resized to the fine count).
+  // Precondition: k < plane_ends().size(). Cost: O(fine vertices), parallel.
+  void coefficients_at(std::size_t k, std::vector<Vec3>& out) const;
+
+ private:
+  friend std::string encode_isw(const SubdivisionHierarchy&, const std::vector<Vec3>&, const IswMetadata&,
+                                const IswEncodeOptions&, IswPlaneValues&);
+  std::unique_ptr<detail::PlaneValuesState> state_;
+};
+
+// encode_isw() of a version 2 file (Error(InvalidArgument) for another
+// options.major_version), `planes` receiving what its plane ends decode to.
+std::string encode_isw(const SubdivisionHierarchy& hierarchy, const std::vector<Vec3>& coefficients,
+                       const IswMetadata& metadata, const IswEncodeOptions& options, IswPlaneValues& planes);
+
 // The coefficients exactly as encode_isw() stores them (version 1) (quantized per class
 // with step / class_weights[c], then scaled back): lets a caller measure the
 // quantization error before encoding. Errors as encode_isw(). Cost: O(fine vertices).

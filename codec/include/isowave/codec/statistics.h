@@ -5,6 +5,7 @@
 // between the reconstruction and the full-resolution decode, and the bytes a
 // progressive reader needs to reach it. error_table() is the one definition
 // convert and stats report (docs/FORMAT.md, "Errors").
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -50,9 +51,14 @@ struct ErrorTable {
 // `all_decoded_errors` (the errors of the synthesis of every decoded
 // coefficient against `reference`, which the caller measured already); plus
 // the full decode without `reference`.
+// `visit`, if given, is called with each row's index and the fine control
+// points its synthesis gave (rows keeping every decoded coefficient have
+// none), which it may use as scratch: convert measures each row's D there.
+using RowSurfaceVisitor = std::function<void(std::size_t row, std::vector<Vec3>& surface)>;
 std::vector<RateDistortionRow> rate_distortion(const IswDecoded& decoded, const std::vector<double>& percents,
                                                const std::vector<Vec3>* reference = nullptr,
-                                               const PointErrors* all_decoded_errors = nullptr);
+                                               const PointErrors* all_decoded_errors = nullptr,
+                                               const RowSurfaceVisitor& visit = nullptr);
 
 // The error table of a complete decode (see rate_distortion) for `percents`,
 // the base-mesh row last. `full_decode`, if given, must be the synthesis of
@@ -60,7 +66,7 @@ std::vector<RateDistortionRow> rate_distortion(const IswDecoded& decoded, const 
 // synthesis. Throws Error(InvalidArgument) for a truncated decode. Cost: one
 // synthesis per row below 100%, and the full decode unless given.
 ErrorTable error_table(const IswDecoded& decoded, const std::vector<double>& percents,
-                       const std::vector<Vec3>* full_decode = nullptr);
+                       const std::vector<Vec3>* full_decode = nullptr, const RowSurfaceVisitor& visit = nullptr);
 
 // Writes `errors` (the full decode against the fitted points, world units)
 // into the metadata keys quantization_rmse and quantization_max; the
