@@ -186,9 +186,10 @@ void run(const Dataset& dataset) {
         integers.append(reinterpret_cast<const char*>(&q), 4);
       }
   }
+  // The coefficients' sections: 1.0's chunks, 2.0's plane stream.
   std::uint64_t chunk_bytes = 0;
   for (const IswSectionInfo& s : full.sections)
-    if (s.tag == "CHNK") chunk_bytes += s.bytes;
+    if (s.tag == "CHNK" || s.tag == "PLNS") chunk_bytes += s.bytes;
   const double wavelets = static_cast<double>(h.fine_vertex_count() - h.vertex_count(0));
   const std::size_t zstd = zstd_bytes(integers);
   std::printf("wavelet coefficients (vectors): %.0f, %llu non-zero after quantization (step %.3g cell)\n", wavelets,

@@ -6,12 +6,12 @@
 #include <cstdint>
 #include <future>
 #include <iomanip>
+#include <map>
 #include <memory>
 #include <optional>
 #include <sstream>
 #include <stdexcept>
 
-#include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
 #include "isowave/codec/base_order.h"
@@ -421,32 +421,22 @@ IswMetadata metadata_of(const Volume& volume, const std::string& source, const C
   return metadata;
 }
 
-// What the file decodes to, for the evaluation.
-struct Coded {
-  IswDecoded decoded;             // the file written, decoded
-  std::vector<Vec3> full_decode;  // its coefficients synthesized: what a 100% decode gives
-};
-
 // The file at the plan's cut, its metadata recording the quantization error
 // of that cut (the full decode against the fitted points). Under a size limit
 // the final metadata's numbers may deflate to a few bytes more than the
-// plan's: the cut then moves back by the excess.
-Coded write_planned_file(const std::string& whole, detail::RatePlan plan, IswMetadata metadata,
-                         const std::shared_ptr<const SubdivisionHierarchy>& hierarchy,
-                         const SurfaceErrorReference& against_surface, const std::string& source,
-                         const ConvertOptions& options, ConvertResult& result) {
+// plan's: the cut then moves back by the excess. Returns what a 100% decode
+// of the file gives (the plan's surface).
+std::vector<Vec3> write_planned_file(const std::string& whole, detail::RatePlan plan, IswMetadata metadata,
+                                     const std::shared_ptr<const SubdivisionHierarchy>& hierarchy,
+                                     const SurfaceErrorReference& against_surface, const std::string& source,
+                                     const ConvertOptions& options, ConvertResult& result) {
   const std::uint64_t limit = detail::byte_limit(options.rate, result.extracted_vertices);
   for (int attempt = 0;; ++attempt) {
-    IswDecodeOptions decode_options;
-    decode_options.hierarchy = hierarchy;
-    decode_options.max_stream_bytes = plan.stream_bytes;
-    Coded coded{decode_isw(whole, source, decode_options), {}};
-    coded.full_decode = reconstruct(coded.decoded, SIZE_MAX);
-    record_quantization_error(point_errors(coded.full_decode, result.fit.positions, coded.full_decode.size()), metadata);
+    record_quantization_error(point_errors(plan.surface, result.fit.positions, plan.surface.size()), metadata);
     result.bytes = rewrite_isw(whole, IswRewrite{plan.stream_bytes, plan.table, &metadata});
     result.rate_table = plan.table;
     result.file_error = plan.error;
-    if (limit == 0 || result.bytes.size() <= limit) return coded;
+    if (limit == 0 || result.bytes.size() <= limit) return std::move(plan.surface);
     const std::uint64_t excess = result.bytes.size() - limit + 8;
     if (attempt == 3 || plan.stream_bytes <= excess)
       throw std::logic_error(source + ": the file does not fit the size its stream was cut for");
@@ -458,9 +448,11 @@ Coded write_planned_file(const std::string& whole, detail::RatePlan plan, IswMet
 // the rate target asks for (rate_control.h), and the file: its metadata
 // records the quantization error of the cut stream (the full decode against
 // the fitted points) and its RDTB the D measured at the stream's prefixes.
-Coded analyze_and_encode(const std::shared_ptr<const SubdivisionHierarchy>& hierarchy, IswMetadata metadata,
-                         const SurfaceErrorReference& against_surface, const std::string& source,
-                         const ConvertOptions& options, ConvertResult& result, ProgressSink& progress) {
+// Returns what a 100% decode of the file gives.
+std::vector<Vec3> analyze_and_encode(const std::shared_ptr<const SubdivisionHierarchy>& hierarchy,
+                                     IswMetadata metadata, const SurfaceErrorReference& against_surface,
+                                     const std::string& source, const ConvertOptions& options, ConvertResult& result,
+                                     ProgressSink& progress) {
   auto start = Clock::now();
   progress.begin_stage("analysis");
   std::vector<Vec3> coefficients = result.fit.positions;
@@ -473,43 +465,29 @@ Coded analyze_and_encode(const std::shared_ptr<const SubdivisionHierarchy>& hier
   IswEncodeOptions encode_options;
   encode_options.step = options.step_cells * result.cell_size;
   encode_options.frame_step = kFrameStepCells * result.cell_size;
-  const std::string whole = encode_isw(*hierarchy, coefficients, metadata, encode_options);
+  IswPlaneValues planes;
+  const std::string whole = encode_isw(*hierarchy, coefficients, metadata, encode_options, planes);
   std::vector<Vec3>().swap(coefficients);
-  const detail::RatePlan plan =
-      detail::plan_rate(whole, hierarchy, against_surface, options.rate, result.extracted_vertices, result.cell_size);
+  detail::RatePlan plan = detail::plan_rate(whole, planes, hierarchy, against_surface, options.rate,
+                                            result.extracted_vertices, result.cell_size);
+  planes = IswPlaneValues{};
   if (plan.target_missed)
     result.warnings.push_back("the whole stream lies " + number(plan.error / result.cell_size) +
                               " cells from the isosurface, more than the maximum error asked for: the fit's own error "
                               "is the floor (more levels or a larger base mesh lower it)");
-  Coded coded = write_planned_file(whole, plan, std::move(metadata), hierarchy, against_surface, source, options, result);
+  std::vector<Vec3> full_decode =
+      write_planned_file(whole, std::move(plan), std::move(metadata), hierarchy, against_surface, source, options, result);
   progress.end_stage();
   result.seconds.encode = seconds_since(start);
-  return coded;
-}
-
-// D (surface_error.h) of the decoded surface of each summary row against
-// the extracted isosurface, in cells; rows keeping the same coefficients
-// share one. Rows in parallel: each one's distance bins are built serially.
-void measure_rows(const SubdivisionHierarchy& hierarchy, const IswDecoded& expected,
-                  const SurfaceErrorReference& against_surface, ConvertResult& result) {
-  const std::vector<RateDistortionRow>& rows = result.summary;
-  std::vector<double>& errors = result.summary_surface_error;
-  errors.assign(rows.size(), 0.0);
-  const auto repeats = [&](std::size_t k) { return k > 0 && rows[k].kept == rows[k - 1].kept; };
-  tbb::parallel_for(std::size_t{0}, rows.size(), [&](std::size_t k) {
-    if (repeats(k)) return;
-    const PolygonMesh decoded = hierarchy.control_mesh(result.levels, reconstruct(expected, rows[k].kept));
-    errors[k] = against_surface.measure(decoded).d() / result.cell_size;
-  });
-  for (std::size_t k = 1; k < rows.size(); ++k)
-    if (repeats(k)) errors[k] = errors[k - 1];
+  return full_decode;
 }
 
 // Error summary (error_table, as stats makes it) of the file as written,
-// decoded again (its sections and metadata are the final ones; its
-// coefficients must be those the encoder planned), and each row's D against
-// the extracted isosurface.
-void evaluate(const std::shared_ptr<const SubdivisionHierarchy>& hierarchy, Coded coded,
+// decoded (its sections and metadata are the final ones; its surface must be
+// the one the encoder planned), and each row's D against the extracted
+// isosurface, measured on the row's synthesis (one at a time; a row keeping
+// every coefficient is the file's, a repeated row the row before's).
+void evaluate(const std::shared_ptr<const SubdivisionHierarchy>& hierarchy, const std::vector<Vec3>& full_decode,
               const SurfaceErrorReference& against_surface, const std::string& source, const ConvertOptions& options,
               ConvertResult& result, ProgressSink& progress) {
   const auto start = Clock::now();
@@ -517,12 +495,22 @@ void evaluate(const std::shared_ptr<const SubdivisionHierarchy>& hierarchy, Code
   IswDecodeOptions decode_options;
   decode_options.hierarchy = hierarchy;
   const IswDecoded decoded = decode_isw(result.bytes, source, decode_options);
-  if (decoded.ranked != coded.decoded.ranked || decoded.coefficients != coded.decoded.coefficients)
-    throw std::logic_error(source + ": the file written does not decode to the coefficients it was planned with");
-  ErrorTable errors = error_table(decoded, options.summary_percents, &coded.full_decode);
+  if (reconstruct(decoded, SIZE_MAX) != full_decode)
+    throw std::logic_error(source + ": the file written does not decode to the surface it was planned with");
+  std::vector<double>& d_cells = result.summary_surface_error;
+  d_cells.assign(options.summary_percents.size() + 1, result.file_error / result.cell_size);
+  detail::FineSurfaceMeter meter(*hierarchy, against_surface);
+  std::map<std::size_t, double> by_wavelets;  // rows keeping as many coefficients keep the same ones
+  const auto measure_row = [&](std::size_t row, std::vector<Vec3>& surface) {
+    const std::vector<double>& percents = options.summary_percents;
+    const std::size_t wavelets = row < percents.size() ? coefficients_for_percent(*hierarchy, percents[row]) : 0;
+    const auto known = by_wavelets.find(wavelets);
+    d_cells[row] = known != by_wavelets.end() ? known->second : meter.d(surface) / result.cell_size;
+    by_wavelets[wavelets] = d_cells[row];
+  };
+  ErrorTable errors = error_table(decoded, options.summary_percents, &full_decode, measure_row);
   result.summary = std::move(errors.rows);
   result.quantization = errors.quantization;
-  measure_rows(*hierarchy, decoded, against_surface, result);
   progress.end_stage();
   result.seconds.evaluate = seconds_since(start);
 }
@@ -563,8 +551,9 @@ ConvertResult convert_volume(Volume volume, const std::string& source, const Con
   if (options.keep_extracted_mesh) result.extracted_mesh = std::move(prepared.isosurface.mesh);
   prepared = PreparedSurface{};
 
-  Coded coded = analyze_and_encode(hierarchy, std::move(metadata), against_surface, source, options, result, progress);
-  evaluate(hierarchy, std::move(coded), against_surface, source, options, result, progress);
+  std::vector<Vec3> full_decode =
+      analyze_and_encode(hierarchy, std::move(metadata), against_surface, source, options, result, progress);
+  evaluate(hierarchy, full_decode, against_surface, source, options, result, progress);
   return result;
 }
 

@@ -3,71 +3,98 @@
 #include <algorithm>
 #include <cmath>
 
-#include <tbb/parallel_for.h>
-
 #include "isowave/codec/statistics.h"
 #include "isowave/core/error.h"
+#include "isowave/transform/wavelet_transform.h"
 
 namespace isowave::detail {
 
+double FineSurfaceMeter::d(std::vector<Vec3>& positions) {
+  if (mesh_.face_count() == 0) mesh_ = hierarchy_.control_mesh(hierarchy_.levels(), std::move(positions));
+  else mesh_.positions = std::move(positions);
+  const double d = against_surface_.measure(mesh_).d();
+  positions = std::move(mesh_.positions);
+  return d;
+}
+
 namespace {
 
-// Decodes and measures stream prefixes of one file.
+// Measures stream prefixes of one file: at plane ends from the encoder's
+// values, elsewhere by a decode. The surface of the last one measured is kept.
 class PrefixMeter {
  public:
-  PrefixMeter(const std::string& file, const std::shared_ptr<const SubdivisionHierarchy>& hierarchy,
+  PrefixMeter(const std::string& file, const IswPlaneValues* planes,
+              const std::shared_ptr<const SubdivisionHierarchy>& hierarchy,
               const SurfaceErrorReference& against_surface)
-      : file_(file), hierarchy_(hierarchy), against_surface_(against_surface) {}
+      : file_(file), planes_(planes), hierarchy_(hierarchy), meter_(*hierarchy, against_surface) {}
 
+  // D (world units) of the surface decoded from plane end k.
+  double at_plane(std::size_t k) {
+    planes_->coefficients_at(k, surface_);
+    return measure();
+  }
   // D (world units) of the surface decoded from the first `stream_bytes`.
-  double error(std::uint64_t stream_bytes) {
+  double at_bytes(std::uint64_t stream_bytes) {
     IswDecodeOptions options;
     options.hierarchy = hierarchy_;
     options.max_stream_bytes = stream_bytes;
+    options.order = IswOrder::Index;
     IswDecoded decoded = decode_isw(file_, "the stream", options);
-    const int levels = decoded.levels;
-    const PolygonMesh mesh = hierarchy_->control_mesh(levels, take_reconstruction(decoded, SIZE_MAX));
-    return against_surface_.measure(mesh).d();
+    surface_ = std::move(decoded.coefficients);
+    return measure();
   }
+  std::vector<Vec3> take_surface() { return std::move(surface_); }
 
  private:
+  double measure() {
+    synthesize(*hierarchy_, surface_);
+    return meter_.d(surface_);
+  }
+
   const std::string& file_;
+  const IswPlaneValues* planes_;
   std::shared_ptr<const SubdivisionHierarchy> hierarchy_;
-  const SurfaceErrorReference& against_surface_;
+  FineSurfaceMeter meter_;
+  std::vector<Vec3> surface_;
 };
 
 // The smallest prefix within (low, high] whose D is within `bound`, given
 // that `high`'s is (bisection on bytes; D falls nearly monotonically there).
+// The meter keeps the surface of the prefix returned.
 IswRatePoint bisect(PrefixMeter& meter, std::uint64_t low, IswRatePoint high, double bound) {
+  bool measured_high = false;
   for (int step = 0; step < 8 && high.stream_bytes - low > 16; ++step) {
     const std::uint64_t middle = low + (high.stream_bytes - low) / 2;
-    const double e = meter.error(middle);
-    if (e <= bound) high = {middle, e};
+    const double e = meter.at_bytes(middle);
+    measured_high = e <= bound;
+    if (measured_high) high = {middle, e};
     else low = middle;
   }
+  if (!measured_high) meter.at_bytes(high.stream_bytes);
   return high;
 }
 
 }  // namespace
 
-RatePlan plan_rate(const std::string& file, const std::shared_ptr<const SubdivisionHierarchy>& hierarchy,
+RatePlan plan_rate(const std::string& file, const IswPlaneValues& planes,
+                   const std::shared_ptr<const SubdivisionHierarchy>& hierarchy,
                    const SurfaceErrorReference& against_surface, const RateTarget& target,
                    std::size_t extracted_vertices, double cell_size) {
-  PrefixMeter meter(file, hierarchy, against_surface);
+  PrefixMeter meter(file, &planes, hierarchy, against_surface);
   RatePlan plan;
-  // The last kRateTablePlanes plane boundaries, measured two at a time.
-  std::vector<std::uint64_t> ends = stream_plane_ends(file);
-  if (ends.size() > kRateTablePlanes) ends.erase(ends.begin(), ends.end() - kRateTablePlanes);
-  plan.table.resize(ends.size());
-  tbb::parallel_for(std::size_t{0}, ends.size(), [&](std::size_t k) { plan.table[k] = {ends[k], meter.error(ends[k])}; });
+  // The last kRateTablePlanes plane boundaries, coarse to fine: the whole
+  // stream's surface is the meter's at the end.
+  const std::vector<std::uint64_t>& ends = planes.plane_ends();
+  const std::size_t first = ends.size() > kRateTablePlanes ? ends.size() - kRateTablePlanes : 0;
+  for (std::size_t k = first; k < ends.size(); ++k) plan.table.push_back({ends[k], meter.at_plane(k)});
   const std::uint64_t whole = plan.table.empty() ? 0 : plan.table.back().stream_bytes;
-  plan.error = plan.table.empty() ? meter.error(0) : plan.table.back().error;
+  plan.error = plan.table.empty() ? meter.at_bytes(0) : plan.table.back().error;
   if (const std::uint64_t bytes = byte_limit(target, extracted_vertices); bytes > 0) {
     const std::size_t rows = plan.table.size() + 1;
     const std::uint64_t within = stream_bytes_within(file, bytes, rows);
     if (within < whole) {
       plan.stream_bytes = within;
-      plan.error = meter.error(within);
+      plan.error = meter.at_bytes(within);
     }
   } else if (target.max_error_cells > 0) {
     const double bound = target.max_error_cells * cell_size;
@@ -87,6 +114,7 @@ RatePlan plan_rate(const std::string& file, const std::shared_ptr<const Subdivis
                      plan.table.end());
     plan.table.push_back({plan.stream_bytes, plan.error});
   }
+  plan.surface = meter.take_surface();
   return plan;
 }
 
@@ -99,9 +127,10 @@ std::uint64_t byte_limit(const RateTarget& target, std::size_t extracted_vertice
 void move_cut(RatePlan& plan, std::uint64_t stream_bytes, const std::string& file,
               const std::shared_ptr<const SubdivisionHierarchy>& hierarchy,
               const SurfaceErrorReference& against_surface) {
-  PrefixMeter meter(file, hierarchy, against_surface);
+  PrefixMeter meter(file, nullptr, hierarchy, against_surface);
   plan.stream_bytes = stream_bytes;
-  plan.error = meter.error(stream_bytes);
+  plan.error = meter.at_bytes(stream_bytes);
+  plan.surface = meter.take_surface();
   while (!plan.table.empty() && plan.table.back().stream_bytes >= stream_bytes) plan.table.pop_back();
   plan.table.push_back({stream_bytes, plan.error});
 }

@@ -12,6 +12,7 @@
 #include "isowave/core/binned_surface_distance.h"
 #include "isowave/core/error.h"
 #include "isowave/core/surface_distance.h"
+#include "isowave/core/surface_error.h"
 #include "isowave/extract/builtin_fields.h"
 #include "isowave/extract/volume_io.h"
 #include "isowave/fit/fit_quality.h"
@@ -50,6 +51,27 @@ double share_over(const std::vector<double>& values, double limit) {
 // crumples them onto a few spots of it; from twice 18, or the default base
 // (1/16), it is exact. (Which of these tiny bases cover depends on how the base
 // falls on the ring: 16, 17 and 19 cover, 15 leaves 12% out.)
+// Each summary row's D is the D of what `decode --percent` of the file gives:
+// the decode of its coefficients, measured as surface_error() measures it.
+TEST(Convert, SummaryRowsReportTheirDecodesSurfaceError) {
+  ConvertOptions options;
+  options.keep_extracted_mesh = true;
+  options.summary_percents = {100, 20, 5};
+  const ConvertResult result = convert_volume(make_builtin_field("mixing", 32), "mixing", options);
+  ASSERT_EQ(result.summary_surface_error.size(), result.summary.size());
+  ASSERT_GE(result.summary.size(), 4u);  // the base mesh last
+  for (std::size_t k = 0; k < result.summary.size(); ++k) {
+    const RateDistortionRow& row = result.summary[k];
+    IswDecodeOptions keep;
+    keep.max_coefficients = row.wavelet_coefficients;
+    const IswDecoded decoded = decode_isw(result.bytes, "mixing", keep);
+    const PolygonMesh mesh = decoded.hierarchy->control_mesh(decoded.levels, reconstruct(decoded, SIZE_MAX));
+    const double d = surface_error(mesh, result.extracted_mesh, kErrorSamples).d() / result.cell_size;
+    EXPECT_NEAR(result.summary_surface_error[k], d, 1e-9 * d) << "row " << k << " at " << row.percent << "%";
+  }
+  EXPECT_GT(result.summary_surface_error.back(), result.summary_surface_error.front());
+}
+
 TEST(Convert, WarnsWhenTheFitLeavesPartsOfTheSurfaceOut) {
   const Volume torus = make_builtin_field("torus", 48);
   ConvertOptions options;
