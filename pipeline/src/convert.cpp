@@ -428,7 +428,7 @@ IswMetadata metadata_of(const Volume& volume, const std::string& source, const C
 // of the file gives (the plan's surface).
 std::vector<Vec3> write_planned_file(const std::string& whole, detail::RatePlan plan, IswMetadata metadata,
                                      const std::shared_ptr<const SubdivisionHierarchy>& hierarchy,
-                                     const SurfaceErrorReference& against_surface, const std::string& source,
+                                     detail::FineSurfaceMeter& meter, const std::string& source,
                                      const ConvertOptions& options, ConvertResult& result) {
   const std::uint64_t limit = detail::byte_limit(options.rate, result.extracted_vertices);
   for (int attempt = 0;; ++attempt) {
@@ -440,7 +440,7 @@ std::vector<Vec3> write_planned_file(const std::string& whole, detail::RatePlan 
     const std::uint64_t excess = result.bytes.size() - limit + 8;
     if (attempt == 3 || plan.stream_bytes <= excess)
       throw std::logic_error(source + ": the file does not fit the size its stream was cut for");
-    detail::move_cut(plan, plan.stream_bytes - excess, whole, hierarchy, against_surface);
+    detail::move_cut(plan, plan.stream_bytes - excess, whole, hierarchy, meter);
   }
 }
 
@@ -450,9 +450,8 @@ std::vector<Vec3> write_planned_file(const std::string& whole, detail::RatePlan 
 // the fitted points) and its RDTB the D measured at the stream's prefixes.
 // Returns what a 100% decode of the file gives.
 std::vector<Vec3> analyze_and_encode(const std::shared_ptr<const SubdivisionHierarchy>& hierarchy,
-                                     IswMetadata metadata, const SurfaceErrorReference& against_surface,
-                                     const std::string& source, const ConvertOptions& options, ConvertResult& result,
-                                     ProgressSink& progress) {
+                                     IswMetadata metadata, detail::FineSurfaceMeter& meter, const std::string& source,
+                                     const ConvertOptions& options, ConvertResult& result, ProgressSink& progress) {
   auto start = Clock::now();
   progress.begin_stage("analysis");
   std::vector<Vec3> coefficients = result.fit.positions;
@@ -468,15 +467,15 @@ std::vector<Vec3> analyze_and_encode(const std::shared_ptr<const SubdivisionHier
   IswPlaneValues planes;
   const std::string whole = encode_isw(*hierarchy, coefficients, metadata, encode_options, planes);
   std::vector<Vec3>().swap(coefficients);
-  detail::RatePlan plan = detail::plan_rate(whole, planes, hierarchy, against_surface, options.rate,
-                                            result.extracted_vertices, result.cell_size);
+  detail::RatePlan plan =
+      detail::plan_rate(whole, planes, hierarchy, meter, options.rate, result.extracted_vertices, result.cell_size);
   planes = IswPlaneValues{};
   if (plan.target_missed)
     result.warnings.push_back("the whole stream lies " + number(plan.error / result.cell_size) +
                               " cells from the isosurface, more than the maximum error asked for: the fit's own error "
                               "is the floor (more levels or a larger base mesh lower it)");
   std::vector<Vec3> full_decode =
-      write_planned_file(whole, std::move(plan), std::move(metadata), hierarchy, against_surface, source, options, result);
+      write_planned_file(whole, std::move(plan), std::move(metadata), hierarchy, meter, source, options, result);
   progress.end_stage();
   result.seconds.encode = seconds_since(start);
   return full_decode;
@@ -488,7 +487,7 @@ std::vector<Vec3> analyze_and_encode(const std::shared_ptr<const SubdivisionHier
 // isosurface, measured on the row's synthesis (one at a time; a row keeping
 // every coefficient is the file's, a repeated row the row before's).
 void evaluate(const std::shared_ptr<const SubdivisionHierarchy>& hierarchy, const std::vector<Vec3>& full_decode,
-              const SurfaceErrorReference& against_surface, const std::string& source, const ConvertOptions& options,
+              detail::FineSurfaceMeter& meter, const std::string& source, const ConvertOptions& options,
               ConvertResult& result, ProgressSink& progress) {
   const auto start = Clock::now();
   progress.begin_stage("evaluate");
@@ -499,7 +498,6 @@ void evaluate(const std::shared_ptr<const SubdivisionHierarchy>& hierarchy, cons
     throw std::logic_error(source + ": the file written does not decode to the surface it was planned with");
   std::vector<double>& d_cells = result.summary_surface_error;
   d_cells.assign(options.summary_percents.size() + 1, result.file_error / result.cell_size);
-  detail::FineSurfaceMeter meter(*hierarchy, against_surface);
   std::map<std::size_t, double> by_wavelets;  // rows keeping as many coefficients keep the same ones
   const auto measure_row = [&](std::size_t row, std::vector<Vec3>& surface) {
     const std::vector<double>& percents = options.summary_percents;
@@ -551,9 +549,11 @@ ConvertResult convert_volume(Volume volume, const std::string& source, const Con
   if (options.keep_extracted_mesh) result.extracted_mesh = std::move(prepared.isosurface.mesh);
   prepared = PreparedSurface{};
 
-  std::vector<Vec3> full_decode =
-      analyze_and_encode(hierarchy, std::move(metadata), against_surface, source, options, result, progress);
-  evaluate(hierarchy, full_decode, against_surface, source, options, result, progress);
+  // D of the rate table's prefixes and of the summary rows, over one fine mesh.
+  detail::FineSurfaceMeter meter(*hierarchy, against_surface);
+  const std::vector<Vec3> full_decode =
+      analyze_and_encode(hierarchy, std::move(metadata), meter, source, options, result, progress);
+  evaluate(hierarchy, full_decode, meter, source, options, result, progress);
   return result;
 }
 

@@ -25,8 +25,8 @@ class PrefixMeter {
  public:
   PrefixMeter(const std::string& file, const IswPlaneValues* planes,
               const std::shared_ptr<const SubdivisionHierarchy>& hierarchy,
-              const SurfaceErrorReference& against_surface)
-      : file_(file), planes_(planes), hierarchy_(hierarchy), meter_(*hierarchy, against_surface) {}
+              FineSurfaceMeter& meter)
+      : file_(file), planes_(planes), hierarchy_(hierarchy), meter_(meter) {}
 
   // D (world units) of the surface decoded from plane end k.
   double at_plane(std::size_t k) {
@@ -54,7 +54,7 @@ class PrefixMeter {
   const std::string& file_;
   const IswPlaneValues* planes_;
   std::shared_ptr<const SubdivisionHierarchy> hierarchy_;
-  FineSurfaceMeter meter_;
+  FineSurfaceMeter& meter_;
   std::vector<Vec3> surface_;
 };
 
@@ -77,10 +77,9 @@ IswRatePoint bisect(PrefixMeter& meter, std::uint64_t low, IswRatePoint high, do
 }  // namespace
 
 RatePlan plan_rate(const std::string& file, const IswPlaneValues& planes,
-                   const std::shared_ptr<const SubdivisionHierarchy>& hierarchy,
-                   const SurfaceErrorReference& against_surface, const RateTarget& target,
-                   std::size_t extracted_vertices, double cell_size) {
-  PrefixMeter meter(file, &planes, hierarchy, against_surface);
+                   const std::shared_ptr<const SubdivisionHierarchy>& hierarchy, FineSurfaceMeter& surface_meter,
+                   const RateTarget& target, std::size_t extracted_vertices, double cell_size) {
+  PrefixMeter meter(file, &planes, hierarchy, surface_meter);
   RatePlan plan;
   // The last kRateTablePlanes plane boundaries, coarse to fine: the whole
   // stream's surface is the meter's at the end.
@@ -125,9 +124,8 @@ std::uint64_t byte_limit(const RateTarget& target, std::size_t extracted_vertice
 }
 
 void move_cut(RatePlan& plan, std::uint64_t stream_bytes, const std::string& file,
-              const std::shared_ptr<const SubdivisionHierarchy>& hierarchy,
-              const SurfaceErrorReference& against_surface) {
-  PrefixMeter meter(file, nullptr, hierarchy, against_surface);
+              const std::shared_ptr<const SubdivisionHierarchy>& hierarchy, FineSurfaceMeter& surface_meter) {
+  PrefixMeter meter(file, nullptr, hierarchy, surface_meter);
   plan.stream_bytes = stream_bytes;
   plan.error = meter.at_bytes(stream_bytes);
   plan.surface = meter.take_surface();

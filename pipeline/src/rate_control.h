@@ -17,7 +17,8 @@
 namespace isowave::detail {
 
 // D of fine control point arrays, one at a time, over one fine control mesh
-// whose faces are built once (only the positions change between arrays).
+// whose faces are built once (only the positions change between arrays):
+// convert's one meter for the rate table and the summary rows.
 class FineSurfaceMeter {
  public:
   FineSurfaceMeter(const SubdivisionHierarchy& hierarchy, const SurfaceErrorReference& against_surface)
@@ -52,9 +53,8 @@ constexpr std::size_t kRateTablePlanes = 4;
 // plane ends a decode more (up to eight for max_error_cells: a bisection
 // inside the plane that reaches it).
 RatePlan plan_rate(const std::string& file, const IswPlaneValues& planes,
-                   const std::shared_ptr<const SubdivisionHierarchy>& hierarchy,
-                   const SurfaceErrorReference& against_surface, const RateTarget& target,
-                   std::size_t extracted_vertices, double cell_size);
+                   const std::shared_ptr<const SubdivisionHierarchy>& hierarchy, FineSurfaceMeter& meter,
+                   const RateTarget& target, std::size_t extracted_vertices, double cell_size);
 
 // The target's size limit in bytes (0: none).
 std::uint64_t byte_limit(const RateTarget& target, std::size_t extracted_vertices);
@@ -62,7 +62,6 @@ std::uint64_t byte_limit(const RateTarget& target, std::size_t extracted_vertice
 // Moves a plan's cut back to `stream_bytes` (below its cut), measuring D
 // there by a decode: the cut's table row (the last) and surface move with it.
 void move_cut(RatePlan& plan, std::uint64_t stream_bytes, const std::string& file,
-              const std::shared_ptr<const SubdivisionHierarchy>& hierarchy,
-              const SurfaceErrorReference& against_surface);
+              const std::shared_ptr<const SubdivisionHierarchy>& hierarchy, FineSurfaceMeter& meter);
 
 }  // namespace isowave::detail
