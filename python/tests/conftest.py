@@ -34,7 +34,8 @@ def sphere_isw(cli, tmp_path_factory):
 
 @pytest.fixture(scope="session")
 def large_isw(cli, tmp_path_factory):
-    """builtin:torus:96 converted by the CLI: a decode long enough to watch another thread run."""
+    """builtin:torus:96 at 4 levels converted by the CLI: a decode long enough, on a fast host too, to watch
+    another thread run."""
     path = tmp_path_factory.mktemp("cli") / "torus.isw"
-    cli("convert", "builtin:torus:96", "--levels", "3", "-o", path, "--quiet")
+    cli("convert", "builtin:torus:96", "--levels", "4", "-o", path, "--quiet")
     return path
