@@ -5,8 +5,6 @@
 #include <chrono>
 #include <cmath>
 
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
 #include <tbb/task_group.h>
 
 #include "isowave/core/huge_page_vector.h"
