@@ -118,8 +118,7 @@ constexpr std::uint64_t kMeshSeed = 0x6d657368, kReferenceSeed = 0x72656665;
 
 // The reference's samples, binned for the backward direction: the first
 // search radius is a quarter of their mean spacing, so that a block of
-// faces visits about one sample (on miranda's 6.7 M-vertex fine mesh
-// 0.53 s, against 0.9 s at half the spacing).
+// faces visits about one sample (docs/MEASUREMENTS.md gives the timings).
 PointSetDistance reference_points(const PolygonMesh& reference, std::size_t samples) {
   if (samples == 0) throw Error(ErrorKind::InvalidArgument, "surface error: at least one sample is needed");
   AreaSamples sampled = sample_area(reference, samples, kReferenceSeed);
