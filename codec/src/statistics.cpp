@@ -113,7 +113,7 @@ std::vector<RateDistortionRow> rate_distortion(const IswDecoded& decoded, const 
     } else {
       reconstruct_into(decoded, wavelets, -1, reconstruction);
       e = point_errors(reconstruction, compare_to, fine);
-      if (visit) visit(rows.size(), reconstruction);
+      if (visit) visit(rows.size(), row.wavelet_coefficients, reconstruction);
     }
     row.rms = e.rms;
     row.max = e.max;

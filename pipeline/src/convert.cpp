@@ -499,9 +499,7 @@ void evaluate(const std::shared_ptr<const SubdivisionHierarchy>& hierarchy, cons
   std::vector<double>& d_cells = result.summary_surface_error;
   d_cells.assign(options.summary_percents.size() + 1, result.file_error / result.cell_size);
   std::map<std::size_t, double> by_wavelets;  // rows keeping as many coefficients keep the same ones
-  const auto measure_row = [&](std::size_t row, std::vector<Vec3>& surface) {
-    const std::vector<double>& percents = options.summary_percents;
-    const std::size_t wavelets = row < percents.size() ? coefficients_for_percent(*hierarchy, percents[row]) : 0;
+  const auto measure_row = [&](std::size_t row, std::size_t wavelets, std::vector<Vec3>& surface) {
     const auto known = by_wavelets.find(wavelets);
     d_cells[row] = known != by_wavelets.end() ? known->second : meter.d(surface) / result.cell_size;
     by_wavelets[wavelets] = d_cells[row];

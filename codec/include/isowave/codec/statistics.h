@@ -51,10 +51,11 @@ struct ErrorTable {
 // `all_decoded_errors` (the errors of the synthesis of every decoded
 // coefficient against `reference`, which the caller measured already); plus
 // the full decode without `reference`.
-// `visit`, if given, is called with each row's index and the fine control
-// points its synthesis gave (rows keeping every decoded coefficient have
-// none), which it may use as scratch: convert measures each row's D there.
-using RowSurfaceVisitor = std::function<void(std::size_t row, std::vector<Vec3>& surface)>;
+// `visit`, if given, is called with each row's index, its wavelet
+// coefficient count and the fine control points its synthesis gave (rows
+// keeping every decoded coefficient have none), which it may use as
+// scratch: convert measures each row's D there.
+using RowSurfaceVisitor = std::function<void(std::size_t row, std::size_t wavelets, std::vector<Vec3>& surface)>;
 std::vector<RateDistortionRow> rate_distortion(const IswDecoded& decoded, const std::vector<double>& percents,
                                                const std::vector<Vec3>* reference = nullptr,
                                                const PointErrors* all_decoded_errors = nullptr,
