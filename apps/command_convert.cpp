@@ -115,8 +115,9 @@ cli::CommandSpec convert_spec() {
   std::vector<cli::OptionSpec> options = {
       {"iso", true, "isovalue(s), comma separated (default 0 for builtin: inputs)", "V[,V2,...]"},
       {"fit", true,
-       "how the fine mesh is fitted: 'shrink-wrap' (default; the paper's) or 'parametrization' (the points of a "
-       "MAPS map of the extracted surface, moved onto the trilinear isosurface)",
+       "how the fine mesh is fitted: 'shrink-wrap' (default; the paper's), 'parametrization' (the points of a "
+       "MAPS map of the extracted surface, moved onto the trilinear isosurface) or 'normal' (in development: "
+       "detail as one scalar along the normal; folds on noisy scans)",
        "METHOD"},
       {"levels", true,
        "subdivision levels 1..6, or 'auto' (default): the fewest whose fitted surface lies within --max-error of "
@@ -174,8 +175,9 @@ ConvertOptions convert_options_from(const cli::Arguments& args) {
   options.levels = levels_text == "auto" ? 0 : args.get_int("levels", 0, 1, 6);
   const std::string fit = args.get("fit", "shrink-wrap");
   if (fit == "parametrization") options.fit = FitMethod::Parametrization;
+  else if (fit == "normal") options.fit = FitMethod::Normal;
   else if (fit != "shrink-wrap")
-    throw Error(ErrorKind::InvalidArgument, "--fit must be 'shrink-wrap' or 'parametrization', not '" + fit + "'");
+    throw Error(ErrorKind::InvalidArgument, "--fit must be 'shrink-wrap', 'parametrization' or 'normal', not '" + fit + "'");
   options.rate.max_error_cells = args.get_double("max-error", 0.0);
   if (!(options.rate.max_error_cells > 0) && args.has("max-error"))
     throw Error(ErrorKind::InvalidArgument, "--max-error must be a positive number of cells");
@@ -446,6 +448,14 @@ void render_json_result(std::string& out, const JobOutcome& o) {
   out += "], ";
   if (r.parametrization.fine_vertices > 0)
     appendf(out, "\"fit_fallback_points\": %zu, ", r.parametrization.fallback_points);
+  for (std::size_t k = 0; k < r.normal_levels.size(); ++k) {
+    const NormalFitLevelStatistics& l = r.normal_levels[k];
+    appendf(out,
+            "%s{\"level\": %d, \"vertices\": %zu, \"coefficients\": %zu, \"non_normal\": %zu, \"unpierced\": %zu, "
+            "\"rms_cells\": %.6g, \"max_cells\": %.6g, \"seconds\": %.3f}%s",
+            k ? ", " : "\"normal_fit_levels\": [", l.level, l.vertices, l.coefficients, l.non_normal, l.unpierced,
+            l.rms_cells, l.max_cells, l.seconds, k + 1 == r.normal_levels.size() ? "], " : "");
+  }
   for (std::size_t k = 0; k < r.warnings.size(); ++k)
     appendf(out, "%s%s", k ? ", " : "\"warnings\": [", cli::json_string(r.warnings[k]).c_str());
   appendf(out, "%s\"rows\": [", r.warnings.empty() ? "" : "], ");
@@ -539,6 +549,11 @@ void render_table_rows(std::string& out, const std::string& output, const JobOut
   if (r.parametrization.fine_vertices > 0)
     appendf(out, "%-28s parametrization: %zu points located by the nearest input triangle\n", "",
             r.parametrization.fallback_points);
+  for (const NormalFitLevelStatistics& l : r.normal_levels)
+    appendf(out,
+            "%-28s normal fit level %d: %zu points %.3g cell RMS (max %.3g) off their targets, %zu without one; "
+            "%zu of %zu coefficients non-normal; %.2f s\n",
+            "", l.level, l.vertices, l.rms_cells, l.max_cells, l.unpierced, l.non_normal, l.coefficients, l.seconds);
 }
 
 // The job's summary as data: its numbers and its table rows and JSON object.

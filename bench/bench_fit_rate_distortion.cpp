@@ -18,7 +18,7 @@
 // linear curves), printed as the ratio of D at equal size.
 //
 // usage: bench_fit_rate_distortion VOLUME --iso V [--levels N] [--min-component-vertices N] [--smooth S] [--topology-tolerance T]
-//                                  [--fit shrink-wrap|parametrization|both]
+//                                  [--fit shrink-wrap|parametrization|normal|both|all]
 #include <algorithm>
 #include <cmath>
 #include <cstdint>

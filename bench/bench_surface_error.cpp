@@ -13,7 +13,7 @@
 // the fine mesh and their figures through a pipe.
 //
 // usage: bench_surface_error VOLUME --iso V [--levels N] [--min-component-vertices N] [--smooth S] [--topology-tolerance T]
-//                            [--fit shrink-wrap|parametrization|both]
+//                            [--fit shrink-wrap|parametrization|normal|both|all]
 //   VOLUME is a file or builtin:NAME[:N]; --levels 0 (default) picks them
 //   automatically; --fit defaults to both.
 #include <cstdio>

@@ -36,7 +36,7 @@ double seconds_since(Clock::time_point start) { return std::chrono::duration<dou
 [[noreturn]] void exit_with_usage(const char* program, const std::string& problem, const char* extra_usage) {
   std::fprintf(stderr,
                "%s: %s\nusage: %s VOLUME --iso V [--levels N] [--min-component-vertices N] [--smooth S] "
-               "[--topology-tolerance T] [--fit shrink-wrap|parametrization|both]%s\n",
+               "[--topology-tolerance T] [--fit shrink-wrap|parametrization|normal|both|all]%s\n",
                program, problem.c_str(), program, extra_usage);
   std::exit(2);
 }
@@ -70,8 +70,10 @@ BenchOptions parse_options(int argc, char** argv, const char* program, BenchOpti
         const std::string fit = next();
         if (fit == "shrink-wrap") o.fits = {FitMethod::ShrinkWrap};
         else if (fit == "parametrization") o.fits = {FitMethod::Parametrization};
+        else if (fit == "normal") o.fits = {FitMethod::Normal};
         else if (fit == "both") o.fits = {FitMethod::ShrinkWrap, FitMethod::Parametrization};
-        else usage("--fit expects shrink-wrap, parametrization or both");
+        else if (fit == "all") o.fits = {FitMethod::ShrinkWrap, FitMethod::Parametrization, FitMethod::Normal};
+        else usage("--fit expects shrink-wrap, parametrization, normal, both or all");
       } else if (arg.rfind("--", 0) == 0 || !o.input.empty()) {
         usage("unexpected argument " + arg);
       } else {
@@ -85,7 +87,14 @@ BenchOptions parse_options(int argc, char** argv, const char* program, BenchOpti
   return o;
 }
 
-const char* fit_name(FitMethod fit) { return fit == FitMethod::ShrinkWrap ? "shrink-wrap" : "parametrization"; }
+const char* fit_name(FitMethod fit) {
+  switch (fit) {
+    case FitMethod::ShrinkWrap: return "shrink-wrap";
+    case FitMethod::Parametrization: return "parametrization";
+    case FitMethod::Normal: return "normal";
+  }
+  return "?";
+}
 
 // ---------------------------------------------------------------------------
 // The fits, each in a forked child.

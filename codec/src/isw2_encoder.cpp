@@ -87,6 +87,20 @@ void put_quantization_v2(std::string& out, const V2Scales& scales, int levels, s
   put_section(out, "QUAN", payload);
 }
 
+// The base control points rounded to the frame step: as integers (BPTS) and as points.
+void frame_base(const std::vector<Vec3>& points, std::size_t count, double frame_step,
+                std::vector<QuantizedVector>& quantized, std::vector<Vec3>& rounded) {
+  quantized.assign(count, QuantizedVector{});
+  rounded.assign(count, Vec3{});
+  for (std::size_t v = 0; v < count; ++v)
+    for (int axis = 0; axis < 3; ++axis) {
+      const double scaled = points[v][axis] / frame_step;
+      if (!(std::abs(scaled) <= 1e12)) throw Error(ErrorKind::InvalidArgument, "a base control point is not finite or too large");
+      quantized[v][axis] = std::llround(scaled);
+      rounded[v][axis] = double(quantized[v][axis]) * frame_step;
+    }
+}
+
 std::uint64_t nonzero_wavelets(const SubdivisionHierarchy& hierarchy, const PlaneSymbols& s) {
   std::uint64_t count = 0;
   for (std::size_t i = hierarchy.vertex_count(0); i < hierarchy.fine_vertex_count(); ++i)
@@ -106,15 +120,9 @@ std::string encode_isw_v2(const SubdivisionHierarchy& hierarchy, const std::vect
   V2Scales scales{options.step, options.frame_step > 0 ? options.frame_step : 16 * options.step / weights[0],
                   options.tangential_factor, std::move(weights)};
   // The frame-precision base, which the decoder has before any plane.
-  std::vector<QuantizedVector> base_q(base_count);
-  std::vector<Vec3> coarse_base(base_count);
-  for (std::size_t v = 0; v < base_count; ++v)
-    for (int axis = 0; axis < 3; ++axis) {
-      const double scaled = coefficients[v][axis] / scales.frame_step;
-      if (!(std::abs(scaled) <= 1e12)) throw Error(ErrorKind::InvalidArgument, "a base control point is not finite or too large");
-      base_q[v][axis] = std::llround(scaled);
-      coarse_base[v][axis] = double(base_q[v][axis]) * scales.frame_step;
-    }
+  std::vector<QuantizedVector> base_q;
+  std::vector<Vec3> coarse_base;
+  frame_base(coefficients, base_count, scales.frame_step, base_q, coarse_base);
   std::vector<Vec3> normals = frame_normals(hierarchy, coarse_base);
   PlaneSymbols symbols = symbols_of(hierarchy, coefficients, coarse_base, normals, scales);
   const std::size_t groups = plane_groups(hierarchy.fine_vertex_count());
@@ -165,6 +173,18 @@ std::vector<Section> sections_of_v2(const std::string& file) {
 }
 
 }  // namespace
+
+std::vector<Vec3> isw_frame_normals(const SubdivisionHierarchy& hierarchy, const std::vector<Vec3>& base,
+                                    double frame_step) {
+  if (!(frame_step > 0) || !std::isfinite(frame_step))
+    throw Error(ErrorKind::InvalidArgument, "the frame step must be positive");
+  if (base.size() < hierarchy.vertex_count(0))
+    throw Error(ErrorKind::InvalidArgument, "isw_frame_normals needs one point per base vertex");
+  std::vector<QuantizedVector> quantized;
+  std::vector<Vec3> rounded;
+  frame_base(base, hierarchy.vertex_count(0), frame_step, quantized, rounded);
+  return frame_normals(hierarchy, rounded);
+}
 
 IswPlaneValues::IswPlaneValues() = default;
 IswPlaneValues::~IswPlaneValues() = default;

@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <functional>
 #include <future>
 #include <iomanip>
 #include <map>
@@ -140,9 +141,9 @@ double level_error_bound(const PreparedSurface& prepared, const ConvertOptions& 
   if (options.max_error_cells > 0) return options.max_error_cells;
   const SurfaceDeviation deviation =
       extracted_surface_deviation(prepared.isosurface.mesh, prepared.field, options.prepare.extract.iso);
-  const bool corrected = options.fit == FitMethod::Parametrization
-                             ? options.fine_points == FinePoints::OnTrilinearIsosurface
-                             : options.shrink_wrap.final_correction;
+  const bool corrected = options.fit == FitMethod::Normal ||
+                         (options.fit == FitMethod::Parametrization ? options.fine_points == FinePoints::OnTrilinearIsosurface
+                                                                     : options.shrink_wrap.final_correction);
   return std::max(kLevelErrorFloorCells, (corrected ? kCorrectedLevelErrorShare : kLevelErrorShare) * deviation.rms);
 }
 
@@ -235,6 +236,23 @@ std::shared_ptr<const SubdivisionHierarchy> fit_parametrized(const simplify::Sim
   return fitted.hierarchy;
 }
 
+// fit_levels_by_error() of `base` with `fit_level`, then the levels taken and
+// the fit checked; the fit's seconds counted from `start`.
+std::shared_ptr<const SubdivisionHierarchy> fit_by_levels(const PolygonMesh& base,
+                                                          const std::function<FittedLevel(int)>& fit_level,
+                                                          const PreparedSurface& prepared,
+                                                          const SurfaceErrorReference& against_surface,
+                                                          const ConvertOptions& options, ConvertResult& result,
+                                                          Clock::time_point start) {
+  result.level_reports.clear();
+  const FittedLevel fitted = fit_levels_by_error(base, level_rule(options, result), against_surface, result.cell_size,
+                                                 fit_level, result.level_reports);
+  take_levels(fitted, result);
+  check_fit(prepared, options, result);
+  result.seconds.fit += seconds_since(start);
+  return fitted.hierarchy;
+}
+
 // The shrink-wrap of `base` (Sec. 4.2) at the levels of
 // fit_levels_by_error(), and the fit against the isosurface, both ways; the
 // error rows, measured against the fit, cannot show what it missed. A base
@@ -256,13 +274,37 @@ std::shared_ptr<const SubdivisionHierarchy> fit_base(const PolygonMesh& base, co
     result.fit = shrink_wrap(*hierarchy, base.positions, prepared.distance, prepared.field, wrap_options, progress);
     return FittedLevel{std::move(hierarchy), &result.fit.positions, result.fit.folded_faces};
   };
-  result.level_reports.clear();
-  const FittedLevel fitted = fit_levels_by_error(base, level_rule(options, result), against_surface, result.cell_size,
-                                                 fit_level, result.level_reports);
-  take_levels(fitted, result);
-  check_fit(prepared, options, result);
-  result.seconds.fit += seconds_since(start);
-  return fitted.hierarchy;
+  return fit_by_levels(base, fit_level, prepared, against_surface, options, result, start);
+}
+
+// The normal fit (fit/normal_fit.h) of `base` at the levels of
+// fit_levels_by_error(), its coefficients along the coder's frame normals.
+std::shared_ptr<const SubdivisionHierarchy> fit_normal(const PolygonMesh& base, const PreparedSurface& prepared,
+                                                       const SurfaceErrorReference& against_surface,
+                                                       const ConvertOptions& options, ConvertResult& result,
+                                                       ProgressSink& progress) {
+  const auto start = Clock::now();
+  const double iso = options.prepare.extract.iso;
+  const Orientation orientation = orientation_from_flip(options.prepare.extract.flip);
+  const double frame_step = kFrameStepCells * result.cell_size;
+  const auto fit_level = [&](int levels) {
+    check_level_memory(base, levels);
+    result.fit = ShrinkWrapResult{};
+    auto hierarchy = std::make_shared<const SubdivisionHierarchy>(base, levels);
+    const NormalDirections directions = [&](const std::vector<Vec3>& points) {
+      return isw_frame_normals(*hierarchy, points, frame_step);
+    };
+    NormalFitOptions normal = options.normal;
+    normal.surface = &prepared.isosurface.mesh;
+    NormalFitResult fit = normal_fit(*hierarchy, base.positions, prepared.field, iso, directions, normal, progress);
+    result.fit.positions = std::move(fit.positions);
+    result.normal_levels = std::move(fit.levels);
+    result.non_normal_coefficients = fit.non_normal_count();
+    const WrapLevelMesh level = make_wrap_level_mesh(*hierarchy, levels, result.fit.positions, prepared.field, iso);
+    result.fit.folded_faces = count_folded_faces(level, result.fit.positions, prepared.field, orientation);
+    return FittedLevel{std::move(hierarchy), &result.fit.positions, result.fit.folded_faces};
+  };
+  return fit_by_levels(base, fit_level, prepared, against_surface, options, result, start);
 }
 
 // Base mesh, levels, shrink-wrap and the fit check; with
@@ -287,6 +329,10 @@ std::shared_ptr<const SubdivisionHierarchy> fit_surface(PreparedSurface& prepare
     simplify_options.max_vertex_area_share = kParametrizationAreaShare;
     simplify::SimplifyResult simplified = simplify_base(prepared, simplify_options, options, result, progress);
     return fit_parametrized(simplified, prepared, against_surface, options, result, progress);
+  }
+  if (options.fit == FitMethod::Normal) {
+    const PolygonMesh base = simplify_base(prepared, simplify_options, options, result, progress).base;
+    return fit_normal(base, prepared, against_surface, options, result, progress);
   }
   BackgroundDistance distance(prepared, options.prepare);
   simplify_options.serial_phase_begins = [&distance] { distance.start(); };

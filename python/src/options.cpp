@@ -66,8 +66,9 @@ ConvertOptions take_convert_options(py::dict& kwargs) {
     options.levels = cast_as<int>(levels, "levels");
   const std::string fit = take_as<std::string>(kwargs, "fit", "shrink-wrap");
   if (fit == "parametrization") options.fit = FitMethod::Parametrization;
+  else if (fit == "normal") options.fit = FitMethod::Normal;
   else if (fit != "shrink-wrap")
-    throw Error(ErrorKind::InvalidArgument, "fit must be 'shrink-wrap' or 'parametrization', not '" + fit + "'");
+    throw Error(ErrorKind::InvalidArgument, "fit must be 'shrink-wrap', 'parametrization' or 'normal', not '" + fit + "'");
   options.rate.max_error_cells = take_as<double>(kwargs, "max_error", 0.0);
   options.max_error_cells = kLevelShareOfMaxError * options.rate.max_error_cells;
   options.rate.max_bytes = take_as<std::uint64_t>(kwargs, "size", 0);

@@ -121,6 +121,12 @@ void require_size(const SubdivisionHierarchy& h, const std::vector<Vec3>& data, 
                                                 std::to_string(data.size()));
 }
 
+void require_level(const SubdivisionHierarchy& hierarchy, int level) {
+  if (level < 1 || level > hierarchy.levels())
+    throw Error(ErrorKind::InvalidArgument, "level " + std::to_string(level) + " is not in 1.." +
+                                                std::to_string(hierarchy.levels()));
+}
+
 }  // namespace
 
 void analyze(const SubdivisionHierarchy& hierarchy, std::vector<Vec3>& data) {
@@ -144,16 +150,20 @@ void synthesize(const SubdivisionHierarchy& hierarchy, std::vector<Vec3>& data, 
   }
 }
 
+void synthesize_level(const SubdivisionHierarchy& hierarchy, int level, std::vector<Vec3>& data) {
+  require_level(hierarchy, level);
+  require_size(hierarchy, data, level);
+  const RefinementStep& s = hierarchy.step(level);
+  for (const Step& step : lifting::kSynthesisSteps) lift<Direction::Synthesis>(s, data.data(), step);
+}
+
 void subdivide_level(const SubdivisionHierarchy& hierarchy, int level, std::vector<Vec3>& data) {
-  if (level < 1 || level > hierarchy.levels())
-    throw Error(ErrorKind::InvalidArgument, "level " + std::to_string(level) + " is not in 1.." +
-                                                std::to_string(hierarchy.levels()));
+  require_level(hierarchy, level);
   require_size(hierarchy, data, level - 1);
   data.resize(std::max(data.size(), hierarchy.vertex_count(level)));
   std::fill(data.begin() + static_cast<std::ptrdiff_t>(hierarchy.vertex_count(level - 1)),
             data.begin() + static_cast<std::ptrdiff_t>(hierarchy.vertex_count(level)), Vec3{});
-  const RefinementStep& s = hierarchy.step(level);
-  for (const Step& step : lifting::kSynthesisSteps) lift<Direction::Synthesis>(s, data.data(), step);
+  synthesize_level(hierarchy, level, data);
 }
 
 std::vector<Vec3> subdivide(const SubdivisionHierarchy& hierarchy, const std::vector<Vec3>& base_points, int to_level) {

@@ -109,6 +109,16 @@ std::string encode_isw(const SubdivisionHierarchy& hierarchy, const std::vector<
                        const IswMetadata& metadata, const IswEncodeOptions& options = {},
                        std::vector<std::uint32_t>* ranked = nullptr);
 
+// The unit normal of every entry's local frame (fine vertex count entries,
+// zero where the patch is degenerate) that encode_isw() writes version 2 with
+// for base control points `base` and frame step `frame_step` (world units,
+// > 0): the normals of S^L of the base rounded to the frame step. A
+// coefficient along its entry's normal has no tangential part. Throws
+// Error(InvalidArgument) for too few, non-finite or huge base points. Cost:
+// one synthesis, O(fine vertices).
+std::vector<Vec3> isw_frame_normals(const SubdivisionHierarchy& hierarchy, const std::vector<Vec3>& base,
+                                    double frame_step);
+
 // What rewrite_isw() changes in a version 2 file.
 struct IswRewrite {
   std::uint64_t stream_bytes = UINT64_MAX;  // keep at most this many plane stream bytes (any count decodes)

@@ -15,6 +15,7 @@
 #include "isowave/core/volume.h"
 #include "isowave/extract/isosurface.h"
 #include "isowave/fit/fit_quality.h"
+#include "isowave/fit/normal_fit.h"
 #include "isowave/fit/parametrized_fit.h"
 #include "isowave/fit/shrink_wrap.h"
 #include "isowave/pipeline/prepare.h"
@@ -57,6 +58,7 @@ enum class FoldedFit {
 enum class FitMethod {
   ShrinkWrap,       // the paper's shrink-wrap (Sec. 4.2; fit/shrink_wrap.h)
   Parametrization,  // surface points at the parameter positions of a MAPS map (fit/parametrized_fit.h)
+  Normal,           // detail as scalars along the coder's frame normals (fit/normal_fit.h)
 };
 
 // Where the parametrization puts the fine points (FitMethod::Parametrization).
@@ -98,6 +100,7 @@ struct ConvertOptions {
   FinePoints fine_points = FinePoints::OnTrilinearIsosurface;
   // The shrink-wrap (Sec. 4.2); convert_volume() sets `surface` to the extracted mesh.
   ShrinkWrapOptions shrink_wrap;
+  NormalFitOptions normal;  // FitMethod::Normal
   // The step of the last bit plane in cells (IswEncodeOptions::step / cell
   // size, > 0): the finest the stream goes; `rate` cuts it shorter.
   double step_cells = 0.01;
@@ -204,6 +207,10 @@ struct ConvertResult {
   ShrinkWrapResult fit;  // positions: the fitted fine control points (both fits)
   // With FitMethod::Parametrization: the fit's figures.
   ParametrizedFitStatistics parametrization;
+  // With FitMethod::Normal: per level fitted (the base first), and the
+  // non-normal coefficients of the last fit.
+  std::vector<NormalFitLevelStatistics> normal_levels;
+  std::size_t non_normal_coefficients = 0;
   // Every level the fit tried on the last base mesh, in order; the last is `levels`.
   std::vector<LevelReport> level_reports;
   double max_error_cells = 0;  // the bound the automatic levels used (0 with fixed levels)

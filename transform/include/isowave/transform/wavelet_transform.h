@@ -28,6 +28,12 @@ void analyze(const SubdivisionHierarchy& hierarchy, std::vector<Vec3>& data);
 // control points of level `to_level`.
 void synthesize(const SubdivisionHierarchy& hierarchy, std::vector<Vec3>& data, int to_level = -1);
 
+// One level of synthesis, in place: on entry the first vertex_count(level - 1)
+// entries of `data` are control points of level - 1 and the next ones up to
+// vertex_count(level) the level's coefficients; on return the first
+// vertex_count(level) entries are the control points of `level`.
+void synthesize_level(const SubdivisionHierarchy& hierarchy, int level, std::vector<Vec3>& data);
+
 // The subdivision operator S applied `to_level` times (synthesis with every
 // wavelet coefficient zero): control points of level `to_level` from the base
 // control points (vertex_count(0) entries).
@@ -39,5 +45,17 @@ std::vector<Vec3> subdivide(const SubdivisionHierarchy& hierarchy, const std::ve
 // entries are those of `level` (its wavelet coefficients taken as zero).
 // Shrink-wrap fitting refines with this, level by level.
 void subdivide_level(const SubdivisionHierarchy& hierarchy, int level, std::vector<Vec3>& data);
+
+// The transpose of one level of synthesis. Synthesis of `level` is a linear
+// map from (level-(level-1) control points, level-`level` coefficients) to
+// level-`level` control points, in place over the first vertex_count(level)
+// entries; this applies its transpose in place: on entry `data` holds a
+// vector g over the level's control points, on return the entries hold
+// S^T g over the coarser control points and the level's coefficients, so that
+// <synthesis(x), g> = <x, S^T g> for every x. Least-squares fits through
+// synthesis (fit/normal_fit.h) take their gradients with it. Assumes no face
+// holds the same edge twice (require_manifold). Cost: O(vertex_count(level)),
+// parallel, bit-identical for any thread count.
+void synthesize_level_transpose(const SubdivisionHierarchy& hierarchy, int level, std::vector<Vec3>& data);
 
 }  // namespace isowave

@@ -1,0 +1,91 @@
+#pragma once
+// The normal fit (issue #47): wavelet detail that is one scalar along a known
+// normal, as in normal meshes (Guskov et al. 2000) and MPEG V-DMC, for the
+// approximating bicubic scheme as variational normal meshes (Friedel et al.
+// 2004) do it for Loop: the output control points, not the control polygon's
+// prediction, are fitted to the surface.
+//
+// Level by level, coarse to fine:
+//  - level 0: the base control points (3-vectors) move so that their
+//    subdivision S(P0) lies on the isosurface;
+//  - level j+1: each coefficient is s_i n_i, n_i the unit direction the coder
+//    will use (`directions`), and the scalars s_i are those for which
+//    synthesis(P_j, s n) puts every control point of level j+1 on the
+//    isosurface of the trilinear field, in the least-squares sense.
+// Each control point's target is where its line along n pierces the
+// isosurface (the nearest crossing within a reach proportional to the level's
+// edge length); the residual is its distance to the isosurface's tangent
+// plane there (point-to-plane), minimized by Gauss-Newton rounds, each a
+// conjugate-gradient solve through the synthesis and its transpose
+// (synthesize_level_transpose). A coefficient whose point the line does not
+// pierce, or which stays off the surface, becomes non-normal: a free 3-vector
+// aimed along the field gradient; so do the coefficients on boundary curves
+// (box faces), whose points are held in their face's plane.
+//
+// Because every level is fitted, a decode truncated at level j shows the
+// level-j fit, and the detail of level j+1 is what S leaves off the surface.
+// Deterministic for any thread count (fixed-block reductions).
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <vector>
+
+#include "isowave/core/mesh.h"
+#include "isowave/core/progress.h"
+#include "isowave/core/vec3.h"
+#include "isowave/core/volume.h"
+#include "isowave/fit/orientation.h"
+#include "isowave/transform/hierarchy.h"
+
+namespace isowave {
+
+struct NormalFitOptions {
+  int rounds = 4;          // Gauss-Newton rounds per level, 1..50
+  int cg_iterations = 16;  // conjugate-gradient steps per round, 1..500
+  // The piercing search's reach: this many times the level's mean edge
+  // length, at least min_reach_cells cells; > 0.
+  double reach_edges = 1.0;
+  double min_reach_cells = 1.0;
+  // A coefficient whose own point stays farther than this from the
+  // isosurface after the normal rounds becomes non-normal (cells, > 0).
+  double non_normal_cells = 0.1;
+  // The extracted isosurface (kept by pointer): a point whose lines miss the
+  // isosurface aims at its nearest point. nullptr: such a point has no target.
+  const PolygonMesh* surface = nullptr;
+};
+
+// Per level fitted (level 0: the base).
+struct NormalFitLevelStatistics {
+  int level = 0;
+  std::size_t vertices = 0;       // control points of the level
+  std::size_t coefficients = 0;   // unknowns: base points at level 0, f and e coefficients above
+  std::size_t non_normal = 0;     // coefficients left free (always all at level 0)
+  std::size_t unpierced = 0;      // control points with no crossing along their line or gradient
+  double rms_cells = 0;           // RMS distance of the level's control points to the isosurface's tangent planes
+  double max_cells = 0;
+  double seconds = 0;
+};
+
+struct NormalFitResult {
+  std::vector<Vec3> positions;  // level-L control points, ready for analyze()
+  // Per coefficient entry [vertex_count(0), fine): 1 if non-normal.
+  std::vector<std::uint8_t> non_normal;
+  std::vector<NormalFitLevelStatistics> levels;
+  std::size_t non_normal_count() const;
+};
+
+// The unit direction of every entry of the coarse-to-fine array (fine vertex
+// count entries) for base control points `base`: the coder's local-frame
+// normals (codec: isw_frame_normals). Called once, after level 0.
+using NormalDirections = std::function<std::vector<Vec3>(const std::vector<Vec3>& base)>;
+
+// Fits `hierarchy` to the isosurface `iso` of `field` from `base_positions`.
+// Throws Error(InvalidArgument) for too few base positions, a non-finite one,
+// a field with fewer than 2 samples along an axis, directions of the wrong
+// size, or an option out of range. Memory: about 200 bytes per control point
+// of the finest level. Cost: rounds x cg_iterations syntheses of each level.
+NormalFitResult normal_fit(const SubdivisionHierarchy& hierarchy, const std::vector<Vec3>& base_positions,
+                           const Volume& field, double iso, const NormalDirections& directions,
+                           const NormalFitOptions& options = {}, ProgressSink& progress = no_progress());
+
+}  // namespace isowave

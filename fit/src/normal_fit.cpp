@@ -1,0 +1,368 @@
+#include "isowave/fit/normal_fit.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <optional>
+#include <string>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
+
+#include "isowave/core/error.h"
+#include "isowave/fit/trilinear.h"
+#include "isowave/fit/wrap_level_mesh.h"
+#include "isowave/transform/wavelet_transform.h"
+#include "fitted_field.h"
+#include "normal_targets.h"
+
+namespace isowave {
+
+std::size_t NormalFitResult::non_normal_count() const {
+  return static_cast<std::size_t>(std::count(non_normal.begin(), non_normal.end(), std::uint8_t{1}));
+}
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+constexpr std::size_t kGrain = 8192;
+// Levenberg-Marquardt damping of each round's step, relative to a unit
+// coefficient's own weight: keeps points without a target where they are.
+constexpr double kDamping = 1e-3;
+
+template <class Body>
+void for_each_index(std::size_t n, const Body& body) {
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, kGrain), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t i = r.begin(); i < r.end(); ++i) body(i);
+  });
+}
+
+// Sum over i of term(i), the same for any thread count (fixed blocks).
+template <class Term>
+double deterministic_sum(std::size_t n, const Term& term) {
+  return tbb::parallel_deterministic_reduce(
+      tbb::blocked_range<std::size_t>(0, n, kGrain), 0.0,
+      [&](const tbb::blocked_range<std::size_t>& r, double sum) {
+        for (std::size_t i = r.begin(); i < r.end(); ++i) sum += term(i);
+        return sum;
+      },
+      [](double a, double b) { return a + b; });
+}
+
+// The unknowns of one least-squares problem: the first vertex_count(level)
+// entries of the coarse-to-fine array (base points, then the coefficients of
+// levels 1..level), each a free 3-vector or a scalar along its unit direction.
+// Lifted wavelets have (nearly) no mean, so what S leaves off the surface
+// smoothly can only come from coarser entries: every level's fit moves them all.
+struct Unknowns {
+  int level = 1;                                  // the synthesis depth they feed
+  const std::vector<Vec3>* directions = nullptr;  // per entry of the fine array
+  const std::vector<std::uint8_t>* free = nullptr;  // per entry: 1 = a 3-vector
+  std::size_t size = 0;
+  Vec3 project(std::size_t k, const Vec3& x) const {
+    if ((*free)[k]) return x;
+    const Vec3& n = (*directions)[k];
+    return n * dot(n, x);
+  }
+};
+
+// The linearized problem of one round: minimize over x (in the unknowns'
+// space) sum_v |residual_v(W x)|^2 + damping |x|^2, W the synthesis from the
+// unknowns to level `level`'s control points.
+class LevelSystem {
+ public:
+  LevelSystem(const SubdivisionHierarchy& h, const Unknowns& unknowns, const detail::LevelTargets& targets)
+      : h_(h), u_(unknowns), t_(targets), n_(h.vertex_count(unknowns.level)) {}
+
+  // x -> W x (moves of the level's control points).
+  void moves(const std::vector<Vec3>& x, std::vector<Vec3>& out) const {
+    out.resize(n_);
+    for_each_index(n_, [&](std::size_t k) { out[k] = u_.project(k, x[k]); });
+    synthesize(h_, out, u_.level);
+  }
+
+  // Per control point: J^T J applied to its move (the residuals' normal matrix).
+  Vec3 residual_gram(std::size_t v, const Vec3& d) const {
+    const Vec3& m = t_.plane_normal[v];
+    Vec3 out = m * dot(m, d);
+    if (t_.box_axis[v] >= 0) out[t_.box_axis[v]] += d[t_.box_axis[v]];
+    return out;
+  }
+  // Per control point: J^T of its target offsets.
+  Vec3 residual_target(std::size_t v) const {
+    Vec3 out = t_.plane_normal[v] * t_.plane_offset[v];
+    if (t_.box_axis[v] >= 0) out[t_.box_axis[v]] += t_.box_offset[v];
+    return out;
+  }
+
+  // g over the level's control points -> W^T g over the unknowns, in place.
+  void gather(std::vector<Vec3>& g) const {
+    for (int level = u_.level; level >= 1; --level) synthesize_level_transpose(h_, level, g);
+    for_each_index(n_, [&](std::size_t k) { g[k] = u_.project(k, g[k]); });
+  }
+
+  void apply(const std::vector<Vec3>& x, std::vector<Vec3>& out) const {
+    moves(x, out);
+    for_each_index(n_, [&](std::size_t v) { out[v] = residual_gram(v, out[v]); });
+    gather(out);
+    for_each_index(n_, [&](std::size_t k) { out[k] += kDamping * x[k]; });
+  }
+
+  void right_side(std::vector<Vec3>& out) const {
+    out.resize(n_);
+    for_each_index(n_, [&](std::size_t v) { out[v] = residual_target(v); });
+    gather(out);
+  }
+
+ private:
+  const SubdivisionHierarchy& h_;
+  const Unknowns& u_;
+  const detail::LevelTargets& t_;
+  std::size_t n_;
+};
+
+double inner(const std::vector<Vec3>& a, const std::vector<Vec3>& b) {
+  return deterministic_sum(a.size(), [&](std::size_t i) { return dot(a[i], b[i]); });
+}
+
+// Class of an entry for the preconditioner: 0 for the base, then f and e
+// entries of each level.
+std::vector<std::uint8_t> entry_classes(const SubdivisionHierarchy& h, int level) {
+  std::vector<std::uint8_t> classes(h.vertex_count(level), 0);
+  for (int l = 1; l <= level; ++l) {
+    const RefinementStep& s = h.step(l);
+    for (std::size_t i = h.vertex_count(l - 1); i < h.vertex_count(l); ++i)
+      classes[i] = static_cast<std::uint8_t>(2 * l - 1 + (i >= s.first_edge_vertex()));
+  }
+  return classes;
+}
+
+// A Jacobi preconditioner by class: the mean over each class of the squared
+// columns of W (estimated as (W^T z)^2 for random signs z, one probe), plus
+// the damping. Cost: one transposed synthesis.
+std::vector<double> class_diagonal(const LevelSystem& system,
+                                   const std::vector<std::uint8_t>& classes) {
+  const std::size_t n = classes.size();
+  std::vector<Vec3> z(n);
+  std::uint64_t state = 0x9E3779B97F4A7C15ull;
+  for (Vec3& v : z)
+    for (int c = 0; c < 3; ++c) {
+      state = state * 6364136223846793005ull + 1442695040888963407ull;
+      v[c] = (state >> 63) ? 1.0 : -1.0;
+    }
+  system.gather(z);
+  const std::size_t count = *std::max_element(classes.begin(), classes.end()) + 1u;
+  std::vector<double> sum(count, 0.0), members(count, 0.0);
+  for (std::size_t k = 0; k < n; ++k) {
+    sum[classes[k]] += squared_norm(z[k]) / 3.0;
+    members[classes[k]] += 1;
+  }
+  for (std::size_t c = 0; c < count; ++c) sum[c] = (members[c] > 0 ? sum[c] / members[c] : 0.0) + kDamping;
+  return sum;
+}
+
+// Preconditioned conjugate gradients on the round's normal equations from x = 0.
+std::vector<Vec3> solve_round(const LevelSystem& system, std::size_t unknowns,
+                              const std::vector<std::uint8_t>& classes, int iterations) {
+  const std::vector<double> diagonal = class_diagonal(system, classes);
+  std::vector<Vec3> x(unknowns), r, z(unknowns), p, q;
+  system.right_side(r);
+  const auto precondition = [&] {
+    for_each_index(unknowns, [&](std::size_t k) { z[k] = r[k] * (1.0 / diagonal[classes[k]]); });
+  };
+  precondition();
+  p = z;
+  double rz = inner(r, z);
+  const double stop = 1e-12 * rz;
+  for (int it = 0; it < iterations && rz > stop && rz > 0; ++it) {
+    system.apply(p, q);
+    const double pq = inner(p, q);
+    if (!(pq > 0)) break;
+    const double alpha = rz / pq;
+    for_each_index(unknowns, [&](std::size_t k) {
+      x[k] += alpha * p[k];
+      r[k] -= alpha * q[k];
+    });
+    precondition();
+    const double next = inner(r, z);
+    const double beta = next / rz;
+    rz = next;
+    for_each_index(unknowns, [&](std::size_t k) { p[k] = z[k] + beta * p[k]; });
+  }
+  return x;
+}
+
+struct FitInputs {
+  const SubdivisionHierarchy& hierarchy;
+  const Volume& field;
+  const TrilinearGrid& grid;
+  double iso;
+  const BinnedSurfaceDistance* surface;
+  const NormalFitOptions& options;
+};
+
+// Level `level`'s control points from the coarse-to-fine array `data`.
+std::vector<Vec3> synthesize_points(const SubdivisionHierarchy& h, int level, const std::vector<Vec3>& data) {
+  std::vector<Vec3> points(data.begin(), data.begin() + static_cast<std::ptrdiff_t>(h.vertex_count(level)));
+  synthesize(h, points, level);
+  return points;
+}
+
+// The residual figures of the level's control points at their targets.
+void measure(const detail::LevelTargets& targets, double cell, NormalFitLevelStatistics& stats) {
+  const std::size_t n = targets.plane_offset.size();
+  double sum = 0, worst = 0;
+  std::size_t count = 0;
+  for (std::size_t v = 0; v < n; ++v)
+    if (squared_norm(targets.plane_normal[v]) > 0) {
+      const double d = std::abs(targets.plane_offset[v]) / cell;
+      sum += d * d;
+      worst = std::max(worst, d);
+      ++count;
+    }
+  stats.rms_cells = count ? std::sqrt(sum / double(count)) : 0.0;
+  stats.max_cells = worst;
+  stats.unpierced = targets.unpierced;
+}
+
+// Gauss-Newton rounds on the unknowns of `data`: each round retargets the
+// level's points and adds one solve's step. Returns the last targets.
+detail::LevelTargets run_rounds(const FitInputs& in, const WrapLevelMesh& mesh, const Unknowns& u,
+                                const std::vector<Vec3>& pierce_directions, double reach, int rounds,
+                                std::vector<Vec3>& data) {
+  const SubdivisionHierarchy& h = in.hierarchy;
+  const std::vector<std::uint8_t> classes = entry_classes(h, u.level);
+  std::vector<Vec3> points = synthesize_points(h, u.level, data);
+  detail::LevelTargets targets =
+      detail::level_targets(mesh, points, pierce_directions, in.grid, in.field, in.iso, reach, in.surface);
+  for (int round = 0; round < rounds; ++round) {
+    const LevelSystem system(h, u, targets);
+    const std::vector<Vec3> step = solve_round(system, u.size, classes, in.options.cg_iterations);
+    for_each_index(u.size, [&](std::size_t k) { data[k] += u.project(k, step[k]); });
+    points = synthesize_points(h, u.level, data);
+    targets = detail::level_targets(mesh, points, pierce_directions, in.grid, in.field, in.iso, reach, in.surface);
+  }
+  return targets;
+}
+
+double level_reach(const FitInputs& in, const WrapLevelMesh& mesh, const std::vector<Vec3>& points) {
+  return std::max(in.options.min_reach_cells * in.field.cell_size(),
+                  in.options.reach_edges * detail::mean_edge_length(mesh, points));
+}
+
+// One level's fit: every entry up to `level` (the free ones as 3-vectors,
+// the others along `directions`) so that the level's control points lie on
+// the isosurface; then the level's own coefficients whose points the normal
+// line missed or left off the surface become free, and the rounds go on.
+// `aim` is where each point pierces from (zero: the field gradient).
+NormalFitLevelStatistics fit_level(const FitInputs& in, int level, const std::vector<Vec3>& directions,
+                                   const std::vector<Vec3>& aim, std::vector<std::uint8_t>& free,
+                                   int rounds, std::vector<Vec3>& data) {
+  const auto start = Clock::now();
+  const SubdivisionHierarchy& h = in.hierarchy;
+  const std::vector<Vec3> predicted = synthesize_points(h, level, data);
+  const WrapLevelMesh mesh = make_wrap_level_mesh(h, level, predicted, in.field, in.iso);
+  const std::size_t first = h.vertex_count(level - 1), end = h.vertex_count(level);
+  for (std::size_t i = first; i < end; ++i)
+    if (mesh.role[i] != WrapRole::Free) free[i] = 1;  // boundary curves: held in their box face
+  Unknowns u{level, &directions, &free, end};
+  const double reach = level_reach(in, mesh, predicted);
+  detail::LevelTargets targets = run_rounds(in, mesh, u, aim, reach, rounds, data);
+  const double limit = in.options.non_normal_cells * in.field.cell_size();
+  std::vector<Vec3> freed_aim;
+  for (std::size_t i = first; i < end; ++i) {
+    const bool off = !(squared_norm(targets.plane_normal[i]) > 0) || targets.off_line[i] ||
+                     std::abs(targets.plane_offset[i]) > limit;
+    if (!off || free[i]) continue;
+    if (freed_aim.empty()) freed_aim = aim;
+    free[i] = 1;
+    freed_aim[i] = Vec3{};  // aims along the field gradient from now on
+  }
+  if (!freed_aim.empty()) targets = run_rounds(in, mesh, u, freed_aim, reach, std::max(2, rounds / 2), data);
+  NormalFitLevelStatistics stats;
+  stats.level = level;
+  stats.vertices = end;
+  stats.coefficients = end - first;
+  stats.non_normal = static_cast<std::size_t>(std::count(free.begin() + static_cast<std::ptrdiff_t>(first),
+                                                         free.begin() + static_cast<std::ptrdiff_t>(end), std::uint8_t{1}));
+  measure(targets, in.field.cell_size(), stats);
+  stats.seconds = std::chrono::duration<double>(Clock::now() - start).count();
+  return stats;
+}
+
+void check_inputs(const SubdivisionHierarchy& h, const std::vector<Vec3>& base, const Volume& field,
+                  const NormalFitOptions& o) {
+  if (base.size() < h.vertex_count(0))
+    throw Error(ErrorKind::InvalidArgument, "the normal fit needs " + std::to_string(h.vertex_count(0)) +
+                                                " base positions, got " + std::to_string(base.size()));
+  for (std::size_t v = 0; v < h.vertex_count(0); ++v)
+    if (!std::isfinite(base[v].x) || !std::isfinite(base[v].y) || !std::isfinite(base[v].z))
+      throw Error(ErrorKind::InvalidArgument, "base position " + std::to_string(v) + " is not finite");
+  if (field.dims[0] < 2 || field.dims[1] < 2 || field.dims[2] < 2)
+    throw Error(ErrorKind::InvalidArgument, "the normal fit needs at least 2 samples along every axis");
+  if (o.rounds < 1 || o.rounds > 50 || o.cg_iterations < 1 || o.cg_iterations > 500 || !(o.reach_edges > 0) ||
+      !(o.min_reach_cells > 0) || !(o.non_normal_cells > 0))
+    throw Error(ErrorKind::InvalidArgument, "a normal-fit option is out of its range");
+}
+
+void check_directions(const std::vector<Vec3>& directions, std::size_t fine) {
+  if (directions.size() != fine)
+    throw Error(ErrorKind::InvalidArgument, "the normal fit's directions must have one entry per fine vertex");
+}
+
+// The coefficients along the old directions re-expressed along the new ones
+// (same scalars), so that a coefficient stays normal when the base moves.
+void respan(std::vector<Vec3>& data, const std::vector<std::uint8_t>& free, std::size_t base_count,
+            const std::vector<Vec3>& old_normals, const std::vector<Vec3>& new_normals) {
+  for_each_index(data.size() - base_count, [&](std::size_t k) {
+    const std::size_t i = base_count + k;
+    if (!free[i]) data[i] = new_normals[i] * dot(old_normals[i], data[i]);
+  });
+}
+
+}  // namespace
+
+NormalFitResult normal_fit(const SubdivisionHierarchy& hierarchy, const std::vector<Vec3>& base_positions,
+                           const Volume& field, double iso, const NormalDirections& directions,
+                           const NormalFitOptions& options, ProgressSink& progress) {
+  check_inputs(hierarchy, base_positions, field, options);
+  progress.begin_stage("normal fit");
+  const detail::FittedField fitted(field, iso);
+  std::optional<BinnedSurfaceDistance> surface;
+  if (options.surface) surface.emplace(*options.surface);
+  const FitInputs in{hierarchy, field, fitted.grid(), iso, surface ? &*surface : nullptr, options};
+  const int levels = hierarchy.levels();
+  const std::size_t base_count = hierarchy.vertex_count(0), fine = hierarchy.fine_vertex_count();
+  std::vector<Vec3> data(fine);
+  std::copy(base_positions.begin(), base_positions.begin() + static_cast<std::ptrdiff_t>(base_count), data.begin());
+  std::vector<std::uint8_t> free(fine, 0);
+  std::fill(free.begin(), free.begin() + static_cast<std::ptrdiff_t>(base_count), std::uint8_t{1});
+  NormalFitResult result;
+  // Coarse to fine with the base free; the directions follow the base.
+  std::vector<Vec3> normals = directions(data);
+  check_directions(normals, fine);
+  for (int level = 1; level <= levels; ++level) {
+    result.levels.push_back(fit_level(in, level, normals, normals, free, options.rounds, data));
+    const std::vector<Vec3> moved = directions(data);
+    check_directions(moved, fine);
+    respan(data, free, base_count, normals, moved);
+    normals = moved;
+    progress.update(double(level) / double(levels + 1));
+  }
+  // Last, the base fixed where the coder rounds it: the directions are final.
+  if (levels > 0) {
+    std::fill(free.begin(), free.begin() + static_cast<std::ptrdiff_t>(base_count), std::uint8_t{0});
+    std::vector<Vec3> fixed_base = normals;
+    for (std::size_t i = 0; i < base_count; ++i) fixed_base[i] = Vec3{};
+    // Base entries along a zero direction do not move.
+    result.levels.back() = fit_level(in, levels, fixed_base, normals, free, std::max(2, options.rounds / 2), data);
+    std::fill(free.begin(), free.begin() + static_cast<std::ptrdiff_t>(base_count), std::uint8_t{1});
+  }
+  result.non_normal.assign(free.begin() + static_cast<std::ptrdiff_t>(base_count), free.end());
+  result.positions = synthesize_points(hierarchy, levels, data);
+  progress.end_stage();
+  return result;
+}
+
+}  // namespace isowave

@@ -1,0 +1,141 @@
+#include "normal_targets.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include "root_search.h"
+
+namespace isowave::detail {
+namespace {
+
+constexpr std::size_t kGrain = 4096;
+
+// d with its component along `axis` removed, normalized (zero if nothing is left).
+Vec3 in_plane(Vec3 d, int axis) {
+  d[axis] = 0;
+  const double length = std::sqrt(squared_norm(d));
+  return length > 0 ? d * (1.0 / length) : Vec3{};
+}
+
+Vec3 unit_or_zero(const Vec3& v) {
+  const double length = std::sqrt(squared_norm(v));
+  return length > 0 && std::isfinite(length) ? v * (1.0 / length) : Vec3{};
+}
+
+}  // namespace
+
+bool pierce(const TrilinearGrid& grid, double iso, const Vec3& p, const Vec3& d, double reach, double step,
+            double tolerance, double& t) {
+  const Vec3 g0 = grid.grid_point(p), gd = grid.grid_direction(d);
+  const auto h = [&](double s) { return grid.value_at(g0 + gd * s) - iso; };
+  const double h0 = h(0);
+  if (h0 == 0) {
+    t = 0;
+    return true;
+  }
+  double forward = 0, h_forward = h0, backward = 0, h_backward = h0;
+  for (double s = step;; s += step) {
+    const double at = std::min(s, reach);
+    const double ha = h(at);
+    if (root_side(ha) != root_side(h_forward)) {
+      t = refine_bracket(h, forward, h_forward, at, ha, tolerance);
+      return true;
+    }
+    const double hb = h(-at);
+    if (root_side(hb) != root_side(h_backward)) {
+      t = refine_bracket(h, backward, h_backward, -at, hb, tolerance);
+      return true;
+    }
+    if (at >= reach) return false;
+    forward = at, h_forward = ha, backward = -at, h_backward = hb;
+  }
+}
+
+LevelTargets level_targets(const WrapLevelMesh& mesh, const std::vector<Vec3>& positions,
+                           const std::vector<Vec3>& directions, const TrilinearGrid& grid, const Volume& box,
+                           double iso, double reach, const BinnedSurfaceDistance* surface) {
+  const std::size_t n = mesh.vertex_count;
+  const double cell = box.cell_size(), step = 0.25 * cell, tolerance = 1e-4 * cell;
+  const Vec3 low = volume_box_min(box), high = volume_box_max(box);
+  LevelTargets targets;
+  targets.plane_normal.assign(n, Vec3{});
+  targets.plane_offset.assign(n, 0.0);
+  targets.box_axis.assign(n, -1);
+  targets.box_offset.assign(n, 0.0);
+  targets.off_line.assign(n, 0);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, kGrain), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t v = r.begin(); v < r.end(); ++v) {
+      if (mesh.role[v] == WrapRole::Fixed) continue;
+      const Vec3& p = positions[v];
+      const int face = mesh.box_face[v];
+      const int axis = face >= 0 ? face / 2 : -1;
+      if (axis >= 0) {
+        targets.box_axis[v] = static_cast<std::int8_t>(axis);
+        targets.box_offset[v] = (face % 2 ? high[axis] : low[axis]) - p[axis];
+      }
+      const auto held = [&](const Vec3& d) { return axis >= 0 ? in_plane(d, axis) : unit_or_zero(d); };
+      const Vec3 gradient = grid.sample(p).gradient;
+      Vec3 d = held(squared_norm(directions[v]) > 0 ? directions[v] : gradient);
+      double t = 0;
+      bool found = squared_norm(d) > 0 && pierce(grid, iso, p, d, reach, step, tolerance, t);
+      if (!found && squared_norm(directions[v]) > 0) {
+        d = held(gradient);
+        found = squared_norm(d) > 0 && pierce(grid, iso, p, d, reach, step, tolerance, t);
+        targets.off_line[v] = 1;
+      }
+      Vec3 target = p + d * t;
+      if (!found && surface) {
+        target = surface->closest_point(p);
+        d = unit_or_zero(target - p);
+        if (axis >= 0) target[axis] = p[axis] + targets.box_offset[v];
+        found = true;
+        targets.off_line[v] = 1;
+      }
+      if (!found) continue;
+      Vec3 m = grid.sample(target).gradient;
+      m = axis >= 0 ? in_plane(m, axis) : unit_or_zero(m);
+      if (!(squared_norm(m) > 0)) m = d;
+      targets.plane_normal[v] = m;
+      targets.plane_offset[v] = dot(m, target - p);
+    }
+  });
+  for (std::size_t v = 0; v < n; ++v)
+    targets.unpierced += mesh.role[v] != WrapRole::Fixed && !(squared_norm(targets.plane_normal[v]) > 0);
+  return targets;
+}
+
+std::vector<Vec3> level_vertex_normals(const WrapLevelMesh& mesh, const std::vector<Vec3>& positions) {
+  std::vector<Vec3> normals(mesh.vertex_count);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, mesh.vertex_count, kGrain),
+                    [&](const tbb::blocked_range<std::size_t>& r) {
+                      for (std::size_t v = r.begin(); v < r.end(); ++v) {
+                        Vec3 sum;
+                        for (std::uint32_t k = mesh.vertex_face_offsets[v]; k < mesh.vertex_face_offsets[v + 1]; ++k) {
+                          const std::uint32_t f = mesh.vertex_faces[k];
+                          const std::uint32_t first = mesh.face_offsets[f], count = mesh.face_offsets[f + 1] - first;
+                          for (std::uint32_t c = 0; c < count; ++c)
+                            sum += cross(positions[mesh.face_vertices[first + c]],
+                                         positions[mesh.face_vertices[first + (c + 1) % count]]);
+                        }
+                        normals[v] = unit_or_zero(sum);
+                      }
+                    });
+  return normals;
+}
+
+double mean_edge_length(const WrapLevelMesh& mesh, const std::vector<Vec3>& positions) {
+  const std::size_t stride = std::max<std::size_t>(1, mesh.vertex_count / 65536);
+  double sum = 0;
+  std::size_t count = 0;
+  for (std::size_t v = 0; v < mesh.vertex_count; v += stride)
+    for (std::uint32_t k = mesh.neighbour_offsets[v]; k < mesh.neighbour_offsets[v + 1]; ++k) {
+      sum += std::sqrt(squared_norm(positions[mesh.neighbours[k]] - positions[v]));
+      ++count;
+    }
+  return count ? sum / double(count) : 0.0;
+}
+
+}  // namespace isowave::detail
