@@ -15,6 +15,7 @@
 #include "isowave/fit/wrap_level_mesh.h"
 #include "isowave/transform/wavelet_transform.h"
 #include "fitted_field.h"
+#include "coverage_pull.h"
 #include "normal_targets.h"
 
 namespace isowave {
@@ -30,6 +31,11 @@ constexpr std::size_t kGrain = 8192;
 // Levenberg-Marquardt damping of each round's step, relative to a unit
 // coefficient's own weight: keeps points without a target where they are.
 constexpr double kDamping = 1e-3;
+// The coverage pull: an extracted vertex farther than kCoveredCells from the
+// level's points pulls the nearest within kPullReachCells.
+constexpr double kCoveredCells = 1.0;
+constexpr double kPullReachCells = 4.0;
+constexpr double kPullMaxEdgeCells = 1.0;
 
 template <class Body>
 void for_each_index(std::size_t n, const Body& body) {
@@ -61,7 +67,7 @@ struct Unknowns {
   const std::vector<std::uint8_t>* free = nullptr;  // per entry: 1 = a 3-vector
   std::size_t size = 0;
   Vec3 project(std::size_t k, const Vec3& x) const {
-    if ((*free)[k]) return x;
+    if ((*free)[k] || !directions) return x;
     const Vec3& n = (*directions)[k];
     return n * dot(n, x);
   }
@@ -77,13 +83,16 @@ class LevelSystem {
 
   // x -> W x (moves of the level's control points).
   void moves(const std::vector<Vec3>& x, std::vector<Vec3>& out) const {
-    out.resize(n_);
-    for_each_index(n_, [&](std::size_t k) { out[k] = u_.project(k, x[k]); });
+    out.assign(n_, Vec3{});
+    for_each_index(u_.size, [&](std::size_t k) { out[k] = u_.project(k, x[k]); });
     synthesize(h_, out, u_.level);
   }
 
-  // Per control point: J^T J applied to its move (the residuals' normal matrix).
+  // Per control point: J^T J applied to its move (the residuals' normal
+  // matrix): the tangent plane's normal, the box face's axis; a pulled
+  // point's whole move.
   Vec3 residual_gram(std::size_t v, const Vec3& d) const {
+    if (t_.pulled[v]) return d;
     const Vec3& m = t_.plane_normal[v];
     Vec3 out = m * dot(m, d);
     if (t_.box_axis[v] >= 0) out[t_.box_axis[v]] += d[t_.box_axis[v]];
@@ -91,22 +100,25 @@ class LevelSystem {
   }
   // Per control point: J^T of its target offsets.
   Vec3 residual_target(std::size_t v) const {
+    if (t_.pulled[v]) return t_.pull_offset[v];
     Vec3 out = t_.plane_normal[v] * t_.plane_offset[v];
     if (t_.box_axis[v] >= 0) out[t_.box_axis[v]] += t_.box_offset[v];
     return out;
   }
 
-  // g over the level's control points -> W^T g over the unknowns, in place.
+  // g over the level's control points -> W^T g over the unknowns, in place
+  // (g ends with one entry per unknown).
   void gather(std::vector<Vec3>& g) const {
     for (int level = u_.level; level >= 1; --level) synthesize_level_transpose(h_, level, g);
-    for_each_index(n_, [&](std::size_t k) { g[k] = u_.project(k, g[k]); });
+    g.resize(u_.size);
+    for_each_index(u_.size, [&](std::size_t k) { g[k] = u_.project(k, g[k]); });
   }
 
   void apply(const std::vector<Vec3>& x, std::vector<Vec3>& out) const {
     moves(x, out);
     for_each_index(n_, [&](std::size_t v) { out[v] = residual_gram(v, out[v]); });
     gather(out);
-    for_each_index(n_, [&](std::size_t k) { out[k] += kDamping * x[k]; });
+    for_each_index(u_.size, [&](std::size_t k) { out[k] += kDamping * x[k]; });
   }
 
   void right_side(std::vector<Vec3>& out) const {
@@ -141,10 +153,10 @@ std::vector<std::uint8_t> entry_classes(const SubdivisionHierarchy& h, int level
 // A Jacobi preconditioner by class: the mean over each class of the squared
 // columns of W (estimated as (W^T z)^2 for random signs z, one probe), plus
 // the damping. Cost: one transposed synthesis.
-std::vector<double> class_diagonal(const LevelSystem& system,
+std::vector<double> class_diagonal(const LevelSystem& system, std::size_t points,
                                    const std::vector<std::uint8_t>& classes) {
   const std::size_t n = classes.size();
-  std::vector<Vec3> z(n);
+  std::vector<Vec3> z(points);
   std::uint64_t state = 0x9E3779B97F4A7C15ull;
   for (Vec3& v : z)
     for (int c = 0; c < 3; ++c) {
@@ -163,9 +175,9 @@ std::vector<double> class_diagonal(const LevelSystem& system,
 }
 
 // Preconditioned conjugate gradients on the round's normal equations from x = 0.
-std::vector<Vec3> solve_round(const LevelSystem& system, std::size_t unknowns,
+std::vector<Vec3> solve_round(const LevelSystem& system, std::size_t points, std::size_t unknowns,
                               const std::vector<std::uint8_t>& classes, int iterations) {
-  const std::vector<double> diagonal = class_diagonal(system, classes);
+  const std::vector<double> diagonal = class_diagonal(system, points, classes);
   std::vector<Vec3> x(unknowns), r, z(unknowns), p, q;
   system.right_side(r);
   const auto precondition = [&] {
@@ -198,8 +210,10 @@ struct FitInputs {
   const Volume& field;
   const TrilinearGrid& grid;
   double iso;
+  double facing;  // the field's slope along an outward normal: unfolded_sign(orientation)
   const BinnedSurfaceDistance* surface;
   const NormalFitOptions& options;
+  CoveragePull* pull;  // nullptr without the extracted surface
 };
 
 // Level `level`'s control points from the coarse-to-fine array `data`.
@@ -226,22 +240,52 @@ void measure(const detail::LevelTargets& targets, double cell, NormalFitLevelSta
   stats.unpierced = targets.unpierced;
 }
 
+// Adds `step` to the unknowns of `data` and moves `points` with it; a step
+// that would move some point farther than the reach is shortened to it (a
+// linearization holds near the targets only).
+void take_step(const SubdivisionHierarchy& h, const Unknowns& u, const std::vector<Vec3>& step, double reach,
+               std::vector<Vec3>& data, std::vector<Vec3>& points) {
+  std::vector<Vec3> moved(h.vertex_count(u.level));
+  for_each_index(u.size, [&](std::size_t k) { moved[k] = u.project(k, step[k]); });
+  synthesize(h, moved, u.level);
+  const double longest = std::sqrt(tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(0, moved.size(), kGrain), 0.0,
+      [&](const tbb::blocked_range<std::size_t>& r, double m) {
+        for (std::size_t i = r.begin(); i < r.end(); ++i) m = std::max(m, squared_norm(moved[i]));
+        return m;
+      },
+      [](double a, double b) { return std::max(a, b); }));
+  const double scale = longest > reach ? reach / longest : 1.0;
+  for_each_index(u.size, [&](std::size_t k) { data[k] += u.project(k, step[k]) * scale; });
+  for_each_index(points.size(), [&](std::size_t v) { points[v] += moved[v] * scale; });
+}
+
 // Gauss-Newton rounds on the unknowns of `data`: each round retargets the
 // level's points and adds one solve's step. Returns the last targets.
 detail::LevelTargets run_rounds(const FitInputs& in, const WrapLevelMesh& mesh, const Unknowns& u,
                                 const std::vector<Vec3>& pierce_directions, double reach, int rounds,
                                 std::vector<Vec3>& data) {
   const SubdivisionHierarchy& h = in.hierarchy;
-  const std::vector<std::uint8_t> classes = entry_classes(h, u.level);
+  std::vector<std::uint8_t> classes = entry_classes(h, u.level);
+  classes.resize(u.size);
   std::vector<Vec3> points = synthesize_points(h, u.level, data);
-  detail::LevelTargets targets =
-      detail::level_targets(mesh, points, pierce_directions, in.grid, in.field, in.iso, reach, in.surface);
+  // The pull only where the level samples the surface finely (as the
+  // shrink-wrap's), and not before the last round, which puts the pulled
+  // points back on the isosurface where they now are.
+  const bool fine_level = detail::mean_edge_length(mesh, points) <= kPullMaxEdgeCells * in.field.cell_size();
+  const auto retarget = [&](bool pull) {
+    detail::LevelTargets t =
+        detail::level_targets(mesh, points, pierce_directions, in.grid, in.field, in.iso, in.facing, reach, in.surface);
+    if (pull && fine_level && in.pull)
+      detail::add_coverage_pull(*in.pull, mesh, points, kPullReachCells * in.field.cell_size(), t);
+    return t;
+  };
+  detail::LevelTargets targets = retarget(rounds > 1);
   for (int round = 0; round < rounds; ++round) {
     const LevelSystem system(h, u, targets);
-    const std::vector<Vec3> step = solve_round(system, u.size, classes, in.options.cg_iterations);
-    for_each_index(u.size, [&](std::size_t k) { data[k] += u.project(k, step[k]); });
-    points = synthesize_points(h, u.level, data);
-    targets = detail::level_targets(mesh, points, pierce_directions, in.grid, in.field, in.iso, reach, in.surface);
+    const std::vector<Vec3> step = solve_round(system, points.size(), u.size, classes, in.options.cg_iterations);
+    take_step(h, u, step, reach, data, points);
+    targets = retarget(round + 2 < rounds);
   }
   return targets;
 }
@@ -331,7 +375,11 @@ NormalFitResult normal_fit(const SubdivisionHierarchy& hierarchy, const std::vec
   const detail::FittedField fitted(field, iso);
   std::optional<BinnedSurfaceDistance> surface;
   if (options.surface) surface.emplace(*options.surface);
-  const FitInputs in{hierarchy, field, fitted.grid(), iso, surface ? &*surface : nullptr, options};
+  const double facing = options.orientation == Orientation::TowardHigher ? 1.0 : -1.0;
+  std::optional<CoveragePull> pull;
+  if (options.surface) pull.emplace(options.surface->positions, field, kCoveredCells * field.cell_size());
+  const FitInputs in{hierarchy, field, fitted.grid(), iso, facing, surface ? &*surface : nullptr, options,
+                     pull ? &*pull : nullptr};
   const int levels = hierarchy.levels();
   const std::size_t base_count = hierarchy.vertex_count(0), fine = hierarchy.fine_vertex_count();
   std::vector<Vec3> data(fine);
@@ -339,7 +387,8 @@ NormalFitResult normal_fit(const SubdivisionHierarchy& hierarchy, const std::vec
   std::vector<std::uint8_t> free(fine, 0);
   std::fill(free.begin(), free.begin() + static_cast<std::ptrdiff_t>(base_count), std::uint8_t{1});
   NormalFitResult result;
-  // Coarse to fine with the base free; the directions follow the base.
+  // Coarse to fine with the base free (the only low-pass entries: the
+  // wavelets of every level have almost no mean); the directions follow it.
   std::vector<Vec3> normals = directions(data);
   check_directions(normals, fine);
   for (int level = 1; level <= levels; ++level) {
@@ -350,13 +399,13 @@ NormalFitResult normal_fit(const SubdivisionHierarchy& hierarchy, const std::vec
     normals = moved;
     progress.update(double(level) / double(levels + 1));
   }
-  // Last, the base fixed where the coder rounds it: the directions are final.
+  // Last, the base fixed where the coder takes its frames from; base
+  // entries along no direction stay.
   if (levels > 0) {
     std::fill(free.begin(), free.begin() + static_cast<std::ptrdiff_t>(base_count), std::uint8_t{0});
-    std::vector<Vec3> fixed_base = normals;
-    for (std::size_t i = 0; i < base_count; ++i) fixed_base[i] = Vec3{};
-    // Base entries along a zero direction do not move.
-    result.levels.back() = fit_level(in, levels, fixed_base, normals, free, std::max(2, options.rounds / 2), data);
+    std::vector<Vec3> along = normals;
+    std::fill(along.begin(), along.begin() + static_cast<std::ptrdiff_t>(base_count), Vec3{});
+    result.levels.back() = fit_level(in, levels, along, normals, free, std::max(2, options.rounds / 2), data);
     std::fill(free.begin(), free.begin() + static_cast<std::ptrdiff_t>(base_count), std::uint8_t{1});
   }
   result.non_normal.assign(free.begin() + static_cast<std::ptrdiff_t>(base_count), free.end());

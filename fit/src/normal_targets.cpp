@@ -20,6 +20,17 @@ Vec3 in_plane(Vec3 d, int axis) {
   return length > 0 ? d * (1.0 / length) : Vec3{};
 }
 
+// The box face p lies farthest beyond (axis * 2 + 0 low / 1 high), or -1 inside.
+int outside_face(const Vec3& p, const Vec3& low, const Vec3& high) {
+  int face = -1;
+  double worst = 0;
+  for (int axis = 0; axis < 3; ++axis) {
+    if (low[axis] - p[axis] > worst) worst = low[axis] - p[axis], face = 2 * axis;
+    if (p[axis] - high[axis] > worst) worst = p[axis] - high[axis], face = 2 * axis + 1;
+  }
+  return face;
+}
+
 Vec3 unit_or_zero(const Vec3& v) {
   const double length = std::sqrt(squared_norm(v));
   return length > 0 && std::isfinite(length) ? v * (1.0 / length) : Vec3{};
@@ -27,36 +38,56 @@ Vec3 unit_or_zero(const Vec3& v) {
 
 }  // namespace
 
-bool pierce(const TrilinearGrid& grid, double iso, const Vec3& p, const Vec3& d, double reach, double step,
-            double tolerance, double& t) {
+bool pierce(const TrilinearGrid& grid, double iso, const Vec3& p, const Vec3& d, double facing, double reach,
+            double step, double tolerance, double& t) {
   const Vec3 g0 = grid.grid_point(p), gd = grid.grid_direction(d);
   const auto h = [&](double s) { return grid.value_at(g0 + gd * s) - iso; };
+  // A crossing inside the box (the field is clamped beyond it, so its
+  // isosurface would go on outside) on the side the surface allows: the
+  // field's slope along d has the sign `facing`.
+  const auto admissible = [&](double root) {
+    return grid.inside(g0 + gd * root) &&
+           (facing == 0 || dot(grid.sample_at(g0 + gd * root).gradient, d) * facing >= 0);
+  };
   const double h0 = h(0);
-  if (h0 == 0) {
+  if (h0 == 0 && admissible(0)) {
     t = 0;
     return true;
   }
   double forward = 0, h_forward = h0, backward = 0, h_backward = h0;
-  for (double s = step;; s += step) {
+  bool forward_open = true, backward_open = true;
+  for (double s = step; forward_open || backward_open; s += step) {
     const double at = std::min(s, reach);
-    const double ha = h(at);
-    if (root_side(ha) != root_side(h_forward)) {
-      t = refine_bracket(h, forward, h_forward, at, ha, tolerance);
-      return true;
+    if (forward_open) {
+      const double ha = h(at);
+      if (root_side(ha) != root_side(h_forward)) {
+        const double root = refine_bracket(h, forward, h_forward, at, ha, tolerance);
+        if (admissible(root)) {
+          t = root;
+          return true;
+        }
+      }
+      forward = at, h_forward = ha;
     }
-    const double hb = h(-at);
-    if (root_side(hb) != root_side(h_backward)) {
-      t = refine_bracket(h, backward, h_backward, -at, hb, tolerance);
-      return true;
+    if (backward_open) {
+      const double hb = h(-at);
+      if (root_side(hb) != root_side(h_backward)) {
+        const double root = refine_bracket(h, backward, h_backward, -at, hb, tolerance);
+        if (admissible(root)) {
+          t = root;
+          return true;
+        }
+      }
+      backward = -at, h_backward = hb;
     }
-    if (at >= reach) return false;
-    forward = at, h_forward = ha, backward = -at, h_backward = hb;
+    if (at >= reach) forward_open = backward_open = false;
   }
+  return false;
 }
 
 LevelTargets level_targets(const WrapLevelMesh& mesh, const std::vector<Vec3>& positions,
                            const std::vector<Vec3>& directions, const TrilinearGrid& grid, const Volume& box,
-                           double iso, double reach, const BinnedSurfaceDistance* surface) {
+                           double iso, double facing, double reach, const BinnedSurfaceDistance* surface) {
   const std::size_t n = mesh.vertex_count;
   const double cell = box.cell_size(), step = 0.25 * cell, tolerance = 1e-4 * cell;
   const Vec3 low = volume_box_min(box), high = volume_box_max(box);
@@ -66,11 +97,13 @@ LevelTargets level_targets(const WrapLevelMesh& mesh, const std::vector<Vec3>& p
   targets.box_axis.assign(n, -1);
   targets.box_offset.assign(n, 0.0);
   targets.off_line.assign(n, 0);
+  targets.pull_offset.assign(n, Vec3{});
+  targets.pulled.assign(n, 0);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, kGrain), [&](const tbb::blocked_range<std::size_t>& r) {
     for (std::size_t v = r.begin(); v < r.end(); ++v) {
       if (mesh.role[v] == WrapRole::Fixed) continue;
       const Vec3& p = positions[v];
-      const int face = mesh.box_face[v];
+      const int face = mesh.box_face[v] >= 0 ? mesh.box_face[v] : outside_face(p, low, high);
       const int axis = face >= 0 ? face / 2 : -1;
       if (axis >= 0) {
         targets.box_axis[v] = static_cast<std::int8_t>(axis);
@@ -80,10 +113,11 @@ LevelTargets level_targets(const WrapLevelMesh& mesh, const std::vector<Vec3>& p
       const Vec3 gradient = grid.sample(p).gradient;
       Vec3 d = held(squared_norm(directions[v]) > 0 ? directions[v] : gradient);
       double t = 0;
-      bool found = squared_norm(d) > 0 && pierce(grid, iso, p, d, reach, step, tolerance, t);
-      if (!found && squared_norm(directions[v]) > 0) {
+      const bool along_normal = squared_norm(directions[v]) > 0;
+      bool found = squared_norm(d) > 0 && pierce(grid, iso, p, d, along_normal ? facing : 0.0, reach, step, tolerance, t);
+      if (!found && along_normal) {
         d = held(gradient);
-        found = squared_norm(d) > 0 && pierce(grid, iso, p, d, reach, step, tolerance, t);
+        found = squared_norm(d) > 0 && pierce(grid, iso, p, d, 0.0, reach, step, tolerance, t);
         targets.off_line[v] = 1;
       }
       Vec3 target = p + d * t;
@@ -105,6 +139,20 @@ LevelTargets level_targets(const WrapLevelMesh& mesh, const std::vector<Vec3>& p
   for (std::size_t v = 0; v < n; ++v)
     targets.unpierced += mesh.role[v] != WrapRole::Fixed && !(squared_norm(targets.plane_normal[v]) > 0);
   return targets;
+}
+
+void add_coverage_pull(CoveragePull& pull, const WrapLevelMesh& mesh, const std::vector<Vec3>& positions,
+                       double reach, LevelTargets& targets) {
+  std::vector<Vec3> moved = positions;
+  std::vector<PulledPoint> pulled;
+  pull.apply(mesh, moved, reach, &pulled);
+  targets.pull_offset.assign(positions.size(), Vec3{});
+  targets.pulled.assign(positions.size(), 0);
+  targets.pulled_count = pulled.size();
+  for (const PulledPoint& p : pulled) {
+    targets.pulled[p.vertex] = 1;
+    targets.pull_offset[p.vertex] = moved[p.vertex] - positions[p.vertex];
+  }
 }
 
 std::vector<Vec3> level_vertex_normals(const WrapLevelMesh& mesh, const std::vector<Vec3>& positions) {

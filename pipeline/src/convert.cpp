@@ -296,6 +296,7 @@ std::shared_ptr<const SubdivisionHierarchy> fit_normal(const PolygonMesh& base, 
     };
     NormalFitOptions normal = options.normal;
     normal.surface = &prepared.isosurface.mesh;
+    normal.orientation = orientation;
     NormalFitResult fit = normal_fit(*hierarchy, base.positions, prepared.field, iso, directions, normal, progress);
     result.fit.positions = std::move(fit.positions);
     result.normal_levels = std::move(fit.levels);
@@ -330,21 +331,20 @@ std::shared_ptr<const SubdivisionHierarchy> fit_surface(PreparedSurface& prepare
     simplify::SimplifyResult simplified = simplify_base(prepared, simplify_options, options, result, progress);
     return fit_parametrized(simplified, prepared, against_surface, options, result, progress);
   }
-  if (options.fit == FitMethod::Normal) {
-    const PolygonMesh base = simplify_base(prepared, simplify_options, options, result, progress).base;
-    return fit_normal(base, prepared, against_surface, options, result, progress);
-  }
+  // The shrink-wrap searches the signed-distance field, the normal fit the field itself.
+  const bool wrap = options.fit == FitMethod::ShrinkWrap;
   BackgroundDistance distance(prepared, options.prepare);
-  simplify_options.serial_phase_begins = [&distance] { distance.start(); };
+  if (wrap) simplify_options.serial_phase_begins = [&distance] { distance.start(); };
   std::shared_ptr<const SubdivisionHierarchy> hierarchy;
   for (result.base_attempts = 1;; ++result.base_attempts) {
     const PolygonMesh base = simplify_base(prepared, simplify_options, options, result, progress).base;
     simplify_options.serial_phase_begins = nullptr;  // the distance field is on its way
     if (options.levels > 0) check_level_memory(base, options.levels);  // before the wait
-    result.seconds.distance += distance.wait(progress);
+    if (wrap) result.seconds.distance += distance.wait(progress);
     result.fit = ShrinkWrapResult{};  // the previous try's, before the next one's peak
     hierarchy.reset();
-    hierarchy = fit_base(base, prepared, against_surface, options, result, progress);
+    hierarchy = wrap ? fit_base(base, prepared, against_surface, options, result, progress)
+                     : fit_normal(base, prepared, against_surface, options, result, progress);
     // With the levels fixed, a larger base multiplies the fine mesh: it grows
     // only when the levels follow it.
     const std::size_t grown = 2 * base.vertex_count();

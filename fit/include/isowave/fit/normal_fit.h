@@ -52,6 +52,9 @@ struct NormalFitOptions {
   // The extracted isosurface (kept by pointer): a point whose lines miss the
   // isosurface aims at its nearest point. nullptr: such a point has no target.
   const PolygonMesh* surface = nullptr;
+  // Which way the base mesh's normals point (extraction's): a normal line
+  // pierces only where it leaves the region its surface encloses.
+  Orientation orientation = Orientation::TowardLower;
 };
 
 // Per level fitted (level 0: the base).

@@ -95,6 +95,13 @@ class TrilinearGrid {
   }
 
   double value(const Vec3& world) const { return value_at(grid_point(world)); }
+
+  // Whether grid coordinates g lie in the box (within 1e-9 of a cell).
+  bool inside(const Vec3& g) const {
+    constexpr double slack = 1e-9;
+    return g.x >= -slack && g.y >= -slack && g.z >= -slack && g.x <= last_.x + slack && g.y <= last_.y + slack &&
+           g.z <= last_.z + slack;
+  }
   TrilinearSample sample(const Vec3& world) const { return sample_at(grid_point(world)); }
 
   // Asks the cache for the samples around grid coordinates g (a hint; loops
