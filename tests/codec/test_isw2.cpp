@@ -2,7 +2,7 @@
 // quantizer's bounds on every coefficient, at the whole stream and at every
 // prefix; error falling plane by plane; file cuts and stream limits that
 // agree; the encoder's size limit and rate table; `--percent` on top of the
-// stream; hostile packets and damaged sections.
+// stream; hostile packets, damaged sections and sections out of order.
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -12,6 +12,7 @@
 #include <zlib.h>
 
 #include "codec_test_data.h"
+#include "isw_test_sections.h"
 #include "isowave/codec/base_order.h"
 #include "isowave/codec/importance.h"
 #include "isowave/codec/isw_format.h"
@@ -233,6 +234,56 @@ TEST(IswFormat2, DamagedSectionsAreFormatErrorsAndCutHeadersToo) {
       EXPECT_TRUE(error.kind() == ErrorKind::Format || error.kind() == ErrorKind::Unsupported) << error.what();
     }
   }
+}
+
+// Expects a one-line Error(Format) naming the file and `section`, from a
+// whole decode and from one of the headers (which lists the other sections).
+void expect_format_error(const std::string& bytes, const std::string& section, const std::string& what) {
+  for (const bool headers_only : {false, true}) {
+    SCOPED_TRACE(what + (headers_only ? ", headers only" : ""));
+    IswDecodeOptions options;
+    options.headers_only = headers_only;
+    try {
+      decode_isw(bytes, "order.isw", options);
+      ADD_FAILURE() << "decoded";
+    } catch (const Error& error) {
+      const std::string message = error.what();
+      EXPECT_EQ(error.kind(), ErrorKind::Format) << message;
+      EXPECT_EQ(message.find('\n'), std::string::npos) << message;
+      EXPECT_EQ(message.rfind("order.isw: section ", 0), 0u) << message;
+      EXPECT_NE(message.find("section " + section), std::string::npos) << message;
+    }
+  }
+}
+
+// docs/FORMAT.md: after BPTS, optionally RDTB, then PLNS and END, each once.
+// Any other order or repetition is an error, and costs no second decode.
+TEST(IswFormat2, RepeatedOrMisplacedStreamSectionsAreFormatErrors) {
+  const Encoded e = encode_sample(test::cube(), 2, 1e-3);
+  IswRewrite rewrite;
+  rewrite.rate_table = {{0, 0.5}};
+  const std::vector<std::string> parts = test::split_sections(rewrite_isw(e.bytes, rewrite));
+  ASSERT_EQ(parts.size(), 8u);  // the file header, META, BASE, QUAN, BPTS, RDTB, PLNS, END
+  const std::string head = parts[0] + parts[1] + parts[2] + parts[3] + parts[4];
+  const std::string &rdtb = parts[5], &planes = parts[6], &end = parts[7];
+  ASSERT_EQ(test::section_tag(rdtb) + test::section_tag(planes) + test::section_tag(end), "RDTBPLNSEND ");
+  // Complete and empty: top plane -1, no flags, 1 group, 3 segments, no packets.
+  const std::string no_packets = test::make_section("PLNS", std::string("\xff\x00\x01\x03\x00", 5));
+  const std::string unknown = test::make_section("NEWS", "a later minor version's");
+
+  const IswDecoded full = decode_isw(head + planes + end, "full.isw");
+  for (const std::string& valid : {head + rdtb + planes + end, head + unknown + planes + unknown + end})
+    EXPECT_EQ(decode_isw(valid, "valid.isw").coefficients, full.coefficients);
+
+  expect_format_error(head + planes + planes + end, "PLNS", "PLNS twice");
+  expect_format_error(head + rdtb + planes + planes + planes + end, "PLNS", "PLNS three times");
+  expect_format_error(head + planes + no_packets + end, "PLNS", "an empty PLNS after the stream");
+  expect_format_error(head + planes + unknown + planes.substr(0, planes.size() / 2), "PLNS", "a second PLNS, cut");
+  expect_format_error(head + planes + rdtb + end, "RDTB", "RDTB after PLNS");
+  expect_format_error(head + rdtb + rdtb + planes + end, "RDTB", "RDTB twice");
+  expect_format_error(head + rdtb + end, "END", "no PLNS");
+  expect_format_error(head + end + planes, "END", "END before PLNS");
+  expect_format_error(head + planes + parts[4] + end, "BPTS", "BPTS in the stream");
 }
 
 TEST(IswFormat2, EncodingIsDeterministicAndRejectsBadOptions) {
