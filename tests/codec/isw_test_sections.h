@@ -55,4 +55,19 @@ inline std::string join(const std::vector<std::string>& parts) {
   return out;
 }
 
+// `file` with the payload of every section `tag` replaced (sizes and CRCs made consistent).
+inline std::string with_section_payload(const std::string& file, const std::string& tag, const std::string& payload) {
+  std::vector<std::string> parts = split_sections(file);
+  for (std::size_t k = 1; k < parts.size(); ++k)
+    if (section_tag(parts[k]) == tag) parts[k] = make_section(tag, payload);
+  return join(parts);
+}
+
+// The payload of the first section `tag` of `file`, or "".
+inline std::string payload_of(const std::string& file, const std::string& tag) {
+  for (const std::string& part : split_sections(file))
+    if (part.size() >= 20 && section_tag(part) == tag) return section_payload(part);
+  return "";
+}
+
 }  // namespace isowave::test

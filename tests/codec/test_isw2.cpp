@@ -237,9 +237,12 @@ TEST(IswFormat2, DamagedSectionsAreFormatErrorsAndCutHeadersToo) {
 }
 
 // Expects a one-line Error(Format) naming the file and `section`, from a
-// whole decode and from one of the headers (which lists the other sections).
-void expect_format_error(const std::string& bytes, const std::string& section, const std::string& what) {
+// whole decode and, with `headers_too`, from one of the headers (which lists
+// the other sections).
+void expect_format_error(const std::string& bytes, const std::string& section, const std::string& what,
+                         bool headers_too = true) {
   for (const bool headers_only : {false, true}) {
+    if (headers_only && !headers_too) continue;
     SCOPED_TRACE(what + (headers_only ? ", headers only" : ""));
     IswDecodeOptions options;
     options.headers_only = headers_only;
@@ -284,6 +287,22 @@ TEST(IswFormat2, RepeatedOrMisplacedStreamSectionsAreFormatErrors) {
   expect_format_error(head + rdtb + end, "END", "no PLNS");
   expect_format_error(head + end + planes, "END", "END before PLNS");
   expect_format_error(head + planes + parts[4] + end, "BPTS", "BPTS in the stream");
+}
+
+// docs/FORMAT.md, PLNS: LEB128 values of at most 64 bits. The group count
+// (1) written in ten bytes decodes as in one; ten bytes holding 2^64 + 1 are
+// an error, not 1 wrapped around.
+TEST(IswFormat2, PacketTableValuesOf64BitsOrMoreAreFormatErrors) {
+  const Encoded e = encode_sample(test::cube(), 2, 1e-3);
+  const std::string planes = test::payload_of(e.bytes, "PLNS");
+  ASSERT_EQ(planes[2], 1);  // top plane, flags, then one group in one byte
+  const auto with_groups = [&](char last) {
+    const std::string groups = "\x81" + std::string(8, '\x80') + last;  // 1 + last x 2^63
+    return test::with_section_payload(e.bytes, "PLNS", planes.substr(0, 2) + groups + planes.substr(3));
+  };
+  EXPECT_EQ(decode_isw(with_groups('\x00'), "long.isw").coefficients, decode_isw(e.bytes, "test.isw").coefficients);
+  expect_format_error(with_groups('\x02'), "PLNS", "2^64 + 1", false);
+  expect_format_error(with_groups('\x7f'), "PLNS", "127 x 2^63 + 1", false);
 }
 
 TEST(IswFormat2, EncodingIsDeterministicAndRejectsBadOptions) {

@@ -366,14 +366,6 @@ TEST(IswFormat, HostileHeadersAreRejectedBeforeAllocating) {
   EXPECT_THROW(decode_isw(bad, "x.isw"), Error);
 }
 
-// `bytes` with the payload of section `tag` replaced (sizes and CRCs made consistent).
-std::string with_section_payload(const std::string& bytes, const std::string& tag, const std::string& payload) {
-  std::vector<std::string> parts = test::split_sections(bytes);
-  for (std::size_t k = 1; k < parts.size(); ++k)
-    if (test::section_tag(parts[k]) == tag) parts[k] = test::make_section(tag, payload);
-  return test::join(parts);
-}
-
 // `bytes` with a section `tag` holding `payload` (valid sizes and CRCs)
 // inserted before the section at index `before` (0: META).
 std::string with_section_inserted(const std::string& bytes, std::size_t before, const std::string& tag,
@@ -432,7 +424,7 @@ TEST(IswFormat, BaseMeshTheHierarchyCannotRefineIsAFormatErrorNamingTheSection) 
   quan.append(reinterpret_cast<const char*>(weights), sizeof weights);
   quan.append(reinterpret_cast<const char*>(&coefficients), 8);
   quan.append(reinterpret_cast<const char*>(&chunks), 4);
-  const std::string level1 = with_section_payload(level0, "QUAN", quan);
+  const std::string level1 = test::with_section_payload(level0, "QUAN", quan);
   try {
     decode_isw(level1, "fan.isw");
     ADD_FAILURE() << "decoded a base mesh that cannot be refined";
