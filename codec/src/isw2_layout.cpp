@@ -92,6 +92,10 @@ PlaneStream read_planes(PayloadReader& reader, std::string_view payload, bool pa
   stream.layout = {top_plane, static_cast<std::size_t>(groups), static_cast<std::size_t>(segments)};
   if (count > static_cast<std::uint64_t>(top_plane + 1) * stream.layout.packets_per_plane())
     reader.fail("holds more packets than planes");
+  if (count > reader.remaining()) {  // every size takes a byte at least
+    if (payload_cut) return stream;
+    reader.fail("has an impossible packet count");
+  }
   std::vector<std::uint64_t> sizes(static_cast<std::size_t>(count));
   for (std::uint64_t& size : sizes)
     if (!read_varint(reader, size)) {

@@ -305,6 +305,26 @@ TEST(IswFormat2, PacketTableValuesOf64BitsOrMoreAreFormatErrors) {
   expect_format_error(with_groups('\x7f'), "PLNS", "127 x 2^63 + 1", false);
 }
 
+// The packet count is checked against the bytes left before the table is
+// read (or allocated): every size takes a byte at least. The largest table
+// the counts allow (32 planes, 32 segments, 64 groups: 65,536 sizes) in 100
+// bytes is an error; cut by the file's end, the stream holds no packet.
+TEST(IswFormat2, PacketCountBeyondTheBytesLeftIsRejectedBeforeTheTable) {
+  const Encoded e = encode_sample(test::cube(), 2, 1e-3);
+  const std::string header("\x1f\x00\x40\x20\x80\x80\x04", 7);  // top plane 31, no flags, G 64, S 32, P 2^16
+  const std::string file = test::with_section_payload(e.bytes, "PLNS", header + std::string(100, '\x01'));
+  expect_format_error(file, "PLNS", "65,536 packets in 100 bytes", false);
+  try {
+    decode_isw(file, "count.isw");
+  } catch (const Error& error) {
+    EXPECT_NE(std::string(error.what()).find("packet count"), std::string::npos) << error.what();
+  }
+  const std::size_t planes_end = file.size() - 20;  // before END
+  const IswDecoded cut = decode_isw(file.substr(0, planes_end - 50), "cut.isw");
+  EXPECT_TRUE(cut.truncated);
+  EXPECT_EQ(cut.stream.decoded, 0u);
+}
+
 TEST(IswFormat2, EncodingIsDeterministicAndRejectsBadOptions) {
   const Encoded e = encode_sample(test::genus_slab(2), 3, 1e-3);
   EXPECT_EQ(encode_isw(*e.surface.hierarchy, e.surface.coefficients, sample_metadata(), e.options), e.bytes);
