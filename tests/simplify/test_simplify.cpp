@@ -4,7 +4,6 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <cstdio>
 #include <map>
@@ -71,15 +70,6 @@ int max_valence_of(const PolygonMesh& mesh) {
   return valence.empty() ? 0 : *std::max_element(valence.begin(), valence.end());
 }
 
-// The positions of a mesh's sharp vertices, sorted.
-std::vector<std::array<double, 3>> sharp_positions(const PolygonMesh& mesh) {
-  std::vector<std::array<double, 3>> positions;
-  for (std::size_t v = 0; v < mesh.vertex_count(); ++v)
-    if (mesh.is_sharp(v)) positions.push_back({mesh.positions[v].x, mesh.positions[v].y, mesh.positions[v].z});
-  std::sort(positions.begin(), positions.end());
-  return positions;
-}
-
 // Checks every property the issue asks of a base mesh built from `input`.
 void expect_valid_base_mesh(const PolygonMesh& input, const SimplifyResult& result, const std::string& name,
                             bool input_valences_in_range = true) {
@@ -113,7 +103,7 @@ void expect_valid_base_mesh(const PolygonMesh& input, const SimplifyResult& resu
   EXPECT_EQ(base.sharp.empty(), input.sharp.empty());
   // Sharp vertices are never merged away from their position: the base has
   // a sharp vertex exactly where the input has one, and no other.
-  EXPECT_EQ(sharp_positions(base), sharp_positions(input));
+  EXPECT_EQ(test::sharp_positions(base), test::sharp_positions(input));
   std::size_t face_total = 0;
   for (std::size_t s = 0; s < result.report.face_size_histogram.size(); ++s)
     face_total += result.report.face_size_histogram[s];
