@@ -139,7 +139,7 @@ std::optional<Section> SectionWalker::next() {
   std::memcpy(&size, bytes_.data() + position_ + 4, 8);
   std::memcpy(&stored_header_crc, bytes_.data() + position_ + 12, 4);
   const std::string& tag = section.tag;
-  section.where = name_ + ": section " + tag + " (at byte " + std::to_string(position_) + ")";
+  section.where = where(tag);
   if (header_crc(tag.c_str(), size) != stored_header_crc)
     throw Error(ErrorKind::Format, section.where + ": corrupt section header (CRC mismatch)");
   section.known = known_tag(major_, tag);
@@ -173,6 +173,10 @@ std::optional<Section> SectionWalker::next() {
   return section;
 }
 
+std::string SectionWalker::where(const std::string& tag) const {
+  return name_ + ": section " + tag + " (at byte " + std::to_string(position_) + ")";
+}
+
 void SectionWalker::check_stream_order(const std::string& tag, const std::string& where) {
   const StreamOrder order = stream_order(major_);
   const int index = order.index(tag);
@@ -201,7 +205,7 @@ bool SectionWalker::list_rest(std::vector<IswSectionInfo>& sections) {
     std::memcpy(&size, bytes_.data() + position_ + 4, 8);
     IswSectionInfo next{bytes_.substr(position_, 4), position_, 0, 0};
     if (known_tag(major_, next.tag))
-      check_stream_order(next.tag, name_ + ": section " + next.tag + " (at byte " + std::to_string(position_) + ")");
+      check_stream_order(next.tag, where(next.tag));
     if (!fits(bytes_, position_, size)) {
       truncated_ = true;
       break;

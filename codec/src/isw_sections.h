@@ -103,6 +103,8 @@ class SectionWalker {
   bool list_rest(std::vector<IswSectionInfo>& sections);
 
  private:
+  // "NAME: section TAG (at byte N)" for the section at the position.
+  std::string where(const std::string& tag) const;
   // Error(Format) headed by `where` unless a known stream section `tag` may
   // follow those before it; records it.
   void check_stream_order(const std::string& tag, const std::string& where);
