@@ -84,13 +84,36 @@ def mesh():
           b"end_header\n" + struct.pack(">9d", 0, 0, 0, 1, 0, 0, 0, 1, 0) + struct.pack(">4I", 3, 0, 1, 2))
 
 
+def isw_sections(data):
+    """The 16-byte header and each section (tag, u64 size, CRC, payload, CRC) of an .isw file."""
+    parts, at = [data[:16]], 16
+    while at + 16 <= len(data):
+        size = struct.unpack_from("<Q", data, at + 4)[0]
+        parts.append(data[at:at + 20 + size])
+        at += 20 + size
+    return parts
+
+
+def isw_section(tag, payload):
+    size = struct.pack("<Q", len(payload))
+    return tag + size + struct.pack("<I", zlib.crc32(tag + size)) + payload + struct.pack("<I", zlib.crc32(tag + payload))
+
+
 def isw():
     data = os.path.join(HERE, "..", "tests", "codec", "data")
     shutil.copy(os.path.join(data, "golden_1_0.isw"), os.path.join(CORPUS, "isw", "golden_1_0.isw"))
     shutil.copy(os.path.join(data, "golden_2_0.isw"), os.path.join(CORPUS, "isw", "golden_2_0.isw"))
-    # Version 2 decodes any prefix past its headers: one cut inside the plane stream.
     with open(os.path.join(data, "golden_2_0.isw"), "rb") as f:
-        write("isw", "golden_2_0_cut_in_stream.isw", f.read()[:600])
+        golden = f.read()
+    # Version 2 decodes any prefix past its headers: one cut inside the plane stream.
+    write("isw", "golden_2_0_cut_in_stream.isw", golden[:600])
+    # Stream sections a reader must reject (issue #52): PLNS repeated, RDTB after PLNS; and RDTB in its place.
+    head, planes, end = isw_sections(golden)[:5], isw_sections(golden)[5], isw_sections(golden)[6]
+    assert planes[:4] == b"PLNS" and end[:4] == b"END "
+    rates = isw_section(b"RDTB", struct.pack("<IQdQd", 2, 100, 0.01, 284, 0.001))
+    write("isw", "golden_2_0_plns_repeated.isw", b"".join(head) + planes + planes + end)
+    write("isw", "golden_2_0_rdtb_after_plns.isw", b"".join(head) + planes + rates + end)
+    write("isw", "golden_2_0_rdtb.isw", b"".join(head) + rates + planes + end)
 
 
 def npy():

@@ -22,13 +22,15 @@ void put_varint(std::string& out, std::uint64_t v) {
   out.push_back(static_cast<char>(v));
 }
 
-// False when the bytes end first (a cut table); Error(Format) for more than
-// 64 bits.
+// False when the bytes end first (a cut table); Error(Format) for a value
+// of 2^64 or more.
 bool read_varint(PayloadReader& reader, std::uint64_t& v) {
   v = 0;
   for (int shift = 0; shift < 64; shift += 7) {
     if (reader.remaining() == 0) return false;
     const auto byte = reader.read<std::uint8_t>();
+    // The tenth byte holds bit 63 only.
+    if (shift == 63 && byte > 1) break;
     v |= std::uint64_t{byte & 0x7Fu} << shift;
     if (!(byte & 0x80)) return true;
   }
@@ -90,6 +92,10 @@ PlaneStream read_planes(PayloadReader& reader, std::string_view payload, bool pa
   stream.layout = {top_plane, static_cast<std::size_t>(groups), static_cast<std::size_t>(segments)};
   if (count > static_cast<std::uint64_t>(top_plane + 1) * stream.layout.packets_per_plane())
     reader.fail("holds more packets than planes");
+  if (count > reader.remaining()) {  // every size takes a byte at least
+    if (payload_cut) return stream;
+    reader.fail("has an impossible packet count");
+  }
   std::vector<std::uint64_t> sizes(static_cast<std::size_t>(count));
   for (std::uint64_t& size : sizes)
     if (!read_varint(reader, size)) {

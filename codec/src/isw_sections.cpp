@@ -26,11 +26,36 @@ namespace detail {
 namespace {
 
 constexpr const char* kHeaderOrder[] = {"META", "BASE", "QUAN", "BPTS"};
-constexpr std::string_view kKnownTags[] = {"META", "BASE", "QUAN", "BPTS", "CHNK", "END "};
-constexpr std::string_view kKnownTags2[] = {"META", "BASE", "QUAN", "BPTS", "RDTB", "PLNS", "END "};
 
-bool stream_tag(int major, const std::string& tag) {
-  return major == 1 ? tag == "CHNK" || tag == "END " : tag == "RDTB" || tag == "PLNS" || tag == "END ";
+// The sections after the headers, in their order (docs/FORMAT.md): whether
+// one may come more than once, and whether it may be left out.
+struct StreamTag {
+  std::string_view tag;
+  bool repeats;
+  bool optional;
+};
+constexpr StreamTag kStream1[] = {{"CHNK", true, true}, {"END ", false, false}};
+constexpr StreamTag kStream2[] = {{"RDTB", false, true}, {"PLNS", false, false}, {"END ", false, false}};
+
+struct StreamOrder {
+  const StreamTag* tags;
+  int count;
+  // The position of `tag` in the order, or -1.
+  int index(std::string_view tag) const {
+    for (int k = 0; k < count; ++k)
+      if (tags[k].tag == tag) return k;
+    return -1;
+  }
+};
+
+StreamOrder stream_order(int major) {
+  return major == 1 ? StreamOrder{kStream1, static_cast<int>(std::size(kStream1))}
+                    : StreamOrder{kStream2, static_cast<int>(std::size(kStream2))};
+}
+
+bool known_tag(int major, std::string_view tag) {
+  return std::find(std::begin(kHeaderOrder), std::end(kHeaderOrder), tag) != std::end(kHeaderOrder) ||
+         stream_order(major).index(tag) >= 0;
 }
 
 std::uint32_t crc_of(const char* tag, std::string_view payload) {
@@ -114,16 +139,13 @@ std::optional<Section> SectionWalker::next() {
   std::memcpy(&size, bytes_.data() + position_ + 4, 8);
   std::memcpy(&stored_header_crc, bytes_.data() + position_ + 12, 4);
   const std::string& tag = section.tag;
-  section.where = name_ + ": section " + tag + " (at byte " + std::to_string(position_) + ")";
+  section.where = where(tag);
   if (header_crc(tag.c_str(), size) != stored_header_crc)
     throw Error(ErrorKind::Format, section.where + ": corrupt section header (CRC mismatch)");
-  section.known = major_ == 1
-                      ? std::find(std::begin(kKnownTags), std::end(kKnownTags), tag) != std::end(kKnownTags)
-                      : std::find(std::begin(kKnownTags2), std::end(kKnownTags2), tag) != std::end(kKnownTags2);
+  section.known = known_tag(major_, tag);
   if (section.known && !in_stream && tag != kHeaderOrder[headers_read_])
     throw Error(ErrorKind::Format, section.where + ": expected section " + kHeaderOrder[headers_read_]);
-  if (section.known && in_stream && !stream_tag(major_, tag))
-    throw Error(ErrorKind::Format, section.where + ": section out of order");
+  if (section.known && in_stream) check_stream_order(tag, section.where);
   if (!fits(bytes_, position_, size)) {
     // Known tags are in order here: a cut stream section ends the stream,
     // and a cut plane stream still decodes as far as it goes.
@@ -151,6 +173,26 @@ std::optional<Section> SectionWalker::next() {
   return section;
 }
 
+std::string SectionWalker::where(const std::string& tag) const {
+  return name_ + ": section " + tag + " (at byte " + std::to_string(position_) + ")";
+}
+
+void SectionWalker::check_stream_order(const std::string& tag, const std::string& where) {
+  const StreamOrder order = stream_order(major_);
+  const int index = order.index(tag);
+  if (index < 0) throw Error(ErrorKind::Format, where + ": section out of order");
+  if (index == stream_stage_ && !order.tags[index].repeats)
+    throw Error(ErrorKind::Format, where + " is repeated (a file holds one)");
+  if (index < stream_stage_)
+    throw Error(ErrorKind::Format, where + " comes after section " + std::string(order.tags[stream_stage_].tag) +
+                                       " (out of order)");
+  for (int k = stream_stage_ + 1; k < index; ++k)
+    if (!order.tags[k].optional)
+      throw Error(ErrorKind::Format, where + " comes before section " + std::string(order.tags[k].tag) +
+                                         ", which is missing");
+  stream_stage_ = index;
+}
+
 void SectionWalker::require_headers() const {
   if (headers_read_ < std::size(kHeaderOrder))
     throw Error(ErrorKind::Format, name_ + ": truncated before section " + kHeaderOrder[headers_read_] +
@@ -162,6 +204,8 @@ bool SectionWalker::list_rest(std::vector<IswSectionInfo>& sections) {
     std::uint64_t size = 0;
     std::memcpy(&size, bytes_.data() + position_ + 4, 8);
     IswSectionInfo next{bytes_.substr(position_, 4), position_, 0, 0};
+    if (known_tag(major_, next.tag))
+      check_stream_order(next.tag, where(next.tag));
     if (!fits(bytes_, position_, size)) {
       truncated_ = true;
       break;

@@ -80,8 +80,10 @@ struct Section {
 };
 
 // Walks the sections of a file after its header, checking the order of the
-// known ones: META, BASE, QUAN, BPTS, then CHNK... (version 1) or RDTB and
-// PLNS (version 2), and END; unknown tags may appear anywhere. Cost: one CRC
+// known ones: META, BASE, QUAN, BPTS, then any number of CHNK (version 1) or
+// an optional RDTB and one PLNS (version 2), and END; a known section
+// repeated (but CHNK), out of that order or following a missing PLNS is
+// Error(Format) naming it. Unknown tags may appear anywhere. Cost: one CRC
 // pass over the bytes.
 class SectionWalker {
  public:
@@ -96,16 +98,23 @@ class SectionWalker {
   // Throws Error(Format) unless META, BASE, QUAN and BPTS were all read.
   void require_headers() const;
   // Appends the remaining sections to `sections` without checking their
-  // payloads (CHNK with their coefficient counts); returns whether the file
-  // is truncated (a section cut short, or no END). For `info`.
+  // payloads (CHNK with their coefficient counts), only their order; returns
+  // whether the file is truncated (a section cut short, or no END). For `info`.
   bool list_rest(std::vector<IswSectionInfo>& sections);
 
  private:
+  // "NAME: section TAG (at byte N)" for the section at the position.
+  std::string where(const std::string& tag) const;
+  // Error(Format) headed by `where` unless a known stream section `tag` may
+  // follow those before it; records it.
+  void check_stream_order(const std::string& tag, const std::string& where);
+
   const std::string& bytes_;
   std::string name_;
   int major_;
   std::size_t position_ = kFileHeaderBytes;
   std::size_t headers_read_ = 0;  // of META, BASE, QUAN, BPTS
+  int stream_stage_ = -1;         // the order's index of the last stream section read
   bool truncated_ = false;
 };
 

@@ -1,4 +1,7 @@
 """Errors: isowave::Error becomes isowave.Error with the CLI's message; unsupported options say so."""
+import struct
+import zlib
+
 import numpy as np
 import pytest
 
@@ -42,18 +45,45 @@ def test_corrupt_file_raises_a_format_error(sphere_isw, tmp_path):
     assert str(corrupt) in str(caught.value)
 
 
+def rate_table(path):
+    """The file's cell size (META) and RDTB rows (stream bytes, D in world units), read as docs/FORMAT.md lays
+    them out: a 16-byte header, then sections of tag, u64 size, u32 CRC, payload, u32 CRC."""
+    data, at, cell, rows = path.read_bytes(), 16, None, []
+    while at + 16 <= len(data):
+        tag, size = data[at:at + 4], struct.unpack_from("<Q", data, at + 4)[0]
+        payload = data[at + 16:at + 16 + size]
+        if tag == b"META":  # u32 text size, the text compressed by zlib
+            text = zlib.decompress(payload[4:]).decode()
+            cell = float(dict(line.split("=", 1) for line in text.splitlines())["cell_size"])
+        elif tag == b"RDTB":
+            rows = [struct.unpack_from("<Qd", payload, 4 + 16 * k) for k in range(struct.unpack_from("<I", payload)[0])]
+        at += 20 + size
+    return cell, rows
+
+
 def test_decode_limits_by_bytes_and_error(sphere_isw):
     path, _ = sphere_isw
     size = path.stat().st_size
-    whole, _ = isowave.decode(path)
-    # A prefix decodes to a surface as large as the whole one; the whole file's bytes give the whole one.
-    part, _ = isowave.decode(path, bytes=size * 3 // 4)
-    assert part.shape == whole.shape
-    assert (isowave.decode(path, bytes=size)[0] == whole).all()
-    # An error below every recorded one reads the whole stream; a huge one the shortest prefix.
-    assert (isowave.decode(path, max_error=1e-9)[0] == whole).all()
-    coarse, _ = isowave.decode(path, max_error=1e9)
-    assert coarse.shape == whole.shape
+    whole, faces = isowave.decode(path)
+
+    def distance(decode):
+        """RMS distance of a limited decode's vertices from the whole decode's (the same fine mesh)."""
+        vertices, limited_faces = decode
+        assert vertices.shape == whole.shape and (limited_faces == faces).all()
+        return float(np.sqrt(((vertices - whole) ** 2).sum(axis=1).mean()))
+
+    # Fewer bytes decode the same mesh farther from the whole one; the whole file's bytes give the whole one.
+    half, three_quarters = (distance(isowave.decode(path, bytes=size * k // 4)) for k in (2, 3))
+    assert half > three_quarters > 0
+    assert distance(isowave.decode(path, bytes=size)) == 0
+    # Each error the file records picks a longer prefix than the one before, closer to the whole decode; an error
+    # below every row reads the whole stream, a huge one the shortest prefix.
+    cell, rows = rate_table(path)
+    assert len(rows) >= 3 and [b for b, _ in rows] == sorted(b for b, _ in rows)
+    by_row = [distance(isowave.decode(path, max_error=error / cell * (1 + 1e-9))) for _, error in rows]
+    assert all(coarser > finer for coarser, finer in zip(by_row, by_row[1:])), by_row
+    assert distance(isowave.decode(path, max_error=1e9)) == by_row[0] > 0
+    assert distance(isowave.decode(path, max_error=1e-9)) == 0
     with pytest.raises(isowave.Error, match="at most one of max_error and bytes"):
         isowave.decode(path, bytes=4000, max_error=0.1)
     with pytest.raises(isowave.Error, match="max_error must be a positive"):

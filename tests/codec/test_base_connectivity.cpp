@@ -65,14 +65,6 @@ std::vector<std::vector<std::array<double, 3>>> faces_by_position(const PolygonM
   return faces;
 }
 
-std::vector<std::array<double, 3>> sharp_positions(const PolygonMesh& mesh) {
-  std::vector<std::array<double, 3>> sharp;
-  for (std::size_t v = 0; v < mesh.vertex_count(); ++v)
-    if (mesh.is_sharp(v)) sharp.push_back({mesh.positions[v].x, mesh.positions[v].y, mesh.positions[v].z});
-  std::sort(sharp.begin(), sharp.end());
-  return sharp;
-}
-
 // The same mesh with vertices and faces in random order and every face
 // rotated by a random amount.
 PolygonMesh shuffled(const PolygonMesh& mesh, std::mt19937& rng) {
@@ -188,7 +180,7 @@ TEST(BaseConnectivity, CanonicalOrderKeepsTheMeshAndIsAFixedPoint) {
     const PolygonMesh& mesh = meshes[i];
     const detail::CanonicalMesh once = canonical_order(mesh);
     EXPECT_EQ(faces_by_position(once.mesh), faces_by_position(mesh));
-    EXPECT_EQ(sharp_positions(once.mesh), sharp_positions(mesh));
+    EXPECT_EQ(test::sharp_positions(once.mesh), test::sharp_positions(mesh));
     EXPECT_NO_THROW(require_manifold(once.mesh, "canonical mesh"));
     for (std::size_t v = 0; v < mesh.vertex_count(); ++v)
       EXPECT_EQ(once.mesh.positions[once.new_of_old[v]].x, mesh.positions[v].x);

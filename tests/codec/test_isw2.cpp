@@ -2,16 +2,15 @@
 // quantizer's bounds on every coefficient, at the whole stream and at every
 // prefix; error falling plane by plane; file cuts and stream limits that
 // agree; the encoder's size limit and rate table; `--percent` on top of the
-// stream; hostile packets and damaged sections.
+// stream; hostile packets, damaged sections and sections out of order.
 #include <algorithm>
 #include <cmath>
-#include <cstring>
 #include <random>
 
 #include <gtest/gtest.h>
-#include <zlib.h>
 
 #include "codec_test_data.h"
+#include "isw_test_sections.h"
 #include "isowave/codec/base_order.h"
 #include "isowave/codec/importance.h"
 #include "isowave/codec/isw_format.h"
@@ -192,25 +191,34 @@ TEST(IswFormat2, PercentKeepsTheMostImportantOfTheDecodedCoefficients) {
     }
 }
 
-TEST(IswFormat2, RandomPacketsOfAValidFileDecodeWithoutCrashing) {
+// Whatever its packets hold, a decode keeps every component below 2^(top + 1)
+// steps, as the plane decoder alone does (test_bitplane_coder.cpp): from the
+// frame base for base control points, from zero for the others.
+TEST(IswFormat2, RandomPacketsOfAValidFileDecodeWithinTheTopPlanesBound) {
   const Encoded e = encode_sample(test::genus_slab(2), 3, 1e-4);
   const IswDecoded full = decode_isw(e.bytes, "test.isw");
-  // PLNS is the section before END: rewrite its packets with noise and fix its CRC.
+  const CoefficientClasses classes(*full.hierarchy);
+  IswDecodeOptions no_planes;
+  no_planes.max_stream_bytes = 0;
+  const std::vector<Vec3> frame_base = decode_isw(e.bytes, "base.isw", no_planes).base.positions;
+  const double steps = std::ldexp(1.0, full.stream.top_plane + 1);
+  // The packets follow the PLNS header and the packet table.
   const IswSectionInfo& planes = full.sections[full.sections.size() - 2];
   ASSERT_EQ(planes.tag, "PLNS");
+  std::string payload = test::payload_of(e.bytes, "PLNS");
+  const std::size_t first = static_cast<std::size_t>(full.stream.offset - planes.offset - 16);
+  ASSERT_EQ(payload.size() - first, full.stream.bytes);
   std::mt19937 rng(5);
   for (int trial = 0; trial < 20; ++trial) {
-    std::string bytes = e.bytes;
-    for (std::uint64_t k = full.stream.offset; k < full.stream.offset + full.stream.bytes; ++k)
-      bytes[k] = static_cast<char>(rng() & 0xFF);
-    const std::size_t payload = static_cast<std::size_t>(planes.offset) + 16;
-    const std::size_t size = static_cast<std::size_t>(planes.bytes) - 20;
-    const std::string tagged = "PLNS" + bytes.substr(payload, size);
-    const auto crc = static_cast<std::uint32_t>(
-        crc32(0, reinterpret_cast<const Bytef*>(tagged.data()), static_cast<uInt>(tagged.size())));
-    std::memcpy(&bytes[payload + size], &crc, 4);
-    const IswDecoded d = decode_isw(bytes, "noise.isw");
-    for (const Vec3& c : d.coefficients) ASSERT_TRUE(is_finite(c));
+    for (std::size_t k = first; k < payload.size(); ++k) payload[k] = static_cast<char>(rng() & 0xFF);
+    const IswDecoded d = decode_isw(test::with_section_payload(e.bytes, "PLNS", payload), "noise.isw");
+    ASSERT_EQ(d.stream.top_plane, full.stream.top_plane);
+    for (std::size_t i = 0; i < d.coefficients.size(); ++i) {
+      const int cls = classes.of(i);
+      const Vec3 origin = cls == 0 ? frame_base[i] : Vec3{};
+      ASSERT_LE(norm(d.coefficients[i] - origin), bound(d, cls, steps, e.options.tangential_factor))
+          << "trial " << trial << " value " << i;
+    }
   }
 }
 
@@ -223,16 +231,115 @@ TEST(IswFormat2, DamagedSectionsAreFormatErrorsAndCutHeadersToo) {
   ASSERT_EQ(base_points.tag, "BPTS");
   for (std::uint64_t n = 0; n < base_points.offset + base_points.bytes; n += 7)
     EXPECT_THROW(decode_isw(e.bytes.substr(0, n), "cut.isw"), Error) << n;
+  // CRC-32s cover every section's tag, size and payload: any changed byte is
+  // an error but one of the header's minor version (bytes 10 and 11), which
+  // readers accept whatever it is.
   std::mt19937 rng(3);
+  std::size_t rejected = 0;
   for (int trial = 0; trial < 200; ++trial) {
     std::string bytes = e.bytes;
-    bytes[rng() % bytes.size()] ^= static_cast<char>(1 + rng() % 255);
+    const std::size_t at = rng() % bytes.size();
+    bytes[at] ^= static_cast<char>(1 + rng() % 255);
+    const bool minor_version = at == 10 || at == 11;
     try {
       decode_isw(bytes, "damaged.isw");
+      EXPECT_TRUE(minor_version) << "byte " << at << " changed, and the file decoded";
     } catch (const Error& error) {
+      ++rejected;
+      EXPECT_FALSE(minor_version) << error.what();
       EXPECT_TRUE(error.kind() == ErrorKind::Format || error.kind() == ErrorKind::Unsupported) << error.what();
     }
   }
+  EXPECT_GE(rejected, 190u);  // the minor version is 2 of the file's bytes
+}
+
+// Expects a one-line Error(Format) naming the file and `section`, from a
+// whole decode and, with `headers_too`, from one of the headers (which lists
+// the other sections).
+void expect_format_error(const std::string& bytes, const std::string& section, const std::string& what,
+                         bool headers_too = true) {
+  for (const bool headers_only : {false, true}) {
+    if (headers_only && !headers_too) continue;
+    SCOPED_TRACE(what + (headers_only ? ", headers only" : ""));
+    IswDecodeOptions options;
+    options.headers_only = headers_only;
+    try {
+      decode_isw(bytes, "order.isw", options);
+      ADD_FAILURE() << "decoded";
+    } catch (const Error& error) {
+      const std::string message = error.what();
+      EXPECT_EQ(error.kind(), ErrorKind::Format) << message;
+      EXPECT_EQ(message.find('\n'), std::string::npos) << message;
+      EXPECT_EQ(message.rfind("order.isw: section ", 0), 0u) << message;
+      EXPECT_NE(message.find("section " + section), std::string::npos) << message;
+    }
+  }
+}
+
+// docs/FORMAT.md: after BPTS, optionally RDTB, then PLNS and END, each once.
+// Any other order or repetition is an error, and costs no second decode.
+TEST(IswFormat2, RepeatedOrMisplacedStreamSectionsAreFormatErrors) {
+  const Encoded e = encode_sample(test::cube(), 2, 1e-3);
+  IswRewrite rewrite;
+  rewrite.rate_table = {{0, 0.5}};
+  const std::vector<std::string> parts = test::split_sections(rewrite_isw(e.bytes, rewrite));
+  ASSERT_EQ(parts.size(), 8u);  // the file header, META, BASE, QUAN, BPTS, RDTB, PLNS, END
+  const std::string head = parts[0] + parts[1] + parts[2] + parts[3] + parts[4];
+  const std::string &rdtb = parts[5], &planes = parts[6], &end = parts[7];
+  ASSERT_EQ(test::section_tag(rdtb) + test::section_tag(planes) + test::section_tag(end), "RDTBPLNSEND ");
+  // Complete and empty: top plane -1, no flags, 1 group, 3 segments, no packets.
+  const std::string no_packets = test::make_section("PLNS", std::string("\xff\x00\x01\x03\x00", 5));
+  const std::string unknown = test::make_section("NEWS", "a later minor version's");
+
+  const IswDecoded full = decode_isw(head + planes + end, "full.isw");
+  for (const std::string& valid : {head + rdtb + planes + end, head + unknown + planes + unknown + end})
+    EXPECT_EQ(decode_isw(valid, "valid.isw").coefficients, full.coefficients);
+
+  expect_format_error(head + planes + planes + end, "PLNS", "PLNS twice");
+  expect_format_error(head + rdtb + planes + planes + planes + end, "PLNS", "PLNS three times");
+  expect_format_error(head + planes + no_packets + end, "PLNS", "an empty PLNS after the stream");
+  expect_format_error(head + planes + unknown + planes.substr(0, planes.size() / 2), "PLNS", "a second PLNS, cut");
+  expect_format_error(head + planes + rdtb + end, "RDTB", "RDTB after PLNS");
+  expect_format_error(head + rdtb + rdtb + planes + end, "RDTB", "RDTB twice");
+  expect_format_error(head + rdtb + end, "END", "no PLNS");
+  expect_format_error(head + end + planes, "END", "END before PLNS");
+  expect_format_error(head + planes + parts[4] + end, "BPTS", "BPTS in the stream");
+}
+
+// docs/FORMAT.md, PLNS: LEB128 values of at most 64 bits. The group count
+// (1) written in ten bytes decodes as in one; ten bytes holding 2^64 + 1 are
+// an error, not 1 wrapped around.
+TEST(IswFormat2, PacketTableValuesOf64BitsOrMoreAreFormatErrors) {
+  const Encoded e = encode_sample(test::cube(), 2, 1e-3);
+  const std::string planes = test::payload_of(e.bytes, "PLNS");
+  ASSERT_EQ(planes[2], 1);  // top plane, flags, then one group in one byte
+  const auto with_groups = [&](char last) {
+    const std::string groups = "\x81" + std::string(8, '\x80') + last;  // 1 + last x 2^63
+    return test::with_section_payload(e.bytes, "PLNS", planes.substr(0, 2) + groups + planes.substr(3));
+  };
+  EXPECT_EQ(decode_isw(with_groups('\x00'), "long.isw").coefficients, decode_isw(e.bytes, "test.isw").coefficients);
+  expect_format_error(with_groups('\x02'), "PLNS", "2^64 + 1", false);
+  expect_format_error(with_groups('\x7f'), "PLNS", "127 x 2^63 + 1", false);
+}
+
+// The packet count is checked against the bytes left before the table is
+// read (or allocated): every size takes a byte at least. The largest table
+// the counts allow (32 planes, 32 segments, 64 groups: 65,536 sizes) in 100
+// bytes is an error; cut by the file's end, the stream holds no packet.
+TEST(IswFormat2, PacketCountBeyondTheBytesLeftIsRejectedBeforeTheTable) {
+  const Encoded e = encode_sample(test::cube(), 2, 1e-3);
+  const std::string header("\x1f\x00\x40\x20\x80\x80\x04", 7);  // top plane 31, no flags, G 64, S 32, P 2^16
+  const std::string file = test::with_section_payload(e.bytes, "PLNS", header + std::string(100, '\x01'));
+  expect_format_error(file, "PLNS", "65,536 packets in 100 bytes", false);
+  try {
+    decode_isw(file, "count.isw");
+  } catch (const Error& error) {
+    EXPECT_NE(std::string(error.what()).find("packet count"), std::string::npos) << error.what();
+  }
+  const std::size_t planes_end = file.size() - 20;  // before END
+  const IswDecoded cut = decode_isw(file.substr(0, planes_end - 50), "cut.isw");
+  EXPECT_TRUE(cut.truncated);
+  EXPECT_EQ(cut.stream.decoded, 0u);
 }
 
 TEST(IswFormat2, EncodingIsDeterministicAndRejectsBadOptions) {

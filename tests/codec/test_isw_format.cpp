@@ -8,9 +8,9 @@
 
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
-#include <zlib.h>
 
 #include "codec_test_data.h"
+#include "isw_test_sections.h"
 #include "isowave/codec/importance.h"
 #include "isowave/codec/isw_format.h"
 #include "isowave/codec/statistics.h"
@@ -366,55 +366,13 @@ TEST(IswFormat, HostileHeadersAreRejectedBeforeAllocating) {
   EXPECT_THROW(decode_isw(bad, "x.isw"), Error);
 }
 
-// CRC-32 of a section's tag followed by `data`, as docs/FORMAT.md defines it.
-std::uint32_t section_crc(const std::string& tag, const std::string& data) {
-  uLong crc = crc32(0L, Z_NULL, 0);
-  crc = crc32(crc, reinterpret_cast<const Bytef*>(tag.data()), 4);
-  crc = crc32(crc, reinterpret_cast<const Bytef*>(data.data()), static_cast<uInt>(data.size()));
-  return static_cast<std::uint32_t>(crc);
-}
-
-// `bytes` with the payload of section `tag` replaced (sizes and CRCs made
-// consistent): tag, u64 size, u32 CRC of tag + size, payload, u32 CRC of tag + payload.
-std::string with_section_payload(const std::string& bytes, const std::string& tag, const std::string& payload) {
-  constexpr std::size_t kFileHeader = 16, kSectionHeader = 16;
-  std::string out = bytes.substr(0, kFileHeader);
-  for (std::size_t position = kFileHeader; position < bytes.size();) {
-    std::uint64_t size = 0;
-    std::memcpy(&size, bytes.data() + position + 4, 8);
-    const std::size_t end = position + kSectionHeader + static_cast<std::size_t>(size) + 4;
-    if (bytes.compare(position, 4, tag) != 0) {
-      out += bytes.substr(position, end - position);
-    } else {
-      std::string size_bytes(8, '\0');
-      const std::uint64_t new_size = payload.size();
-      std::memcpy(size_bytes.data(), &new_size, 8);
-      const std::uint32_t header_crc = section_crc(tag, size_bytes), payload_crc = section_crc(tag, payload);
-      out += tag + size_bytes + std::string(reinterpret_cast<const char*>(&header_crc), 4) + payload +
-             std::string(reinterpret_cast<const char*>(&payload_crc), 4);
-    }
-    position = end;
-  }
-  return out;
-}
-
 // `bytes` with a section `tag` holding `payload` (valid sizes and CRCs)
 // inserted before the section at index `before` (0: META).
 std::string with_section_inserted(const std::string& bytes, std::size_t before, const std::string& tag,
                                   const std::string& payload) {
-  constexpr std::size_t kFileHeader = 16, kSectionHeader = 16;
-  std::size_t position = kFileHeader;
-  for (std::size_t index = 0; index < before; ++index) {
-    std::uint64_t size = 0;
-    std::memcpy(&size, bytes.data() + position + 4, 8);
-    position += kSectionHeader + static_cast<std::size_t>(size) + 4;
-  }
-  std::string size_bytes(8, '\0');
-  const std::uint64_t size = payload.size();
-  std::memcpy(size_bytes.data(), &size, 8);
-  const std::uint32_t header_crc = section_crc(tag, size_bytes), payload_crc = section_crc(tag, payload);
-  return bytes.substr(0, position) + tag + size_bytes + std::string(reinterpret_cast<const char*>(&header_crc), 4) +
-         payload + std::string(reinterpret_cast<const char*>(&payload_crc), 4) + bytes.substr(position);
+  std::vector<std::string> parts = test::split_sections(bytes);
+  parts.insert(parts.begin() + 1 + static_cast<std::ptrdiff_t>(before), test::make_section(tag, payload));
+  return test::join(parts);
 }
 
 TEST(IswFormat, SectionsOfALaterMinorVersionAreSkipped) {
@@ -466,7 +424,7 @@ TEST(IswFormat, BaseMeshTheHierarchyCannotRefineIsAFormatErrorNamingTheSection) 
   quan.append(reinterpret_cast<const char*>(weights), sizeof weights);
   quan.append(reinterpret_cast<const char*>(&coefficients), 8);
   quan.append(reinterpret_cast<const char*>(&chunks), 4);
-  const std::string level1 = with_section_payload(level0, "QUAN", quan);
+  const std::string level1 = test::with_section_payload(level0, "QUAN", quan);
   try {
     decode_isw(level1, "fan.isw");
     ADD_FAILURE() << "decoded a base mesh that cannot be refined";

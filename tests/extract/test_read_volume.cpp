@@ -13,6 +13,7 @@
 #include <string>
 
 #include "isowave/core/error.h"
+#include "isowave/extract/builtin_fields.h"
 #include "isowave/extract/volume_io.h"
 #include "support/test_meshes.h"
 #include "volume_io_test_support.h"
@@ -119,17 +120,31 @@ INSTANTIATE_TEST_SUITE_P(VolumeIo, SharedVolumes, ::testing::ValuesIn(kShared),
                            return name;
                          });
 
+// builtin:NAME:N is the generated field of that name and size at unit
+// spacing (extract/builtin_fields.h): the sphere R - |p - c| with
+// R = 0.35 (N - 1) and c the box centre, computed here.
 TEST(VolumeIo, BuiltinPrefixDispatches) {
-  try {
-    const Volume v = read_volume("builtin:sphere:16");
-    EXPECT_EQ(v.dims, (std::array<std::size_t, 3>{16, 16, 16}));
-    EXPECT_EQ(v.values.size(), 16u * 16 * 16);
-  } catch (const Error& e) {
-    if (e.kind() != ErrorKind::Unsupported) throw;
-    GTEST_SKIP() << "builtin fields not implemented yet: " << e.what();
+  const Volume v = read_volume("builtin:sphere:16");
+  ASSERT_EQ(v.dims, (std::array<std::size_t, 3>{16, 16, 16}));
+  ASSERT_EQ(v.values.size(), 16u * 16 * 16);
+  EXPECT_EQ(v.spacing, (Vec3{1, 1, 1}));
+  EXPECT_EQ(v.origin, (Vec3{0, 0, 0}));
+  const double centre = 7.5, radius = 0.35 * 15;
+  for (std::size_t k = 0; k < 16; ++k)
+    for (std::size_t j = 0; j < 16; ++j)
+      for (std::size_t i = 0; i < 16; ++i) {
+        const double r = norm(Vec3{i - centre, j - centre, k - centre});
+        ASSERT_NEAR(v.at(i, j, k), radius - r, 1e-5) << i << " " << j << " " << k;
+      }
+  EXPECT_EQ(read_volume("builtin:torus:12").values, make_builtin_field("torus", 12).values);
+  for (const char* bad : {"builtin:sphere:abc", "builtin:", "builtin:cube:16", "builtin:sphere:4"}) {
+    try {
+      read_volume(bad);
+      ADD_FAILURE() << bad;
+    } catch (const Error& e) {
+      EXPECT_EQ(e.kind(), ErrorKind::InvalidArgument) << e.what();
+    }
   }
-  EXPECT_THROW(read_volume("builtin:sphere:abc"), Error);
-  EXPECT_THROW(read_volume("builtin:"), Error);
 }
 
 TEST(VolumeIo, UnknownExtensionAndMissingFile) {

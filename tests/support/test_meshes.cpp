@@ -153,6 +153,14 @@ std::vector<NamedMesh> generated_corpus() {
   return corpus;
 }
 
+std::vector<std::array<double, 3>> sharp_positions(const PolygonMesh& mesh) {
+  std::vector<std::array<double, 3>> positions;
+  for (std::size_t v = 0; v < mesh.vertex_count(); ++v)
+    if (mesh.is_sharp(v)) positions.push_back({mesh.positions[v].x, mesh.positions[v].y, mesh.positions[v].z});
+  std::sort(positions.begin(), positions.end());
+  return positions;
+}
+
 void jitter(PolygonMesh& mesh, double amount, std::uint32_t seed) {
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> offset(-amount, amount);

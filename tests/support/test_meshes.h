@@ -34,6 +34,8 @@ std::vector<NamedMesh> generated_corpus();
 
 // Moves every vertex by a uniform random offset in [-amount, amount]^3.
 void jitter(PolygonMesh& mesh, double amount, std::uint32_t seed);
+// The positions of a mesh's sharp vertices, sorted.
+std::vector<std::array<double, 3>> sharp_positions(const PolygonMesh& mesh);
 
 // Query points around `mesh` for distance tests: about 500 of its vertices
 // (distance 0) and as many jittered off them by up to `near`, 500 uniform
