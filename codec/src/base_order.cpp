@@ -67,7 +67,11 @@ std::vector<FaceMatch> refine_matches(const RefinementStep& a, const RefinementS
 CanonicalSurface canonical_surface(const std::shared_ptr<const SubdivisionHierarchy>& hierarchy,
                                    std::vector<Vec3> fine) {
   const PolygonMesh& base = hierarchy->base();
-  if (detail::is_canonical(base)) return {hierarchy, std::move(fine)};
+  if (detail::is_canonical(base)) {
+    std::vector<std::uint32_t> identity(base.vertex_count());
+    for (std::size_t v = 0; v < identity.size(); ++v) identity[v] = static_cast<std::uint32_t>(v);
+    return {hierarchy, std::move(fine), std::move(identity)};
+  }
   detail::CanonicalMesh canonical = detail::canonical_order(base);
   auto ordered = std::make_shared<const SubdivisionHierarchy>(canonical.mesh, hierarchy->levels());
   std::vector<std::uint32_t> vertex_map = std::move(canonical.new_of_old);
@@ -76,7 +80,8 @@ CanonicalSurface canonical_surface(const std::shared_ptr<const SubdivisionHierar
     faces = refine_matches(hierarchy->step(level), ordered->step(level), faces, vertex_map);
   std::vector<Vec3> moved(ordered->fine_vertex_count());
   for (std::size_t i = 0; i < moved.size(); ++i) moved[vertex_map[i]] = fine[i];
-  return {std::move(ordered), std::move(moved)};
+  std::vector<std::uint32_t> base_order(vertex_map.begin(), vertex_map.begin() + static_cast<std::ptrdiff_t>(base.vertex_count()));
+  return {std::move(ordered), std::move(moved), std::move(base_order)};
 }
 
 }  // namespace isowave

@@ -122,7 +122,10 @@ std::string encode_isw_v2(const SubdivisionHierarchy& hierarchy, const std::vect
   // The frame-precision base, which the decoder has before any plane.
   std::vector<QuantizedVector> base_q;
   std::vector<Vec3> coarse_base;
-  frame_base(coefficients, base_count, scales.frame_step, base_q, coarse_base);
+  if (options.frame_base && options.frame_base->size() != base_count)
+    throw Error(ErrorKind::InvalidArgument, "the frame base must have one point per base vertex");
+  frame_base(options.frame_base ? *options.frame_base : coefficients, base_count, scales.frame_step, base_q,
+             coarse_base);
   std::vector<Vec3> normals = frame_normals(hierarchy, coarse_base);
   PlaneSymbols symbols = symbols_of(hierarchy, coefficients, coarse_base, normals, scales);
   const std::size_t groups = plane_groups(hierarchy.fine_vertex_count());

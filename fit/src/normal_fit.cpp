@@ -298,7 +298,7 @@ double level_reach(const FitInputs& in, const WrapLevelMesh& mesh, const std::ve
 // One level's fit: every entry up to `level` (the free ones as 3-vectors,
 // the others along `directions`) so that the level's control points lie on
 // the isosurface; then the level's own coefficients whose points the normal
-// line missed or left off the surface become free, and the rounds go on.
+// line has no admissible crossing become free, and the rounds go on.
 // `aim` is where each point pierces from (zero: the field gradient).
 NormalFitLevelStatistics fit_level(const FitInputs& in, int level, const std::vector<Vec3>& directions,
                                    const std::vector<Vec3>& aim, std::vector<std::uint8_t>& free,
@@ -313,11 +313,9 @@ NormalFitLevelStatistics fit_level(const FitInputs& in, int level, const std::ve
   Unknowns u{level, &directions, &free, end};
   const double reach = level_reach(in, mesh, predicted);
   detail::LevelTargets targets = run_rounds(in, mesh, u, aim, reach, rounds, data);
-  const double limit = in.options.non_normal_cells * in.field.cell_size();
   std::vector<Vec3> freed_aim;
   for (std::size_t i = first; i < end; ++i) {
-    const bool off = !(squared_norm(targets.plane_normal[i]) > 0) || targets.off_line[i] ||
-                     std::abs(targets.plane_offset[i]) > limit;
+    const bool off = !(squared_norm(targets.plane_normal[i]) > 0) || targets.off_line[i];
     if (!off || free[i]) continue;
     if (freed_aim.empty()) freed_aim = aim;
     free[i] = 1;
@@ -346,23 +344,13 @@ void check_inputs(const SubdivisionHierarchy& h, const std::vector<Vec3>& base, 
   if (field.dims[0] < 2 || field.dims[1] < 2 || field.dims[2] < 2)
     throw Error(ErrorKind::InvalidArgument, "the normal fit needs at least 2 samples along every axis");
   if (o.rounds < 1 || o.rounds > 50 || o.cg_iterations < 1 || o.cg_iterations > 500 || !(o.reach_edges > 0) ||
-      !(o.min_reach_cells > 0) || !(o.non_normal_cells > 0))
+      !(o.min_reach_cells > 0))
     throw Error(ErrorKind::InvalidArgument, "a normal-fit option is out of its range");
 }
 
 void check_directions(const std::vector<Vec3>& directions, std::size_t fine) {
   if (directions.size() != fine)
     throw Error(ErrorKind::InvalidArgument, "the normal fit's directions must have one entry per fine vertex");
-}
-
-// The coefficients along the old directions re-expressed along the new ones
-// (same scalars), so that a coefficient stays normal when the base moves.
-void respan(std::vector<Vec3>& data, const std::vector<std::uint8_t>& free, std::size_t base_count,
-            const std::vector<Vec3>& old_normals, const std::vector<Vec3>& new_normals) {
-  for_each_index(data.size() - base_count, [&](std::size_t k) {
-    const std::size_t i = base_count + k;
-    if (!free[i]) data[i] = new_normals[i] * dot(old_normals[i], data[i]);
-  });
 }
 
 }  // namespace
@@ -387,26 +375,16 @@ NormalFitResult normal_fit(const SubdivisionHierarchy& hierarchy, const std::vec
   std::vector<std::uint8_t> free(fine, 0);
   std::fill(free.begin(), free.begin() + static_cast<std::ptrdiff_t>(base_count), std::uint8_t{1});
   NormalFitResult result;
-  // Coarse to fine with the base free (the only low-pass entries: the
-  // wavelets of every level have almost no mean); the directions follow it.
-  std::vector<Vec3> normals = directions(data);
+  // The directions come from the base as given; the coder sends it as the
+  // frame base (IswEncodeOptions::frame_base) and the fitted base as its
+  // refinement, so the base stays free: its points are the only low-pass
+  // entries (the wavelets of every level have almost no mean).
+  result.frame_base.assign(data.begin(), data.begin() + static_cast<std::ptrdiff_t>(base_count));
+  const std::vector<Vec3> normals = directions(result.frame_base);
   check_directions(normals, fine);
   for (int level = 1; level <= levels; ++level) {
     result.levels.push_back(fit_level(in, level, normals, normals, free, options.rounds, data));
-    const std::vector<Vec3> moved = directions(data);
-    check_directions(moved, fine);
-    respan(data, free, base_count, normals, moved);
-    normals = moved;
-    progress.update(double(level) / double(levels + 1));
-  }
-  // Last, the base fixed where the coder takes its frames from; base
-  // entries along no direction stay.
-  if (levels > 0) {
-    std::fill(free.begin(), free.begin() + static_cast<std::ptrdiff_t>(base_count), std::uint8_t{0});
-    std::vector<Vec3> along = normals;
-    std::fill(along.begin(), along.begin() + static_cast<std::ptrdiff_t>(base_count), Vec3{});
-    result.levels.back() = fit_level(in, levels, along, normals, free, std::max(2, options.rounds / 2), data);
-    std::fill(free.begin(), free.begin() + static_cast<std::ptrdiff_t>(base_count), std::uint8_t{1});
+    progress.update(double(level) / double(levels));
   }
   result.non_normal.assign(free.begin() + static_cast<std::ptrdiff_t>(base_count), free.end());
   result.positions = synthesize_points(hierarchy, levels, data);

@@ -72,6 +72,13 @@ std::size_t base_target(const BaseMeshOptions& base, std::size_t extracted_verti
   return std::max<std::size_t>(4, static_cast<std::size_t>(std::llround(base.ratio * double(extracted_vertices))));
 }
 
+// points[v] moved to new_of_old[v].
+std::vector<Vec3> renumbered(const std::vector<Vec3>& points, const std::vector<std::uint32_t>& new_of_old) {
+  std::vector<Vec3> out(points.size());
+  for (std::size_t v = 0; v < points.size(); ++v) out[new_of_old[v]] = points[v];
+  return out;
+}
+
 // The signed-distance field needs only the field and the extracted mesh: it
 // is computed alongside the base mesh, started when the simplification turns
 // serial and leaves a core idle, on one thread (two would take the core the
@@ -301,6 +308,7 @@ std::shared_ptr<const SubdivisionHierarchy> fit_normal(const PolygonMesh& base, 
     result.fit.positions = std::move(fit.positions);
     result.normal_levels = std::move(fit.levels);
     result.non_normal_coefficients = fit.non_normal_count();
+    result.frame_base = std::move(fit.frame_base);
     const WrapLevelMesh level = make_wrap_level_mesh(*hierarchy, levels, result.fit.positions, prepared.field, iso);
     result.fit.folded_faces = count_folded_faces(level, result.fit.positions, prepared.field, orientation);
     return FittedLevel{std::move(hierarchy), &result.fit.positions, result.fit.folded_faces};
@@ -510,6 +518,7 @@ std::vector<Vec3> analyze_and_encode(const std::shared_ptr<const SubdivisionHier
   IswEncodeOptions encode_options;
   encode_options.step = options.step_cells * result.cell_size;
   encode_options.frame_step = kFrameStepCells * result.cell_size;
+  if (!result.frame_base.empty()) encode_options.frame_base = &result.frame_base;
   IswPlaneValues planes;
   const std::string whole = encode_isw(*hierarchy, coefficients, metadata, encode_options, planes);
   std::vector<Vec3>().swap(coefficients);
@@ -586,6 +595,7 @@ ConvertResult convert_volume(Volume volume, const std::string& source, const Con
   CanonicalSurface canonical = canonical_surface(fitted, std::move(result.fit.positions));
   const std::shared_ptr<const SubdivisionHierarchy> hierarchy = canonical.hierarchy;
   result.fit.positions = std::move(canonical.fine);
+  if (!result.frame_base.empty()) result.frame_base = renumbered(result.frame_base, canonical.base_order);
   result.hierarchy = hierarchy;
   IswMetadata metadata = metadata_of(prepared.field, source, options, result);
 

@@ -360,6 +360,41 @@ TEST(IswFormat2, EncodingIsDeterministicAndRejectsBadOptions) {
 // with it, so the analysis of S^L(base), renumbered, gives the base points
 // back (renumbered) and zero details; the coded base then costs a fraction
 // of version 1's.
+// A frame base other than the base (IswEncodeOptions::frame_base, the normal
+// fit's): the frames are those of isw_frame_normals() of that base, so a
+// coefficient along its normal decodes with no tangential part, and the base
+// decodes to its own points.
+TEST(IswFormat2, AFrameBaseSetsTheFramesAndTheBaseRefinesIt) {
+  PolygonMesh base = test::genus_slab(2);
+  test::jitter(base, 0.1, 11);
+  const SubdivisionHierarchy h(base, 2);
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-0.3, 0.3);
+  std::vector<Vec3> frame_base = base.positions;
+  for (Vec3& p : frame_base) p += Vec3{u(rng), u(rng), u(rng)};
+  IswEncodeOptions options;
+  options.step = 1e-4;
+  options.frame_step = 0.02;
+  options.frame_base = &frame_base;
+  const std::vector<Vec3> normals = isw_frame_normals(h, frame_base, options.frame_step);
+  std::vector<Vec3> coefficients(h.fine_vertex_count());
+  std::copy(base.positions.begin(), base.positions.end(), coefficients.begin());
+  for (std::size_t i = h.vertex_count(0); i < coefficients.size(); ++i) coefficients[i] = normals[i] * u(rng);
+  const IswDecoded d = decode_isw(encode_isw(h, coefficients, sample_metadata(), options), "frame base");
+  for (std::size_t i = 0; i < h.vertex_count(0); ++i)
+    EXPECT_LT(norm(d.coefficients[i] - base.positions[i]), bound(d, 0, 1, options.tangential_factor)) << i;
+  const CoefficientClasses classes(h);
+  for (std::size_t i = h.vertex_count(0); i < coefficients.size(); ++i) {
+    const Vec3& n = normals[i];
+    const Vec3 c = d.coefficients[i];
+    EXPECT_LT(norm(c - n * dot(n, c)), 1e-12) << i;  // no tangential part
+    EXPECT_LT(std::abs(dot(n, c - coefficients[i])), bound(d, classes.of(i), 1, 1)) << i;
+  }
+  std::vector<Vec3> wrong(3);
+  options.frame_base = &wrong;
+  EXPECT_THROW(encode_isw(h, coefficients, sample_metadata(), options), Error);
+}
+
 TEST(IswFormat2, CanonicalSurfaceIsTheSameSurfaceRenumbered) {
   PolygonMesh base = test::genus_slab(2);
   test::jitter(base, 0.1, 4);

@@ -83,10 +83,12 @@ void check_fit(const Shape& shape, int levels) {
   EXPECT_LT(worst, 0.05);
   EXPECT_LT(worst_analytic, 0.08);  // plus the trilinear interpolant's own error
 
-  // Every wavelet coefficient along its frame normal: no tangential part.
+  // Every wavelet coefficient along its frame normal (the frames of the
+  // base the fit was given, which the coder sends): no tangential part.
+  ASSERT_EQ(fit.frame_base, std::vector<Vec3>(shape.base.positions.begin(), shape.base.positions.end()));
   std::vector<Vec3> coefficients = fit.positions;
   analyze(h, coefficients);
-  const std::vector<Vec3> normals = isw_frame_normals(h, coefficients, kFrameStep);
+  const std::vector<Vec3> normals = isw_frame_normals(h, fit.frame_base, kFrameStep);
   double largest = 0;
   for (std::size_t i = h.vertex_count(0); i < coefficients.size(); ++i) {
     const Vec3& n = normals[i];

@@ -19,6 +19,7 @@
 #include "isowave/fit/fold_repair.h"
 #include "isowave/fit/wrap_level_mesh.h"
 #include "isowave/pipeline/convert.h"
+#include "torus_reference.h"
 
 namespace isowave {
 namespace {
@@ -31,23 +32,7 @@ double marching_cubes_folded_share(const ConvertResult& result, const Volume& fi
   return double(count_folded_faces(level, mesh.positions, field, Orientation::TowardLower)) / double(mesh.face_count());
 }
 
-// The builtin torus at n samples per axis (builtin_fields.h): unit spacing,
-// centre c = (n-1)/2, radii 0.25 (n-1) and 0.1 (n-1); its field is the
-// signed distance, so |distance| below is exact.
-double torus_distance(const Vec3& p, std::size_t n) {
-  const double size = double(n - 1), c = 0.5 * size;
-  const double x = p.x - c, y = p.y - c, z = p.z - c;
-  const double ring = std::sqrt(x * x + y * y) - 0.25 * size;
-  return std::abs(std::sqrt(ring * ring + z * z) - 0.1 * size);
-}
-
-// RMS distance of area-uniform samples of `mesh` from the analytic torus.
-double rms_from_torus(const PolygonMesh& mesh, std::size_t n) {
-  double sum = 0;
-  const std::vector<Vec3> samples = area_samples(mesh, 100000, 7);
-  for (const Vec3& p : samples) sum += torus_distance(p, n) * torus_distance(p, n);
-  return std::sqrt(sum / double(samples.size()));
-}
+using test::rms_from_torus;
 
 TEST(ConvertParametrization, DecodedTorusIsAsNearTheTrueSurfaceAsMarchingCubes) {
   constexpr std::size_t n = 48;

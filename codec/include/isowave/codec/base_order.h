@@ -5,6 +5,7 @@
 // each face starting at a fixed corner. Converting a fitted surface to it
 // renumbers the whole hierarchy, so the fitted fine control points move with
 // their vertices.
+#include <cstdint>
 #include <memory>
 #include <vector>
 
@@ -16,6 +17,8 @@ namespace isowave {
 struct CanonicalSurface {
   std::shared_ptr<const SubdivisionHierarchy> hierarchy;  // over the base in canonical order, same levels
   std::vector<Vec3> fine;  // the fine control points given, renumbered for it
+  // Per base vertex of the given hierarchy: its index in the canonical one.
+  std::vector<std::uint32_t> base_order;
 };
 
 // `fine`: level-L control points of `hierarchy` (at least fine_vertex_count()).

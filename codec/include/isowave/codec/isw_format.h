@@ -79,6 +79,12 @@ struct IswEncodeOptions {
   // 0: 16 x step / weight_0), from which the local frames are built; the
   // planes refine them to `step`.
   double frame_step = 0;
+  // Version 2: the points BPTS sends (rounded to frame_step), from which the
+  // local frames are built, one per base vertex in the hierarchy's order;
+  // the planes then refine the base control points from them. nullptr: the
+  // base control points themselves. A fit whose coefficients lie along the
+  // frames of another base than its final one (fit/normal_fit.h) passes it.
+  const std::vector<Vec3>* frame_base = nullptr;
   // Version 2: cut the plane stream so that the file holds at most this many
   // bytes (0: the whole stream). Error(InvalidArgument) when the headers alone exceed it.
   std::uint64_t max_bytes = 0;

@@ -5,25 +5,27 @@
 // 2004) do it for Loop: the output control points, not the control polygon's
 // prediction, are fitted to the surface.
 //
-// Level by level, coarse to fine:
-//  - level 0: the base control points (3-vectors) move so that their
-//    subdivision S(P0) lies on the isosurface;
-//  - level j+1: each coefficient is s_i n_i, n_i the unit direction the coder
-//    will use (`directions`), and the scalars s_i are those for which
-//    synthesis(P_j, s n) puts every control point of level j+1 on the
-//    isosurface of the trilinear field, in the least-squares sense.
+// The representation and the fit:
+//  - each coefficient is s_i n_i, n_i the unit direction the coder will use
+//    (`directions`, from the base as given), the base points free 3-vectors;
+//  - level by level, every entry up to the level (the base and the scalars
+//    of levels 1..j) is solved for at once, so that synthesis puts every
+//    control point of level j on the isosurface of the trilinear field in
+//    the least-squares sense: lifted wavelets have almost no mean, so the
+//    smooth part of a level's error can only come from coarser entries.
 // Each control point's target is where its line along n pierces the
 // isosurface (the nearest crossing within a reach proportional to the level's
 // edge length); the residual is its distance to the isosurface's tangent
 // plane there (point-to-plane), minimized by Gauss-Newton rounds, each a
 // conjugate-gradient solve through the synthesis and its transpose
-// (synthesize_level_transpose). A coefficient whose point the line does not
-// pierce, or which stays off the surface, becomes non-normal: a free 3-vector
-// aimed along the field gradient; so do the coefficients on boundary curves
-// (box faces), whose points are held in their face's plane.
+// (synthesize_level_transpose). A coefficient whose point's line has no
+// admissible crossing within the reach (after the normal rounds) becomes
+// non-normal: a free 3-vector aimed along the field gradient, or at the
+// extracted surface's nearest point; so do the coefficients on boundary
+// curves (box faces), whose points are held in their face's plane. A
+// crossing is admissible inside the volume's box, where the line leaves the
+// region its surface encloses (not the far side of a thin sheet).
 //
-// Because every level is fitted, a decode truncated at level j shows the
-// level-j fit, and the detail of level j+1 is what S leaves off the surface.
 // Deterministic for any thread count (fixed-block reductions).
 #include <cstddef>
 #include <cstdint>
@@ -46,9 +48,6 @@ struct NormalFitOptions {
   // length, at least min_reach_cells cells; > 0.
   double reach_edges = 1.0;
   double min_reach_cells = 1.0;
-  // A coefficient whose own point stays farther than this from the
-  // isosurface after the normal rounds becomes non-normal (cells, > 0).
-  double non_normal_cells = 0.1;
   // The extracted isosurface (kept by pointer): a point whose lines miss the
   // isosurface aims at its nearest point. nullptr: such a point has no target.
   const PolygonMesh* surface = nullptr;
@@ -71,6 +70,9 @@ struct NormalFitLevelStatistics {
 
 struct NormalFitResult {
   std::vector<Vec3> positions;  // level-L control points, ready for analyze()
+  // The base the directions came from (the base positions given): the
+  // coder's frame base (IswEncodeOptions::frame_base).
+  std::vector<Vec3> frame_base;
   // Per coefficient entry [vertex_count(0), fine): 1 if non-normal.
   std::vector<std::uint8_t> non_normal;
   std::vector<NormalFitLevelStatistics> levels;
@@ -79,7 +81,8 @@ struct NormalFitResult {
 
 // The unit direction of every entry of the coarse-to-fine array (fine vertex
 // count entries) for base control points `base`: the coder's local-frame
-// normals (codec: isw_frame_normals). Called once, after level 0.
+// normals (codec: isw_frame_normals). Called once, with the base positions
+// given, which the coder must then send as its frame base.
 using NormalDirections = std::function<std::vector<Vec3>(const std::vector<Vec3>& base)>;
 
 // Fits `hierarchy` to the isosurface `iso` of `field` from `base_positions`.

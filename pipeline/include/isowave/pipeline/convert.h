@@ -211,6 +211,9 @@ struct ConvertResult {
   // non-normal coefficients of the last fit.
   std::vector<NormalFitLevelStatistics> normal_levels;
   std::size_t non_normal_coefficients = 0;
+  // With FitMethod::Normal: the base its directions came from, which the
+  // file sends as its frame base (IswEncodeOptions::frame_base); else empty.
+  std::vector<Vec3> frame_base;
   // Every level the fit tried on the last base mesh, in order; the last is `levels`.
   std::vector<LevelReport> level_reports;
   double max_error_cells = 0;  // the bound the automatic levels used (0 with fixed levels)

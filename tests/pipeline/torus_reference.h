@@ -1,0 +1,30 @@
+#pragma once
+// The analytic surface of the builtin torus field, for tests that measure a
+// decoded fit against it.
+#include <cmath>
+#include <cstddef>
+#include <vector>
+
+#include "isowave/core/mesh.h"
+#include "isowave/core/surface_error.h"
+
+namespace isowave::test {
+
+// Distance to the builtin torus at n samples per axis (builtin_fields.h):
+// unit spacing, centre (n-1)/2, radii 0.25 (n-1) and 0.1 (n-1); its field is
+// the signed distance, so this is exact.
+inline double torus_distance(const Vec3& p, std::size_t n) {
+  const double size = double(n - 1), c = 0.5 * size;
+  const double ring = std::hypot(p.x - c, p.y - c) - 0.25 * size;
+  return std::abs(std::hypot(ring, p.z - c) - 0.1 * size);
+}
+
+// RMS distance of area-uniform samples of `mesh` from the analytic torus.
+inline double rms_from_torus(const PolygonMesh& mesh, std::size_t n) {
+  double sum = 0;
+  const std::vector<Vec3> samples = area_samples(mesh, 100000, 7);
+  for (const Vec3& p : samples) sum += torus_distance(p, n) * torus_distance(p, n);
+  return std::sqrt(sum / double(samples.size()));
+}
+
+}  // namespace isowave::test
