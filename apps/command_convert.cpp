@@ -448,6 +448,9 @@ void render_json_result(std::string& out, const JobOutcome& o) {
   out += "], ";
   if (r.parametrization.fine_vertices > 0)
     appendf(out, "\"fit_fallback_points\": %zu, ", r.parametrization.fallback_points);
+  for (std::size_t k = 0; k < r.normal_share.size(); ++k)
+    appendf(out, "%s%.6g%s", k ? ", " : "\"normal_energy_share\": [", r.normal_share[k],
+            k + 1 == r.normal_share.size() ? "], " : "");
   for (std::size_t k = 0; k < r.normal_levels.size(); ++k) {
     const NormalFitLevelStatistics& l = r.normal_levels[k];
     appendf(out,
@@ -549,6 +552,12 @@ void render_table_rows(std::string& out, const std::string& output, const JobOut
   if (r.parametrization.fine_vertices > 0)
     appendf(out, "%-28s parametrization: %zu points located by the nearest input triangle\n", "",
             r.parametrization.fallback_points);
+  if (!r.normal_share.empty()) {
+    std::string shares;
+    for (std::size_t k = 0; k < r.normal_share.size(); ++k)
+      appendf(shares, "%s level %zu %.1f%%", k ? "," : "", k + 1, 100.0 * r.normal_share[k]);
+    appendf(out, "%-28s detail energy along the local frames' normals:%s\n", "", shares.c_str());
+  }
   for (const NormalFitLevelStatistics& l : r.normal_levels)
     appendf(out,
             "%-28s normal fit level %d: %zu points %.3g cell RMS (max %.3g) off their targets, %zu without one; "

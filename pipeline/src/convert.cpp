@@ -498,6 +498,24 @@ std::vector<Vec3> write_planned_file(const std::string& whole, detail::RatePlan 
   }
 }
 
+// Per level, the share of the wavelet coefficients' energy along the
+// normals of the coder's local frames (of the file's frame base).
+std::vector<double> normal_energy_share(const SubdivisionHierarchy& h, const std::vector<Vec3>& coefficients,
+                                        const ConvertResult& result) {
+  const std::vector<Vec3> normals = isw_frame_normals(
+      h, result.frame_base.empty() ? coefficients : result.frame_base, kFrameStepCells * result.cell_size);
+  std::vector<double> shares;
+  for (int level = 1; level <= h.levels(); ++level) {
+    double along = 0, all = 0;
+    for (std::size_t i = h.vertex_count(level - 1); i < h.vertex_count(level); ++i) {
+      along += dot(normals[i], coefficients[i]) * dot(normals[i], coefficients[i]);
+      all += squared_norm(coefficients[i]);
+    }
+    shares.push_back(all > 0 ? along / all : 1.0);
+  }
+  return shares;
+}
+
 // Analysis (Sec. 3), the embedded stream down to the finest step, the cut
 // the rate target asks for (rate_control.h), and the file: its metadata
 // records the quantization error of the cut stream (the full decode against
@@ -510,6 +528,7 @@ std::vector<Vec3> analyze_and_encode(const std::shared_ptr<const SubdivisionHier
   progress.begin_stage("analysis");
   std::vector<Vec3> coefficients = result.fit.positions;
   analyze(*hierarchy, coefficients);
+  result.normal_share = normal_energy_share(*hierarchy, coefficients, result);
   progress.end_stage();
   result.seconds.analysis = seconds_since(start);
 

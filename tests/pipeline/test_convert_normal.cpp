@@ -30,6 +30,8 @@ TEST(ConvertNormal, DecodedTorusIsNearTheTrueSurfaceWithOnlyNormalDetail) {
   const ConvertResult result = convert_volume(make_builtin_field("torus", n), "torus", options);
   EXPECT_EQ(result.non_normal_coefficients, 0u);
   EXPECT_EQ(result.fit.folded_faces, 0u);
+  ASSERT_EQ(result.normal_share.size(), std::size_t(result.levels));
+  for (const double share : result.normal_share) EXPECT_GT(share, 1 - 1e-12);
 
   const IswDecoded decoded = decode_isw(result.bytes, "torus");
   const PolygonMesh fine =

@@ -211,6 +211,10 @@ struct ConvertResult {
   // non-normal coefficients of the last fit.
   std::vector<NormalFitLevelStatistics> normal_levels;
   std::size_t non_normal_coefficients = 0;
+  // Per level 1..L: the share of the wavelet coefficients' energy (sum of
+  // squares) along the normals of the file's local frames (1 for a level of
+  // zero detail).
+  std::vector<double> normal_share;
   // With FitMethod::Normal: the base its directions came from, which the
   // file sends as its frame base (IswEncodeOptions::frame_base); else empty.
   std::vector<Vec3> frame_base;
