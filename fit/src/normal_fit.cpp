@@ -17,6 +17,7 @@
 #include "fitted_field.h"
 #include "coverage_pull.h"
 #include "normal_targets.h"
+#include "wrap_kernels.h"
 
 namespace isowave {
 
@@ -67,7 +68,7 @@ struct Unknowns {
   const std::vector<std::uint8_t>* free = nullptr;  // per entry: 1 = a 3-vector
   std::size_t size = 0;
   Vec3 project(std::size_t k, const Vec3& x) const {
-    if ((*free)[k] || !directions) return x;
+    if ((*free)[k]) return x;
     const Vec3& n = (*directions)[k];
     return n * dot(n, x);
   }
@@ -105,6 +106,8 @@ class LevelSystem {
     if (t_.box_axis[v] >= 0) out[t_.box_axis[v]] += t_.box_offset[v];
     return out;
   }
+
+  bool free(std::size_t k) const { return (*u_.free)[k]; }
 
   // g over the level's control points -> W^T g over the unknowns, in place
   // (g ends with one entry per unknown).
@@ -166,8 +169,9 @@ std::vector<double> class_diagonal(const LevelSystem& system, std::size_t points
   system.gather(z);
   const std::size_t count = *std::max_element(classes.begin(), classes.end()) + 1u;
   std::vector<double> sum(count, 0.0), members(count, 0.0);
+  // A free entry's three components each, a normal entry's one.
   for (std::size_t k = 0; k < n; ++k) {
-    sum[classes[k]] += squared_norm(z[k]) / 3.0;
+    sum[classes[k]] += squared_norm(z[k]) / (system.free(k) ? 3.0 : 1.0);
     members[classes[k]] += 1;
   }
   for (std::size_t c = 0; c < count; ++c) sum[c] = (members[c] > 0 ? sum[c] / members[c] : 0.0) + kDamping;
@@ -210,7 +214,7 @@ struct FitInputs {
   const Volume& field;
   const TrilinearGrid& grid;
   double iso;
-  double facing;  // the field's slope along an outward normal: unfolded_sign(orientation)
+  double facing;  // the field's slope along an outward normal: wrap::unfolded_sign(orientation)
   const BinnedSurfaceDistance* surface;
   const NormalFitOptions& options;
   CoveragePull* pull;  // nullptr without the extracted surface
@@ -255,6 +259,7 @@ void take_step(const SubdivisionHierarchy& h, const Unknowns& u, const std::vect
         return m;
       },
       [](double a, double b) { return std::max(a, b); }));
+  if (!std::isfinite(longest)) return;  // a failed solve changes nothing
   const double scale = longest > reach ? reach / longest : 1.0;
   for_each_index(u.size, [&](std::size_t k) { data[k] += u.project(k, step[k]) * scale; });
   for_each_index(points.size(), [&](std::size_t v) { points[v] += moved[v] * scale; });
@@ -299,25 +304,25 @@ double level_reach(const FitInputs& in, const WrapLevelMesh& mesh, const std::ve
 // the others along `directions`) so that the level's control points lie on
 // the isosurface; then the level's own coefficients whose points the normal
 // line has no admissible crossing become free, and the rounds go on.
-// `aim` is where each point pierces from (zero: the field gradient).
 NormalFitLevelStatistics fit_level(const FitInputs& in, int level, const std::vector<Vec3>& directions,
-                                   const std::vector<Vec3>& aim, std::vector<std::uint8_t>& free,
+                                   std::vector<std::uint8_t>& free,
                                    int rounds, std::vector<Vec3>& data) {
   const auto start = Clock::now();
   const SubdivisionHierarchy& h = in.hierarchy;
   const std::vector<Vec3> predicted = synthesize_points(h, level, data);
   const WrapLevelMesh mesh = make_wrap_level_mesh(h, level, predicted, in.field, in.iso);
   const std::size_t first = h.vertex_count(level - 1), end = h.vertex_count(level);
+  // Free: boundary curves (held in their box face) and degenerate patches (no normal).
   for (std::size_t i = first; i < end; ++i)
-    if (mesh.role[i] != WrapRole::Free) free[i] = 1;  // boundary curves: held in their box face
+    if (mesh.role[i] != WrapRole::Free || !(squared_norm(directions[i]) > 0)) free[i] = 1;
   Unknowns u{level, &directions, &free, end};
   const double reach = level_reach(in, mesh, predicted);
-  detail::LevelTargets targets = run_rounds(in, mesh, u, aim, reach, rounds, data);
+  detail::LevelTargets targets = run_rounds(in, mesh, u, directions, reach, rounds, data);
   std::vector<Vec3> freed_aim;
   for (std::size_t i = first; i < end; ++i) {
     const bool off = !(squared_norm(targets.plane_normal[i]) > 0) || targets.off_line[i];
     if (!off || free[i]) continue;
-    if (freed_aim.empty()) freed_aim = aim;
+    if (freed_aim.empty()) freed_aim = directions;
     free[i] = 1;
     freed_aim[i] = Vec3{};  // aims along the field gradient from now on
   }
@@ -344,7 +349,7 @@ void check_inputs(const SubdivisionHierarchy& h, const std::vector<Vec3>& base, 
   if (field.dims[0] < 2 || field.dims[1] < 2 || field.dims[2] < 2)
     throw Error(ErrorKind::InvalidArgument, "the normal fit needs at least 2 samples along every axis");
   if (o.rounds < 1 || o.rounds > 50 || o.cg_iterations < 1 || o.cg_iterations > 500 || !(o.reach_edges > 0) ||
-      !(o.min_reach_cells > 0))
+      !(o.min_reach_cells > 0) || !std::isfinite(o.reach_edges) || !std::isfinite(o.min_reach_cells))
     throw Error(ErrorKind::InvalidArgument, "a normal-fit option is out of its range");
 }
 
@@ -363,9 +368,10 @@ NormalFitResult normal_fit(const SubdivisionHierarchy& hierarchy, const std::vec
   const detail::FittedField fitted(field, iso);
   std::optional<BinnedSurfaceDistance> surface;
   if (options.surface) surface.emplace(*options.surface);
-  const double facing = options.orientation == Orientation::TowardHigher ? 1.0 : -1.0;
+  const double facing = wrap::unfolded_sign(options.orientation);
   std::optional<CoveragePull> pull;
-  if (options.surface) pull.emplace(options.surface->positions, field, kCoveredCells * field.cell_size());
+  if (options.surface && options.coverage_pull)
+    pull.emplace(options.surface->positions, field, kCoveredCells * field.cell_size());
   const FitInputs in{hierarchy, field, fitted.grid(), iso, facing, surface ? &*surface : nullptr, options,
                      pull ? &*pull : nullptr};
   const int levels = hierarchy.levels();
@@ -383,7 +389,7 @@ NormalFitResult normal_fit(const SubdivisionHierarchy& hierarchy, const std::vec
   const std::vector<Vec3> normals = directions(result.frame_base);
   check_directions(normals, fine);
   for (int level = 1; level <= levels; ++level) {
-    result.levels.push_back(fit_level(in, level, normals, normals, free, options.rounds, data));
+    result.levels.push_back(fit_level(in, level, normals, free, options.rounds, data));
     progress.update(double(level) / double(levels));
   }
   result.non_normal.assign(free.begin() + static_cast<std::ptrdiff_t>(base_count), free.end());

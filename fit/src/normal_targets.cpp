@@ -56,8 +56,9 @@ bool pierce(const TrilinearGrid& grid, double iso, const Vec3& p, const Vec3& d,
   }
   double forward = 0, h_forward = h0, backward = 0, h_backward = h0;
   bool forward_open = true, backward_open = true;
-  for (double s = step; forward_open || backward_open; s += step) {
-    const double at = std::min(s, reach);
+  const int steps = static_cast<int>(std::ceil(reach / step));
+  for (int k = 1; k <= steps && (forward_open || backward_open); ++k) {
+    const double at = std::min(k * step, reach);
     if (forward_open) {
       const double ha = h(at);
       if (root_side(ha) != root_side(h_forward)) {
@@ -110,21 +111,26 @@ LevelTargets level_targets(const WrapLevelMesh& mesh, const std::vector<Vec3>& p
         targets.box_offset[v] = (face % 2 ? high[axis] : low[axis]) - p[axis];
       }
       const auto held = [&](const Vec3& d) { return axis >= 0 ? in_plane(d, axis) : unit_or_zero(d); };
-      const Vec3 gradient = grid.sample(p).gradient;
-      Vec3 d = held(squared_norm(directions[v]) > 0 ? directions[v] : gradient);
-      double t = 0;
+      // A point held on a face searches within the face's plane, from its
+      // foot there (a point outside the box would find nothing inside it).
+      Vec3 origin = p;
+      if (axis >= 0) origin[axis] += targets.box_offset[v];
+      const Vec3 gradient = grid.sample(origin).gradient;
       const bool along_normal = squared_norm(directions[v]) > 0;
-      bool found = squared_norm(d) > 0 && pierce(grid, iso, p, d, along_normal ? facing : 0.0, reach, step, tolerance, t);
+      Vec3 d = held(along_normal ? directions[v] : gradient);
+      double t = 0;
+      bool found = squared_norm(d) > 0 &&
+                   pierce(grid, iso, origin, d, along_normal ? facing : 0.0, reach, step, tolerance, t);
       if (!found && along_normal) {
         d = held(gradient);
-        found = squared_norm(d) > 0 && pierce(grid, iso, p, d, 0.0, reach, step, tolerance, t);
+        found = squared_norm(d) > 0 && pierce(grid, iso, origin, d, 0.0, reach, step, tolerance, t);
         targets.off_line[v] = 1;
       }
-      Vec3 target = p + d * t;
+      Vec3 target = origin + d * t;
       if (!found && surface) {
-        target = surface->closest_point(p);
-        d = unit_or_zero(target - p);
-        if (axis >= 0) target[axis] = p[axis] + targets.box_offset[v];
+        target = surface->closest_point(origin);
+        if (axis >= 0) target[axis] = origin[axis];
+        d = unit_or_zero(target - origin);
         found = true;
         targets.off_line[v] = 1;
       }
@@ -148,30 +154,10 @@ void add_coverage_pull(CoveragePull& pull, const WrapLevelMesh& mesh, const std:
   pull.apply(mesh, moved, reach, &pulled);
   targets.pull_offset.assign(positions.size(), Vec3{});
   targets.pulled.assign(positions.size(), 0);
-  targets.pulled_count = pulled.size();
   for (const PulledPoint& p : pulled) {
     targets.pulled[p.vertex] = 1;
     targets.pull_offset[p.vertex] = moved[p.vertex] - positions[p.vertex];
   }
-}
-
-std::vector<Vec3> level_vertex_normals(const WrapLevelMesh& mesh, const std::vector<Vec3>& positions) {
-  std::vector<Vec3> normals(mesh.vertex_count);
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, mesh.vertex_count, kGrain),
-                    [&](const tbb::blocked_range<std::size_t>& r) {
-                      for (std::size_t v = r.begin(); v < r.end(); ++v) {
-                        Vec3 sum;
-                        for (std::uint32_t k = mesh.vertex_face_offsets[v]; k < mesh.vertex_face_offsets[v + 1]; ++k) {
-                          const std::uint32_t f = mesh.vertex_faces[k];
-                          const std::uint32_t first = mesh.face_offsets[f], count = mesh.face_offsets[f + 1] - first;
-                          for (std::uint32_t c = 0; c < count; ++c)
-                            sum += cross(positions[mesh.face_vertices[first + c]],
-                                         positions[mesh.face_vertices[first + (c + 1) % count]]);
-                        }
-                        normals[v] = unit_or_zero(sum);
-                      }
-                    });
-  return normals;
 }
 
 double mean_edge_length(const WrapLevelMesh& mesh, const std::vector<Vec3>& positions) {

@@ -26,7 +26,6 @@ struct LevelTargets {
   // the move minus pull_offset instead of the plane's.
   std::vector<Vec3> pull_offset;
   std::vector<std::uint8_t> pulled;
-  std::size_t pulled_count = 0;
   std::vector<std::uint8_t> off_line;  // 1: the point's line missed; aimed along the field gradient or at the nearest surface point
   std::size_t unpierced = 0;
 };
@@ -34,8 +33,9 @@ struct LevelTargets {
 // The nearest crossing of the isosurface `iso` along p + t d (d a unit world
 // vector) with |t| <= reach at which the field's slope along d has the sign
 // `facing` (either sign for 0): sampled every `step` both ways, then refined
-// to `tolerance` (world units). Returns false when there is none. With d the
-// surface's normal, `facing` excludes the far side of a thin sheet.
+// to `tolerance` (world units), only inside the volume's box. Returns false
+// when there is none. With d the surface's normal, `facing` excludes the far
+// side of a thin sheet. reach and step finite and > 0.
 bool pierce(const TrilinearGrid& grid, double iso, const Vec3& p, const Vec3& d, double facing, double reach,
             double step, double tolerance, double& t);
 
@@ -54,9 +54,6 @@ LevelTargets level_targets(const WrapLevelMesh& mesh, const std::vector<Vec3>& p
 // nearest point within `reach`, which then aims at the mean of its pickers.
 void add_coverage_pull(CoveragePull& pull, const WrapLevelMesh& mesh, const std::vector<Vec3>& positions,
                        double reach, LevelTargets& targets);
-
-// Area-weighted unit vertex normals of the level mesh (zero where degenerate).
-std::vector<Vec3> level_vertex_normals(const WrapLevelMesh& mesh, const std::vector<Vec3>& positions);
 
 // Mean edge length of the level mesh (from at most about 65,536 vertices).
 double mean_edge_length(const WrapLevelMesh& mesh, const std::vector<Vec3>& positions);

@@ -304,6 +304,7 @@ std::shared_ptr<const SubdivisionHierarchy> fit_normal(const PolygonMesh& base, 
     NormalFitOptions normal = options.normal;
     normal.surface = &prepared.isosurface.mesh;
     normal.orientation = orientation;
+    normal.coverage_pull = options.shrink_wrap.coverage_pull;
     NormalFitResult fit = normal_fit(*hierarchy, base.positions, prepared.field, iso, directions, normal, progress);
     result.fit.positions = std::move(fit.positions);
     result.normal_levels = std::move(fit.levels);

@@ -14,6 +14,7 @@
 #include "isowave/core/surface_error.h"
 #include "isowave/extract/builtin_fields.h"
 #include "isowave/pipeline/convert.h"
+#include "support/test_meshes.h"
 #include "torus_reference.h"
 
 namespace isowave {
@@ -52,6 +53,44 @@ TEST(ConvertNormal, DecodedTorusIsNearTheTrueSurfaceWithOnlyNormalDetail) {
     nonzero += norm(c) > 0;
   }
   EXPECT_GT(nonzero, decoded.coefficients.size() / 4);  // the check above is not vacuous
+}
+
+// A sphere cut by two faces of the box: the surface's boundary curves lie on
+// them. Every decoded point stays in the box (the field is clamped beyond it,
+// so its isosurface would go on outside), the decoded surface lies as near
+// the true sphere as the marching-cubes mesh, and few coefficients are
+// non-normal (the boundary curves' are: a large share of this small mesh).
+TEST(ConvertNormal, SphereCutByTheBoxStaysInsideIt) {
+  const Vec3 c{0.3, 20.2, 41.6};
+  const double r = 14;
+  const Volume field = test::sampled_volume(
+      {36, 40, 44}, [&](double x, double y, double z) { return r - std::sqrt(squared_norm(Vec3{x, y, z} - c)); });
+  ConvertOptions options;
+  options.fit = FitMethod::Normal;
+  options.keep_extracted_mesh = true;
+  options.summary_percents = {100};
+  const ConvertResult result = convert_volume(field, "cut sphere", options);
+  const IswDecoded decoded = decode_isw(result.bytes, "cut sphere");
+  const PolygonMesh fine =
+      decoded.hierarchy->control_mesh(decoded.hierarchy->levels(), reconstruct(decoded, decoded.ranked.size()));
+  const auto from_sphere = [&](const PolygonMesh& mesh) {
+    double sum = 0;
+    const std::vector<Vec3> samples = area_samples(mesh, 100000, 3);
+    for (const Vec3& p : samples) sum += std::pow(std::sqrt(squared_norm(p - c)) - r, 2);
+    return std::sqrt(sum / double(samples.size()));
+  };
+  double beyond = 0, fitted_beyond = 0;
+  for (const Vec3& p : fine.positions) beyond = std::max({beyond, -p.x, p.z - 43});
+  for (const Vec3& p : result.fit.positions) fitted_beyond = std::max({fitted_beyond, -p.x, p.z - 43});
+  std::printf("cut sphere: points at most %.4f cells beyond the box, fitted %.4f\n", beyond, fitted_beyond);
+  EXPECT_LE(fitted_beyond, 1e-3);
+  EXPECT_LE(beyond, 0.05);  // plus the quantization: a few of the finest steps
+  const double marching_cubes = from_sphere(result.extracted_mesh), fitted = from_sphere(fine);
+  std::printf("cut sphere: marching cubes %.4f cell RMS from the sphere, decoded normal fit %.4f; %zu of %zu "
+              "coefficients non-normal\n",
+              marching_cubes, fitted, result.non_normal_coefficients, result.fine_vertices - result.base_vertices);
+  EXPECT_LE(fitted, 1.25 * marching_cubes);
+  EXPECT_LT(double(result.non_normal_coefficients), 0.1 * double(result.fine_vertices - result.base_vertices));
 }
 
 }  // namespace

@@ -7,7 +7,7 @@
 // order, so its transpose runs the transposed steps in reverse order. Every
 // source gathers from its own neighbour list, so no two threads write one
 // entry and the sums have a fixed order.
-#include <cassert>
+#include <string>
 
 #include "isowave/core/error.h"
 #include "isowave/transform/lifting_rules.h"

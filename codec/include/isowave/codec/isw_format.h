@@ -83,7 +83,8 @@ struct IswEncodeOptions {
   // local frames are built, one per base vertex in the hierarchy's order;
   // the planes then refine the base control points from them. nullptr: the
   // base control points themselves. A fit whose coefficients lie along the
-  // frames of another base than its final one (fit/normal_fit.h) passes it.
+  // frames of another base than its final one (fit/normal_fit.h) passes it,
+  // with the frame_step (> 0) it took isw_frame_normals() at.
   const std::vector<Vec3>* frame_base = nullptr;
   // Version 2: cut the plane stream so that the file holds at most this many
   // bytes (0: the whole stream). Error(InvalidArgument) when the headers alone exceed it.

@@ -9,7 +9,7 @@
 //  - each coefficient is s_i n_i, n_i the unit direction the coder will use
 //    (`directions`, from the base as given), the base points free 3-vectors;
 //  - level by level, every entry up to the level (the base and the scalars
-//    of levels 1..j) is solved for at once, so that synthesis puts every
+//    of levels 1..j) is solved for at once, with a little damping, so that synthesis puts every
 //    control point of level j on the isosurface of the trilinear field in
 //    the least-squares sense: lifted wavelets have almost no mean, so the
 //    smooth part of a level's error can only come from coarser entries.
@@ -42,28 +42,36 @@
 namespace isowave {
 
 struct NormalFitOptions {
-  int rounds = 4;          // Gauss-Newton rounds per level, 1..50
+  // Gauss-Newton rounds per level, 1..50 (max(2, rounds / 2) more after
+  // coefficients were freed).
+  int rounds = 4;
   int cg_iterations = 16;  // conjugate-gradient steps per round, 1..500
   // The piercing search's reach: this many times the level's mean edge
-  // length, at least min_reach_cells cells; > 0.
+  // length, at least min_reach_cells cells; finite and > 0. A round's step
+  // is shortened so that no point moves farther.
   double reach_edges = 1.0;
   double min_reach_cells = 1.0;
   // The extracted isosurface (kept by pointer): a point whose lines miss the
   // isosurface aims at its nearest point. nullptr: such a point has no target.
   const PolygonMesh* surface = nullptr;
+  // With `surface`: on levels whose edges average at most a cell, every
+  // extracted vertex farther than a cell from the level's points pulls the
+  // nearest within 4 cells toward it (the shrink-wrap's coverage pull, as
+  // point-to-point residuals; not in a pass's last round).
+  bool coverage_pull = true;
   // Which way the base mesh's normals point (extraction's): a normal line
   // pierces only where it leaves the region its surface encloses.
   Orientation orientation = Orientation::TowardLower;
 };
 
-// Per level fitted (level 0: the base).
+// Per level fitted, 1..L.
 struct NormalFitLevelStatistics {
   int level = 0;
   std::size_t vertices = 0;       // control points of the level
-  std::size_t coefficients = 0;   // unknowns: base points at level 0, f and e coefficients above
-  std::size_t non_normal = 0;     // coefficients left free (always all at level 0)
-  std::size_t unpierced = 0;      // control points with no crossing along their line or gradient
-  double rms_cells = 0;           // RMS distance of the level's control points to the isosurface's tangent planes
+  std::size_t coefficients = 0;   // the level's f and e coefficients
+  std::size_t non_normal = 0;     // of those, the free ones
+  std::size_t unpierced = 0;      // control points with no target at all (only without `surface`)
+  double rms_cells = 0;           // RMS distance of the level's control points to their targets' tangent planes
   double max_cells = 0;
   double seconds = 0;
 };
@@ -88,8 +96,11 @@ using NormalDirections = std::function<std::vector<Vec3>(const std::vector<Vec3>
 // Fits `hierarchy` to the isosurface `iso` of `field` from `base_positions`.
 // Throws Error(InvalidArgument) for too few base positions, a non-finite one,
 // a field with fewer than 2 samples along an axis, directions of the wrong
-// size, or an option out of range. Memory: about 200 bytes per control point
-// of the finest level. Cost: rounds x cg_iterations syntheses of each level.
+// size, or an option out of range. Memory: about 400 bytes per control point
+// of the finest level (the conjugate gradients' five vectors are 120), and
+// the extracted surface's bins. Cost: per level j, about (rounds + 2) x
+// cg_iterations syntheses up to level j and as many transposes, and a root
+// search per control point and round.
 NormalFitResult normal_fit(const SubdivisionHierarchy& hierarchy, const std::vector<Vec3>& base_positions,
                            const Volume& field, double iso, const NormalDirections& directions,
                            const NormalFitOptions& options = {}, ProgressSink& progress = no_progress());

@@ -100,7 +100,9 @@ struct ConvertOptions {
   FinePoints fine_points = FinePoints::OnTrilinearIsosurface;
   // The shrink-wrap (Sec. 4.2); convert_volume() sets `surface` to the extracted mesh.
   ShrinkWrapOptions shrink_wrap;
-  NormalFitOptions normal;  // FitMethod::Normal
+  // FitMethod::Normal; convert_volume() sets `surface`, `orientation` and
+  // `coverage_pull` (from shrink_wrap's) itself.
+  NormalFitOptions normal;
   // The step of the last bit plane in cells (IswEncodeOptions::step / cell
   // size, > 0): the finest the stream goes; `rate` cuts it shorter.
   double step_cells = 0.01;
@@ -207,8 +209,8 @@ struct ConvertResult {
   ShrinkWrapResult fit;  // positions: the fitted fine control points (both fits)
   // With FitMethod::Parametrization: the fit's figures.
   ParametrizedFitStatistics parametrization;
-  // With FitMethod::Normal: per level fitted (the base first), and the
-  // non-normal coefficients of the last fit.
+  // With FitMethod::Normal: per level fitted (1..L), and the non-normal
+  // coefficients of the last fit.
   std::vector<NormalFitLevelStatistics> normal_levels;
   std::size_t non_normal_coefficients = 0;
   // Per level 1..L: the share of the wavelet coefficients' energy (sum of
