@@ -15,7 +15,7 @@
 #include "isowave/extract/builtin_fields.h"
 #include "isowave/pipeline/convert.h"
 #include "support/test_meshes.h"
-#include "torus_reference.h"
+#include "analytic_reference.h"
 
 namespace isowave {
 namespace {
@@ -74,10 +74,7 @@ TEST(ConvertNormal, SphereCutByTheBoxStaysInsideIt) {
   const PolygonMesh fine =
       decoded.hierarchy->control_mesh(decoded.hierarchy->levels(), reconstruct(decoded, decoded.ranked.size()));
   const auto from_sphere = [&](const PolygonMesh& mesh) {
-    double sum = 0;
-    const std::vector<Vec3> samples = area_samples(mesh, 100000, 3);
-    for (const Vec3& p : samples) sum += std::pow(std::sqrt(squared_norm(p - c)) - r, 2);
-    return std::sqrt(sum / double(samples.size()));
+    return test::rms_distance(mesh, [&](const Vec3& p) { return std::sqrt(squared_norm(p - c)) - r; });
   };
   double beyond = 0, fitted_beyond = 0;
   for (const Vec3& p : fine.positions) beyond = std::max({beyond, -p.x, p.z - 43});

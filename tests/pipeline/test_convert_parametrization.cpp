@@ -19,7 +19,7 @@
 #include "isowave/fit/fold_repair.h"
 #include "isowave/fit/wrap_level_mesh.h"
 #include "isowave/pipeline/convert.h"
-#include "torus_reference.h"
+#include "analytic_reference.h"
 
 namespace isowave {
 namespace {

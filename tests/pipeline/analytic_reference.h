@@ -1,6 +1,6 @@
 #pragma once
-// The analytic surface of the builtin torus field, for tests that measure a
-// decoded fit against it.
+// Analytic surfaces (the builtin torus field's, any given distance), for
+// tests that measure a decoded fit against them.
 #include <cmath>
 #include <cstddef>
 #include <vector>
@@ -19,12 +19,18 @@ inline double torus_distance(const Vec3& p, std::size_t n) {
   return std::abs(std::hypot(ring, p.z - c) - 0.1 * size);
 }
 
-// RMS distance of area-uniform samples of `mesh` from the analytic torus.
-inline double rms_from_torus(const PolygonMesh& mesh, std::size_t n) {
+// RMS of distance(p) over 100,000 area-uniform samples p of `mesh`.
+template <class Distance>
+double rms_distance(const PolygonMesh& mesh, const Distance& distance) {
   double sum = 0;
   const std::vector<Vec3> samples = area_samples(mesh, 100000, 7);
-  for (const Vec3& p : samples) sum += torus_distance(p, n) * torus_distance(p, n);
+  for (const Vec3& p : samples) sum += distance(p) * distance(p);
   return std::sqrt(sum / double(samples.size()));
+}
+
+// RMS distance of area-uniform samples of `mesh` from the analytic torus.
+inline double rms_from_torus(const PolygonMesh& mesh, std::size_t n) {
+  return rms_distance(mesh, [n](const Vec3& p) { return torus_distance(p, n); });
 }
 
 }  // namespace isowave::test
