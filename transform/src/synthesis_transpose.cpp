@@ -9,10 +9,9 @@
 // entry and the sums have a fixed order.
 #include <string>
 
-#include "isowave/core/error.h"
 #include "isowave/transform/lifting_rules.h"
 #include "isowave/transform/wavelet_transform.h"
-#include "parallel_range.h"
+#include "level_checks.h"
 
 namespace isowave {
 namespace {
@@ -20,11 +19,6 @@ namespace {
 using lifting::Rule;
 using lifting::Step;
 using lifting::VertexType;
-
-template <class Body>
-void for_range(std::uint32_t n, const Body& body) {
-  detail::parallel_range(n, 8192, body);
-}
 
 inline double count(const std::vector<std::uint32_t>& offsets, std::uint32_t i) {
   return static_cast<double>(offsets[i + 1] - offsets[i]);
@@ -40,7 +34,7 @@ void transpose_e_step(const RefinementStep& s, Vec3* g, const Step& step) {
   const Rule& r = step.smooth;
   const std::uint32_t first_e = s.first_edge_vertex(), first_f = s.first_face_vertex();
   if (r.f != 0)
-    for_range(s.parent_face_count, [&](std::uint32_t begin, std::uint32_t end) {
+    detail::for_lifting_range(s.parent_face_count, [&](std::uint32_t begin, std::uint32_t end) {
       for (std::uint32_t f = begin; f < end; ++f) {
         Vec3 sum;
         for (std::uint32_t k = s.face_offsets[f]; k < s.face_offsets[f + 1]; ++k) {
@@ -51,7 +45,7 @@ void transpose_e_step(const RefinementStep& s, Vec3* g, const Step& step) {
       }
     });
   if (r.v != 0)
-    for_range(s.parent_vertex_count, [&](std::uint32_t begin, std::uint32_t end) {
+    detail::for_lifting_range(s.parent_vertex_count, [&](std::uint32_t begin, std::uint32_t end) {
       for (std::uint32_t v = begin; v < end; ++v) {
         Vec3 sum;
         for (std::uint32_t k = s.vertex_edge_offsets[v]; k < s.vertex_edge_offsets[v + 1]; ++k) {
@@ -61,7 +55,7 @@ void transpose_e_step(const RefinementStep& s, Vec3* g, const Step& step) {
         g[v] += (0.5 * r.v) * sum;
       }
     });
-  for_range(s.parent_edge_count, [&](std::uint32_t begin, std::uint32_t end) {
+  detail::for_lifting_range(s.parent_edge_count, [&](std::uint32_t begin, std::uint32_t end) {
     for (std::uint32_t e = begin; e < end; ++e)
       if (edge_active(s, step, e)) g[first_e + e] = r.self * g[first_e + e];
   });
@@ -75,7 +69,7 @@ void transpose_f_step(const RefinementStep& s, Vec3* g, const Step& step) {
     return g[face_vertex] * (1.0 / count(s.face_offsets, face_vertex - first_f));
   };
   if (r.v != 0)
-    for_range(s.parent_vertex_count, [&](std::uint32_t begin, std::uint32_t end) {
+    detail::for_lifting_range(s.parent_vertex_count, [&](std::uint32_t begin, std::uint32_t end) {
       for (std::uint32_t v = begin; v < end; ++v) {
         Vec3 sum;
         for (std::uint32_t k = s.vertex_face_offsets[v]; k < s.vertex_face_offsets[v + 1]; ++k)
@@ -84,7 +78,7 @@ void transpose_f_step(const RefinementStep& s, Vec3* g, const Step& step) {
       }
     });
   if (r.e != 0)
-    for_range(s.parent_edge_count, [&](std::uint32_t begin, std::uint32_t end) {
+    detail::for_lifting_range(s.parent_edge_count, [&](std::uint32_t begin, std::uint32_t end) {
       for (std::uint32_t e = begin; e < end; ++e) {
         const std::uint32_t f0 = s.edge_faces[2 * e], f1 = s.edge_faces[2 * e + 1];
         Vec3 sum = per_corner(f0);
@@ -92,7 +86,7 @@ void transpose_f_step(const RefinementStep& s, Vec3* g, const Step& step) {
         g[first_e + e] += r.e * sum;
       }
     });
-  for_range(s.parent_face_count, [&](std::uint32_t begin, std::uint32_t end) {
+  detail::for_lifting_range(s.parent_face_count, [&](std::uint32_t begin, std::uint32_t end) {
     for (std::uint32_t f = begin; f < end; ++f) g[first_f + f] = r.self * g[first_f + f];
   });
 }
@@ -104,7 +98,7 @@ void transpose_v_step(const RefinementStep& s, Vec3* g, const Step& step) {
   const std::uint32_t first_e = s.first_edge_vertex(), first_f = s.first_face_vertex();
   const auto smooth = [&](std::uint32_t v) { return s.vertex_rule[v] == VertexRule::Smooth; };
   if (r.f != 0)
-    for_range(s.parent_face_count, [&](std::uint32_t begin, std::uint32_t end) {
+    detail::for_lifting_range(s.parent_face_count, [&](std::uint32_t begin, std::uint32_t end) {
       for (std::uint32_t f = begin; f < end; ++f) {
         Vec3 sum;
         for (std::uint32_t k = s.face_offsets[f]; k < s.face_offsets[f + 1]; ++k) {
@@ -115,7 +109,7 @@ void transpose_v_step(const RefinementStep& s, Vec3* g, const Step& step) {
       }
     });
   if (r.e != 0)
-    for_range(s.parent_edge_count, [&](std::uint32_t begin, std::uint32_t end) {
+    detail::for_lifting_range(s.parent_edge_count, [&](std::uint32_t begin, std::uint32_t end) {
       for (std::uint32_t e = begin; e < end; ++e) {
         Vec3 sum;
         for (int side = 0; side < 2; ++side) {
@@ -131,7 +125,7 @@ void transpose_v_step(const RefinementStep& s, Vec3* g, const Step& step) {
     g[s.crease_edges[2 * k]] += share;
     g[s.crease_edges[2 * k + 1]] += share;
   }
-  for_range(s.parent_vertex_count, [&](std::uint32_t begin, std::uint32_t end) {
+  detail::for_lifting_range(s.parent_vertex_count, [&](std::uint32_t begin, std::uint32_t end) {
     for (std::uint32_t v = begin; v < end; ++v)
       if (smooth(v)) g[v] = r.self * g[v];
   });
@@ -141,12 +135,8 @@ void transpose_v_step(const RefinementStep& s, Vec3* g, const Step& step) {
 }  // namespace
 
 void synthesize_level_transpose(const SubdivisionHierarchy& hierarchy, int level, std::vector<Vec3>& data) {
-  if (level < 1 || level > hierarchy.levels())
-    throw Error(ErrorKind::InvalidArgument, "level " + std::to_string(level) + " is not in 1.." +
-                                                std::to_string(hierarchy.levels()));
-  if (data.size() < hierarchy.vertex_count(level))
-    throw Error(ErrorKind::InvalidArgument, "the transpose of level " + std::to_string(level) + " needs " +
-                                                std::to_string(hierarchy.vertex_count(level)) + " entries");
+  detail::require_level(hierarchy, level);
+  detail::require_size(hierarchy, data, level);
   const RefinementStep& s = hierarchy.step(level);
   for (auto step = lifting::kSynthesisSteps.rbegin(); step != lifting::kSynthesisSteps.rend(); ++step) {
     switch (step->target) {

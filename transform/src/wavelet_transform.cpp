@@ -6,7 +6,7 @@
 
 #include "isowave/core/error.h"
 #include "isowave/transform/lifting_rules.h"
-#include "parallel_range.h"
+#include "level_checks.h"
 
 namespace isowave {
 namespace {
@@ -16,12 +16,6 @@ using lifting::Step;
 using lifting::VertexType;
 
 enum class Direction { Synthesis, Analysis };
-
-// Chunks of the lifting loops.
-template <class Body>
-void for_range(std::uint32_t n, const Body& body) {
-  detail::parallel_range(n, 8192, body);
-}
 
 // target <- self*target + sum  (synthesis) or (target - sum)/self (analysis).
 template <Direction D>
@@ -51,7 +45,7 @@ template <Direction D>
 void lift_e_vertices(const RefinementStep& s, Vec3* data, const Step& step) {
   const Rule& r = step.smooth;
   const std::uint32_t first = s.first_edge_vertex();
-  for_range(s.parent_edge_count, [&](std::uint32_t begin, std::uint32_t end) {
+  detail::for_lifting_range(s.parent_edge_count, [&](std::uint32_t begin, std::uint32_t end) {
     for (std::uint32_t e = begin; e < end; ++e) {
       if (step.skipped_on_sharp_edges && !s.edge_smooth[e]) continue;
       Vec3 sum;
@@ -66,7 +60,7 @@ template <Direction D>
 void lift_f_vertices(const RefinementStep& s, Vec3* data, const Step& step) {
   const Rule& r = step.smooth;
   const std::uint32_t first = s.first_face_vertex();
-  for_range(s.parent_face_count, [&](std::uint32_t begin, std::uint32_t end) {
+  detail::for_lifting_range(s.parent_face_count, [&](std::uint32_t begin, std::uint32_t end) {
     for (std::uint32_t f = begin; f < end; ++f) {
       const std::uint32_t row = s.face_offsets[f], row_end = s.face_offsets[f + 1];
       Vec3 sum;
@@ -80,7 +74,7 @@ void lift_f_vertices(const RefinementStep& s, Vec3* data, const Step& step) {
 template <Direction D>
 void lift_v_vertices(const RefinementStep& s, Vec3* data, const Step& step) {
   const Rule& r = step.smooth;
-  for_range(s.parent_vertex_count, [&](std::uint32_t begin, std::uint32_t end) {
+  detail::for_lifting_range(s.parent_vertex_count, [&](std::uint32_t begin, std::uint32_t end) {
     for (std::uint32_t v = begin; v < end; ++v) {
       if (v + kPrefetchAhead < end) {
         const std::uint32_t ahead = v + kPrefetchAhead;
@@ -96,7 +90,7 @@ void lift_v_vertices(const RefinementStep& s, Vec3* data, const Step& step) {
   });
   const Rule& c = step.crease;
   const auto creases = static_cast<std::uint32_t>(s.crease_vertices.size());
-  for_range(creases, [&](std::uint32_t begin, std::uint32_t end) {
+  detail::for_lifting_range(creases, [&](std::uint32_t begin, std::uint32_t end) {
     for (std::uint32_t k = begin; k < end; ++k) {
       const std::uint32_t v = s.crease_vertices[k];
       const Vec3 sum = (0.5 * c.e) * (data[s.crease_edges[2 * k]] + data[s.crease_edges[2 * k + 1]]);
@@ -114,23 +108,10 @@ void lift(const RefinementStep& s, Vec3* data, const Step& step) {
   }
 }
 
-void require_size(const SubdivisionHierarchy& h, const std::vector<Vec3>& data, int level) {
-  if (data.size() < h.vertex_count(level))
-    throw Error(ErrorKind::InvalidArgument, "wavelet transform needs " + std::to_string(h.vertex_count(level)) +
-                                                " points for level " + std::to_string(level) + ", got " +
-                                                std::to_string(data.size()));
-}
-
-void require_level(const SubdivisionHierarchy& hierarchy, int level) {
-  if (level < 1 || level > hierarchy.levels())
-    throw Error(ErrorKind::InvalidArgument, "level " + std::to_string(level) + " is not in 1.." +
-                                                std::to_string(hierarchy.levels()));
-}
-
 }  // namespace
 
 void analyze(const SubdivisionHierarchy& hierarchy, std::vector<Vec3>& data) {
-  require_size(hierarchy, data, hierarchy.levels());
+  detail::require_size(hierarchy, data, hierarchy.levels());
   for (int level = hierarchy.levels(); level >= 1; --level) {
     const RefinementStep& s = hierarchy.step(level);
     for (auto step = lifting::kSynthesisSteps.rbegin(); step != lifting::kSynthesisSteps.rend(); ++step)
@@ -143,7 +124,7 @@ void synthesize(const SubdivisionHierarchy& hierarchy, std::vector<Vec3>& data, 
   if (to_level > hierarchy.levels())
     throw Error(ErrorKind::InvalidArgument, "level " + std::to_string(to_level) + " exceeds the hierarchy's " +
                                                 std::to_string(hierarchy.levels()) + " levels");
-  require_size(hierarchy, data, to_level);
+  detail::require_size(hierarchy, data, to_level);
   for (int level = 1; level <= to_level; ++level) {
     const RefinementStep& s = hierarchy.step(level);
     for (const Step& step : lifting::kSynthesisSteps) lift<Direction::Synthesis>(s, data.data(), step);
@@ -151,15 +132,15 @@ void synthesize(const SubdivisionHierarchy& hierarchy, std::vector<Vec3>& data, 
 }
 
 void synthesize_level(const SubdivisionHierarchy& hierarchy, int level, std::vector<Vec3>& data) {
-  require_level(hierarchy, level);
-  require_size(hierarchy, data, level);
+  detail::require_level(hierarchy, level);
+  detail::require_size(hierarchy, data, level);
   const RefinementStep& s = hierarchy.step(level);
   for (const Step& step : lifting::kSynthesisSteps) lift<Direction::Synthesis>(s, data.data(), step);
 }
 
 void subdivide_level(const SubdivisionHierarchy& hierarchy, int level, std::vector<Vec3>& data) {
-  require_level(hierarchy, level);
-  require_size(hierarchy, data, level - 1);
+  detail::require_level(hierarchy, level);
+  detail::require_size(hierarchy, data, level - 1);
   data.resize(std::max(data.size(), hierarchy.vertex_count(level)));
   std::fill(data.begin() + static_cast<std::ptrdiff_t>(hierarchy.vertex_count(level - 1)),
             data.begin() + static_cast<std::ptrdiff_t>(hierarchy.vertex_count(level)), Vec3{});
@@ -168,7 +149,7 @@ void subdivide_level(const SubdivisionHierarchy& hierarchy, int level, std::vect
 
 std::vector<Vec3> subdivide(const SubdivisionHierarchy& hierarchy, const std::vector<Vec3>& base_points, int to_level) {
   if (to_level < 0) to_level = hierarchy.levels();
-  require_size(hierarchy, base_points, 0);
+  detail::require_size(hierarchy, base_points, 0);
   std::vector<Vec3> data(base_points.begin(), base_points.begin() + static_cast<std::ptrdiff_t>(hierarchy.vertex_count(0)));
   for (int level = 1; level <= to_level; ++level) subdivide_level(hierarchy, level, data);
   data.resize(hierarchy.vertex_count(to_level));
