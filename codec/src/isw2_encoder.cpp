@@ -199,6 +199,11 @@ const std::vector<std::uint64_t>& IswPlaneValues::plane_ends() const {
   return state_ ? state_->plane_ends : none;
 }
 
+const std::vector<Vec3>& IswPlaneValues::frame_normals() const {
+  static const std::vector<Vec3> none;
+  return state_ ? state_->normals : none;
+}
+
 void IswPlaneValues::coefficients_at(std::size_t k, std::vector<Vec3>& out) const {
   assert(state_ && k < state_->plane_ends.size());
   const PlaneSymbols& s = state_->symbols;

@@ -500,11 +500,9 @@ std::vector<Vec3> write_planned_file(const std::string& whole, detail::RatePlan 
 }
 
 // Per level, the share of the wavelet coefficients' energy along the
-// normals of the coder's local frames (of the file's frame base).
+// normals of the file's local frames.
 std::vector<double> normal_energy_share(const SubdivisionHierarchy& h, const std::vector<Vec3>& coefficients,
-                                        const ConvertResult& result) {
-  const std::vector<Vec3> normals = isw_frame_normals(
-      h, result.frame_base.empty() ? coefficients : result.frame_base, kFrameStepCells * result.cell_size);
+                                        const std::vector<Vec3>& normals) {
   std::vector<double> shares;
   for (int level = 1; level <= h.levels(); ++level) {
     double along = 0, all = 0;
@@ -529,7 +527,6 @@ std::vector<Vec3> analyze_and_encode(const std::shared_ptr<const SubdivisionHier
   progress.begin_stage("analysis");
   std::vector<Vec3> coefficients = result.fit.positions;
   analyze(*hierarchy, coefficients);
-  result.normal_share = normal_energy_share(*hierarchy, coefficients, result);
   progress.end_stage();
   result.seconds.analysis = seconds_since(start);
 
@@ -541,6 +538,7 @@ std::vector<Vec3> analyze_and_encode(const std::shared_ptr<const SubdivisionHier
   if (!result.frame_base.empty()) encode_options.frame_base = &result.frame_base;
   IswPlaneValues planes;
   const std::string whole = encode_isw(*hierarchy, coefficients, metadata, encode_options, planes);
+  result.normal_share = normal_energy_share(*hierarchy, coefficients, planes.frame_normals());
   std::vector<Vec3>().swap(coefficients);
   detail::RatePlan plan =
       detail::plan_rate(whole, planes, hierarchy, meter, options.rate, result.extracted_vertices, result.cell_size);

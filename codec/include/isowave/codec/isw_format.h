@@ -165,6 +165,9 @@ class IswPlaneValues {
   // first k + 1 planes, into `out` (resized to the fine count).
   // Precondition: k < plane_ends().size(). Cost: O(fine vertices), parallel.
   void coefficients_at(std::size_t k, std::vector<Vec3>& out) const;
+  // The unit normal of every entry's local frame in the file written (as
+  // isw_frame_normals() of its frame base); empty before an encoding.
+  const std::vector<Vec3>& frame_normals() const;
 
  private:
   friend std::string encode_isw(const SubdivisionHierarchy&, const std::vector<Vec3>&, const IswMetadata&,
