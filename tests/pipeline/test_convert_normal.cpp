@@ -15,7 +15,7 @@
 #include "isowave/extract/builtin_fields.h"
 #include "isowave/pipeline/convert.h"
 #include "support/test_meshes.h"
-#include "analytic_reference.h"
+#include "convert_test_support.h"
 
 namespace isowave {
 namespace {
@@ -35,8 +35,7 @@ TEST(ConvertNormal, DecodedTorusIsNearTheTrueSurfaceWithOnlyNormalDetail) {
   for (const double share : result.normal_share) EXPECT_GT(share, 1 - 1e-12);
 
   const IswDecoded decoded = decode_isw(result.bytes, "torus");
-  const PolygonMesh fine =
-      decoded.hierarchy->control_mesh(decoded.hierarchy->levels(), reconstruct(decoded, decoded.ranked.size()));
+  const PolygonMesh fine = test::full_decode_mesh(decoded);
   const double marching_cubes = rms_from_torus(result.extracted_mesh, n), fitted = rms_from_torus(fine, n);
   std::printf("torus %zu: marching cubes %.4f cell RMS from the torus, decoded normal fit %.4f (levels %d)\n", n,
               marching_cubes, fitted, result.levels);
@@ -71,8 +70,7 @@ TEST(ConvertNormal, SphereCutByTheBoxStaysInsideIt) {
   options.summary_percents = {100};
   const ConvertResult result = convert_volume(field, "cut sphere", options);
   const IswDecoded decoded = decode_isw(result.bytes, "cut sphere");
-  const PolygonMesh fine =
-      decoded.hierarchy->control_mesh(decoded.hierarchy->levels(), reconstruct(decoded, decoded.ranked.size()));
+  const PolygonMesh fine = test::full_decode_mesh(decoded);
   const auto from_sphere = [&](const PolygonMesh& mesh) {
     return test::rms_distance(mesh, [&](const Vec3& p) { return std::sqrt(squared_norm(p - c)) - r; });
   };

@@ -19,7 +19,7 @@
 #include "isowave/fit/fold_repair.h"
 #include "isowave/fit/wrap_level_mesh.h"
 #include "isowave/pipeline/convert.h"
-#include "analytic_reference.h"
+#include "convert_test_support.h"
 
 namespace isowave {
 namespace {
@@ -44,8 +44,7 @@ TEST(ConvertParametrization, DecodedTorusIsAsNearTheTrueSurfaceAsMarchingCubes) 
   const ConvertResult result = convert_volume(field, "torus", options);
 
   const IswDecoded decoded = decode_isw(result.bytes, "torus");
-  const PolygonMesh fine =
-      decoded.hierarchy->control_mesh(decoded.hierarchy->levels(), reconstruct(decoded, decoded.ranked.size()));
+  const PolygonMesh fine = test::full_decode_mesh(decoded);
   const double marching_cubes = rms_from_torus(result.extracted_mesh, n);
   const double fitted = rms_from_torus(fine, n);
   std::printf("torus %zu: marching cubes %.4f cell RMS from the torus, decoded fit %.4f (levels %d)\n", n,

@@ -15,6 +15,7 @@
 #include "isowave/core/surface_error.h"
 #include "isowave/extract/builtin_fields.h"
 #include "isowave/pipeline/convert.h"
+#include "convert_test_support.h"
 #include "isowave/pipeline/prepare.h"
 
 namespace isowave {
@@ -112,8 +113,7 @@ TEST_P(LevelsByError, ReportsTheFittedAndDecodedSurfacesError) {
   // The decoded file's fine mesh is the fitted one moved by the quantization
   // (at most its maximum error): its D, from other samples, differs by about that.
   const IswDecoded decoded = decode_isw(result.bytes, "torus");
-  const PolygonMesh decoded_mesh =
-      decoded.hierarchy->control_mesh(decoded.hierarchy->levels(), reconstruct(decoded, decoded.ranked.size()));
+  const PolygonMesh decoded_mesh = test::full_decode_mesh(decoded);
   const double d_decoded = surface_error(decoded_mesh, result.extracted_mesh).d() / result.cell_size;
   EXPECT_NEAR(report.d_cells(), d_decoded, result.quantization.max / result.cell_size + 0.05 * d_decoded);
 

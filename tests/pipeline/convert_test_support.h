@@ -1,14 +1,21 @@
 #pragma once
-// Analytic surfaces (the builtin torus field's, any given distance), for
-// tests that measure a decoded fit against them.
+// For the conversion's tests: a file's full decode as a mesh, and analytic
+// surfaces (the builtin torus field's, any given distance) to measure it against.
 #include <cmath>
 #include <cstddef>
 #include <vector>
 
+#include "isowave/codec/isw_format.h"
+#include "isowave/codec/statistics.h"
 #include "isowave/core/mesh.h"
 #include "isowave/core/surface_error.h"
 
 namespace isowave::test {
+
+// The control mesh of a decode's finest level with every coefficient it holds.
+inline PolygonMesh full_decode_mesh(const IswDecoded& decoded) {
+  return decoded.hierarchy->control_mesh(decoded.hierarchy->levels(), reconstruct(decoded, decoded.ranked.size()));
+}
 
 // Distance to the builtin torus at n samples per axis (builtin_fields.h):
 // unit spacing, centre (n-1)/2, radii 0.25 (n-1) and 0.1 (n-1); its field is
