@@ -265,34 +265,16 @@ void take_step(const SubdivisionHierarchy& h, const Unknowns& u, const std::vect
   for_each_index(points.size(), [&](std::size_t v) { points[v] += moved[v] * scale; });
 }
 
-// Gauss-Newton rounds on the unknowns of `data`: each round retargets the
-// level's points and adds one solve's step. Returns the last targets.
-detail::LevelTargets run_rounds(const FitInputs& in, const WrapLevelMesh& mesh, const Unknowns& u,
-                                const std::vector<Vec3>& pierce_directions, double reach, int rounds,
-                                std::vector<Vec3>& data) {
-  const SubdivisionHierarchy& h = in.hierarchy;
-  std::vector<std::uint8_t> classes = entry_classes(h, u.level);
-  classes.resize(u.size);
-  std::vector<Vec3> points = synthesize_points(h, u.level, data);
-  // The pull only where the level samples the surface finely (as the
-  // shrink-wrap's), and not before the last round, which puts the pulled
-  // points back on the isosurface where they now are.
-  const bool fine_level = detail::mean_edge_length(mesh, points) <= kPullMaxEdgeCells * in.field.cell_size();
-  const auto retarget = [&](bool pull) {
-    detail::LevelTargets t =
-        detail::level_targets(mesh, points, pierce_directions, in.grid, in.field, in.iso, in.facing, reach, in.surface);
-    if (pull && fine_level && in.pull)
-      detail::add_coverage_pull(*in.pull, mesh, points, kPullReachCells * in.field.cell_size(), t);
-    return t;
-  };
-  detail::LevelTargets targets = retarget(rounds > 1);
-  for (int round = 0; round < rounds; ++round) {
-    const LevelSystem system(h, u, targets);
-    const std::vector<Vec3> step = solve_round(system, points.size(), u.size, classes, in.options.cg_iterations);
-    take_step(h, u, step, reach, data, points);
-    targets = retarget(round + 2 < rounds);
+// The coefficients of [first, end) whose points' lines had no admissible
+// crossing become free 3-vectors, aimed along the field gradient from now on.
+void free_off_line(const detail::LevelTargets& targets, std::size_t first, std::size_t end,
+                   std::vector<std::uint8_t>& free, std::vector<Vec3>& aim) {
+  for (std::size_t i = first; i < end; ++i) {
+    const bool off = !(squared_norm(targets.plane_normal[i]) > 0) || targets.off_line[i];
+    if (!off || free[i]) continue;
+    free[i] = 1;
+    aim[i] = Vec3{};  // the field gradient (level_targets)
   }
-  return targets;
 }
 
 double level_reach(const FitInputs& in, const WrapLevelMesh& mesh, const std::vector<Vec3>& points) {
@@ -300,33 +282,45 @@ double level_reach(const FitInputs& in, const WrapLevelMesh& mesh, const std::ve
                   in.options.reach_edges * detail::mean_edge_length(mesh, points));
 }
 
-// One level's fit: every entry up to `level` (the free ones as 3-vectors,
-// the others along `directions`) so that the level's control points lie on
-// the isosurface; then the level's own coefficients whose points the normal
-// line has no admissible crossing become free, and the rounds go on.
+// One level's fit: Gauss-Newton rounds on every entry up to `level` (the
+// free ones as 3-vectors, the others along `directions`), each retargeting
+// the level's control points and adding one solve's step; after the first
+// half of the rounds, the level's own coefficients whose points' lines have
+// no admissible crossing become free.
 NormalFitLevelStatistics fit_level(const FitInputs& in, int level, const std::vector<Vec3>& directions,
-                                   std::vector<std::uint8_t>& free,
-                                   int rounds, std::vector<Vec3>& data) {
+                                   std::vector<std::uint8_t>& free, std::vector<Vec3>& data) {
   const auto start = Clock::now();
   const SubdivisionHierarchy& h = in.hierarchy;
-  const std::vector<Vec3> predicted = synthesize_points(h, level, data);
-  const WrapLevelMesh mesh = make_wrap_level_mesh(h, level, predicted, in.field, in.iso);
+  std::vector<Vec3> points = synthesize_points(h, level, data);
+  const WrapLevelMesh mesh = make_wrap_level_mesh(h, level, points, in.field, in.iso);
   const std::size_t first = h.vertex_count(level - 1), end = h.vertex_count(level);
   // Free: boundary curves (held in their box face) and degenerate patches (no normal).
   for (std::size_t i = first; i < end; ++i)
     if (mesh.role[i] != WrapRole::Free || !(squared_norm(directions[i]) > 0)) free[i] = 1;
-  Unknowns u{level, &directions, &free, end};
-  const double reach = level_reach(in, mesh, predicted);
-  detail::LevelTargets targets = run_rounds(in, mesh, u, directions, reach, rounds, data);
-  std::vector<Vec3> freed_aim;
-  for (std::size_t i = first; i < end; ++i) {
-    const bool off = !(squared_norm(targets.plane_normal[i]) > 0) || targets.off_line[i];
-    if (!off || free[i]) continue;
-    if (freed_aim.empty()) freed_aim = directions;
-    free[i] = 1;
-    freed_aim[i] = Vec3{};  // aims along the field gradient from now on
+  const Unknowns u{level, &directions, &free, end};
+  std::vector<std::uint8_t> classes = entry_classes(h, level);
+  const double reach = level_reach(in, mesh, points);
+  // The pull only where the level samples the surface finely (as the
+  // shrink-wrap's), and not before the last round, which puts the pulled
+  // points back on the isosurface where they now are.
+  const bool fine_level = detail::mean_edge_length(mesh, points) <= kPullMaxEdgeCells * in.field.cell_size();
+  std::vector<Vec3> aim(directions.begin(), directions.begin() + static_cast<std::ptrdiff_t>(end));
+  const auto retarget = [&](bool pull) {
+    detail::LevelTargets t =
+        detail::level_targets(mesh, points, aim, in.grid, in.field, in.iso, in.facing, reach, in.surface);
+    if (pull && fine_level && in.pull)
+      detail::add_coverage_pull(*in.pull, mesh, points, kPullReachCells * in.field.cell_size(), t);
+    return t;
+  };
+  const int rounds = in.options.rounds, free_after = std::max(1, rounds / 2);
+  detail::LevelTargets targets = retarget(rounds > 1);
+  for (int round = 0; round < rounds; ++round) {
+    const LevelSystem system(h, u, targets);
+    const std::vector<Vec3> step = solve_round(system, points.size(), u.size, classes, in.options.cg_iterations);
+    take_step(h, u, step, reach, data, points);
+    targets = retarget(round + 2 < rounds);
+    if (round + 1 == free_after) free_off_line(targets, first, end, free, aim);
   }
-  if (!freed_aim.empty()) targets = run_rounds(in, mesh, u, freed_aim, reach, std::max(2, rounds / 2), data);
   NormalFitLevelStatistics stats;
   stats.level = level;
   stats.vertices = end;
@@ -336,6 +330,26 @@ NormalFitLevelStatistics fit_level(const FitInputs& in, int level, const std::ve
   measure(targets, in.field.cell_size(), stats);
   stats.seconds = std::chrono::duration<double>(Clock::now() - start).count();
   return stats;
+}
+
+// Starts from `previous`, a fit of the same base to fewer levels: its
+// entries, the normal ones turned onto this hierarchy's directions (which
+// are taken at a finer level), its non-normal flags and level statistics.
+// Returns the first level left to fit.
+int start_from(const NormalFitResult& previous, const SubdivisionHierarchy& h, const std::vector<Vec3>& directions,
+               std::vector<Vec3>& data, std::vector<std::uint8_t>& free, NormalFitResult& result) {
+  const std::size_t base_count = h.vertex_count(0), n = previous.coefficients.size();
+  const int done = static_cast<int>(previous.levels.size());
+  if (done >= h.levels() || n != h.vertex_count(done) || previous.non_normal.size() + base_count != n ||
+      previous.frame_base != result.frame_base)
+    throw Error(ErrorKind::InvalidArgument, "the normal fit's start is not a fit of the same base to fewer levels");
+  for (std::size_t i = 0; i < n; ++i) {
+    free[i] = i < base_count ? 1 : previous.non_normal[i - base_count];
+    const Vec3& c = previous.coefficients[i];
+    data[i] = free[i] ? c : directions[i] * dot(directions[i], c);
+  }
+  result.levels = previous.levels;
+  return done + 1;
 }
 
 void check_inputs(const SubdivisionHierarchy& h, const std::vector<Vec3>& base, const Volume& field,
@@ -376,24 +390,27 @@ NormalFitResult normal_fit(const SubdivisionHierarchy& hierarchy, const std::vec
                      pull ? &*pull : nullptr};
   const int levels = hierarchy.levels();
   const std::size_t base_count = hierarchy.vertex_count(0), fine = hierarchy.fine_vertex_count();
-  std::vector<Vec3> data(fine);
-  std::copy(base_positions.begin(), base_positions.begin() + static_cast<std::ptrdiff_t>(base_count), data.begin());
-  std::vector<std::uint8_t> free(fine, 0);
-  std::fill(free.begin(), free.begin() + static_cast<std::ptrdiff_t>(base_count), std::uint8_t{1});
   NormalFitResult result;
   // The directions come from the base as given; the coder sends it as the
   // frame base (IswEncodeOptions::frame_base) and the fitted base as its
   // refinement, so the base stays free: its points are the only low-pass
   // entries (the wavelets of every level have almost no mean).
-  result.frame_base.assign(data.begin(), data.begin() + static_cast<std::ptrdiff_t>(base_count));
+  result.frame_base.assign(base_positions.begin(), base_positions.begin() + static_cast<std::ptrdiff_t>(base_count));
   const std::vector<Vec3> normals = directions(result.frame_base);
   check_directions(normals, fine);
-  for (int level = 1; level <= levels; ++level) {
-    result.levels.push_back(fit_level(in, level, normals, free, options.rounds, data));
+  std::vector<Vec3> data(fine);
+  std::vector<std::uint8_t> free(fine, 0);
+  std::fill(free.begin(), free.begin() + static_cast<std::ptrdiff_t>(base_count), std::uint8_t{1});
+  const int first_level = options.start ? start_from(*options.start, hierarchy, normals, data, free, result) : 1;
+  if (first_level == 1)
+    std::copy(base_positions.begin(), base_positions.begin() + static_cast<std::ptrdiff_t>(base_count), data.begin());
+  for (int level = first_level; level <= levels; ++level) {
+    result.levels.push_back(fit_level(in, level, normals, free, data));
     progress.update(double(level) / double(levels));
   }
   result.non_normal.assign(free.begin() + static_cast<std::ptrdiff_t>(base_count), free.end());
   result.positions = synthesize_points(hierarchy, levels, data);
+  result.coefficients = std::move(data);
   progress.end_stage();
   return result;
 }

@@ -294,6 +294,8 @@ std::shared_ptr<const SubdivisionHierarchy> fit_normal(const PolygonMesh& base, 
   const double iso = options.prepare.extract.iso;
   const Orientation orientation = orientation_from_flip(options.prepare.extract.flip);
   const double frame_step = kFrameStepCells * result.cell_size;
+  // Each level tried starts from the previous one's entries (levels by error).
+  NormalFitResult previous;
   const auto fit_level = [&](int levels) {
     check_level_memory(base, levels);
     result.fit = ShrinkWrapResult{};
@@ -305,11 +307,12 @@ std::shared_ptr<const SubdivisionHierarchy> fit_normal(const PolygonMesh& base, 
     normal.surface = &prepared.isosurface.mesh;
     normal.orientation = orientation;
     normal.coverage_pull = options.shrink_wrap.coverage_pull;
-    NormalFitResult fit = normal_fit(*hierarchy, base.positions, prepared.field, iso, directions, normal, progress);
-    result.fit.positions = std::move(fit.positions);
-    result.normal_levels = std::move(fit.levels);
-    result.non_normal_coefficients = fit.non_normal_count();
-    result.frame_base = std::move(fit.frame_base);
+    normal.start = previous.levels.empty() ? nullptr : &previous;
+    previous = normal_fit(*hierarchy, base.positions, prepared.field, iso, directions, normal, progress);
+    result.fit.positions = std::move(previous.positions);
+    result.normal_levels = previous.levels;
+    result.non_normal_coefficients = previous.non_normal_count();
+    result.frame_base = previous.frame_base;
     const WrapLevelMesh level = make_wrap_level_mesh(*hierarchy, levels, result.fit.positions, prepared.field, iso);
     result.fit.folded_faces = count_folded_faces(level, result.fit.positions, prepared.field, orientation);
     return FittedLevel{std::move(hierarchy), &result.fit.positions, result.fit.folded_faces};

@@ -62,10 +62,20 @@ double trilinear_distance(const TrilinearGrid& grid, const Vec3& p) {
   return std::abs(s.value) / std::sqrt(squared_norm(s.gradient));
 }
 
-void check_fit(const Shape& shape, int levels) {
+// The fit of `levels` levels, from the base or (start_levels > 0) from a
+// fit of that many levels, as levels by error continues one.
+void check_fit(const Shape& shape, int levels, int start_levels = 0) {
   const SubdivisionHierarchy h(shape.base, levels);
-  const NormalFitResult fit = normal_fit(h, shape.base.positions, shape.field, 0.0, coder_normals(h));
+  NormalFitResult start;
+  NormalFitOptions options;
+  if (start_levels > 0) {
+    const SubdivisionHierarchy coarse(shape.base, start_levels);
+    start = normal_fit(coarse, shape.base.positions, shape.field, 0.0, coder_normals(coarse));
+    options.start = &start;
+  }
+  const NormalFitResult fit = normal_fit(h, shape.base.positions, shape.field, 0.0, coder_normals(h), options);
   ASSERT_EQ(fit.positions.size(), h.fine_vertex_count());
+  ASSERT_EQ(fit.levels.size(), std::size_t(levels));
   EXPECT_EQ(fit.non_normal_count(), 0u);
 
   // Every fine control point on the trilinear isosurface, and so near the analytic one.
@@ -103,6 +113,11 @@ TEST(NormalFit, SphereEndsOnTheIsosurfaceWithNormalDetail) { check_fit(sphere(),
 
 TEST(NormalFit, TorusEndsOnTheIsosurfaceWithNormalDetail) { check_fit(torus(), 3); }
 
+TEST(NormalFit, ContinuesAFitOfFewerLevels) {
+  check_fit(sphere(), 3, 2);
+  check_fit(torus(), 3, 1);
+}
+
 TEST(NormalFit, IdenticalForAnyThreadCount) {
   const Shape shape = torus();
   const SubdivisionHierarchy h(shape.base, 3);
@@ -126,6 +141,16 @@ TEST(NormalFit, RejectsBadInput) {
   NormalFitOptions options;
   options.rounds = 0;
   EXPECT_THROW(normal_fit(h, shape.base.positions, shape.field, 0.0, coder_normals(h), options), Error);
+  // A start of as many levels, or of another base.
+  const NormalFitResult same = normal_fit(h, shape.base.positions, shape.field, 0.0, coder_normals(h));
+  NormalFitOptions from_same;
+  from_same.start = &same;
+  EXPECT_THROW(normal_fit(h, shape.base.positions, shape.field, 0.0, coder_normals(h), from_same), Error);
+  const SubdivisionHierarchy finer(shape.base, 3);
+  std::vector<Vec3> moved = shape.base.positions;
+  moved[0].x += 0.5;
+  EXPECT_THROW(normal_fit(finer, moved, shape.field, 0.0, coder_normals(finer), from_same), Error);
+  EXPECT_NO_THROW(normal_fit(finer, shape.base.positions, shape.field, 0.0, coder_normals(finer), from_same));
 }
 
 }  // namespace

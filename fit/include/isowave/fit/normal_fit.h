@@ -41,9 +41,11 @@
 
 namespace isowave {
 
+struct NormalFitResult;
+
 struct NormalFitOptions {
-  // Gauss-Newton rounds per level, 1..50 (max(2, rounds / 2) more after
-  // coefficients were freed).
+  // Gauss-Newton rounds per level, 1..50; after the first max(1, rounds / 2)
+  // the level's coefficients whose lines miss become free.
   int rounds = 4;
   int cg_iterations = 16;  // conjugate-gradient steps per round, 1..500
   // The piercing search's reach: this many times the level's mean edge
@@ -62,6 +64,11 @@ struct NormalFitOptions {
   // Which way the base mesh's normals point (extraction's): a normal line
   // pierces only where it leaves the region its surface encloses.
   Orientation orientation = Orientation::TowardLower;
+  // A fit of the same base positions to fewer levels (kept by pointer; its
+  // `coefficients`, `non_normal` and `levels` are read): this fit starts from
+  // its entries and fits only the finer levels, as levels by error tries one
+  // level more. nullptr: from the base.
+  const NormalFitResult* start = nullptr;
 };
 
 // Per level fitted, 1..L.
@@ -81,6 +88,10 @@ struct NormalFitResult {
   // The base the directions came from (the base positions given): the
   // coder's frame base (IswEncodeOptions::frame_base).
   std::vector<Vec3> frame_base;
+  // The coarse-to-fine array fitted (base points, then each coefficient, a
+  // multiple of its direction unless non-normal): analyze() of `positions`
+  // up to rounding.
+  std::vector<Vec3> coefficients;
   // Per coefficient entry [vertex_count(0), fine): 1 if non-normal.
   std::vector<std::uint8_t> non_normal;
   std::vector<NormalFitLevelStatistics> levels;
@@ -96,11 +107,12 @@ using NormalDirections = std::function<std::vector<Vec3>(const std::vector<Vec3>
 // Fits `hierarchy` to the isosurface `iso` of `field` from `base_positions`.
 // Throws Error(InvalidArgument) for too few base positions, a non-finite one,
 // a field with fewer than 2 samples along an axis, directions of the wrong
-// size, or an option out of range. Memory: about 400 bytes per control point
+// size, an option out of range, or a start that is not a fit of the same
+// base positions to fewer levels. Memory: about 400 bytes per control point
 // of the finest level (the conjugate gradients' five vectors are 120), and
-// the extracted surface's bins. Cost: per level j, about (rounds + 2) x
-// cg_iterations syntheses up to level j and as many transposes, and a root
-// search per control point and round.
+// the extracted surface's bins. Cost: per level j fitted, rounds x
+// (cg_iterations + 2) syntheses up to level j and as many transposes, and a
+// root search per control point and round.
 NormalFitResult normal_fit(const SubdivisionHierarchy& hierarchy, const std::vector<Vec3>& base_positions,
                            const Volume& field, double iso, const NormalDirections& directions,
                            const NormalFitOptions& options = {}, ProgressSink& progress = no_progress());
