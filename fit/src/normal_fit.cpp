@@ -333,23 +333,35 @@ NormalFitLevelStatistics fit_level(const FitInputs& in, int level, const std::ve
 }
 
 // Starts from `previous`, a fit of the same base to fewer levels: its
-// entries, the normal ones turned onto this hierarchy's directions (which
-// are taken at a finer level), its non-normal flags and level statistics.
-// Returns the first level left to fit.
-int start_from(const NormalFitResult& previous, const SubdivisionHierarchy& h, const std::vector<Vec3>& directions,
-               std::vector<Vec3>& data, std::vector<std::uint8_t>& free, NormalFitResult& result) {
+// entries, its non-normal flags and level statistics. Returns the first
+// level left to fit.
+int start_from(const NormalFitResult& previous, const SubdivisionHierarchy& h, std::vector<Vec3>& data,
+               std::vector<std::uint8_t>& free, NormalFitResult& result) {
   const std::size_t base_count = h.vertex_count(0), n = previous.coefficients.size();
   const int done = static_cast<int>(previous.levels.size());
   if (done >= h.levels() || n != h.vertex_count(done) || previous.non_normal.size() + base_count != n ||
-      previous.frame_base != result.frame_base)
+      previous.frame_base.size() != base_count)
     throw Error(ErrorKind::InvalidArgument, "the normal fit's start is not a fit of the same base to fewer levels");
   for (std::size_t i = 0; i < n; ++i) {
     free[i] = i < base_count ? 1 : previous.non_normal[i - base_count];
-    const Vec3& c = previous.coefficients[i];
-    data[i] = free[i] ? c : directions[i] * dot(directions[i], c);
+    data[i] = previous.coefficients[i];
   }
   result.levels = previous.levels;
+  result.frame_base = previous.frame_base;
   return done + 1;
+}
+
+// The directions of the frame base `result.frame_base`, and the normal
+// entries of `data` turned onto them.
+std::vector<Vec3> take_directions(const NormalDirections& directions, std::size_t fine, std::size_t fitted,
+                                  const std::vector<std::uint8_t>& free, std::vector<Vec3>& data,
+                                  const NormalFitResult& result) {
+  std::vector<Vec3> normals = directions(result.frame_base);
+  if (normals.size() != fine)
+    throw Error(ErrorKind::InvalidArgument, "the normal fit's directions must have one entry per fine vertex");
+  for (std::size_t i = 0; i < fitted; ++i)
+    if (!free[i]) data[i] = normals[i] * dot(normals[i], data[i]);
+  return normals;
 }
 
 void check_inputs(const SubdivisionHierarchy& h, const std::vector<Vec3>& base, const Volume& field,
@@ -365,11 +377,6 @@ void check_inputs(const SubdivisionHierarchy& h, const std::vector<Vec3>& base, 
   if (o.rounds < 1 || o.rounds > 50 || o.cg_iterations < 1 || o.cg_iterations > 500 || !(o.reach_edges > 0) ||
       !(o.min_reach_cells > 0) || !std::isfinite(o.reach_edges) || !std::isfinite(o.min_reach_cells))
     throw Error(ErrorKind::InvalidArgument, "a normal-fit option is out of its range");
-}
-
-void check_directions(const std::vector<Vec3>& directions, std::size_t fine) {
-  if (directions.size() != fine)
-    throw Error(ErrorKind::InvalidArgument, "the normal fit's directions must have one entry per fine vertex");
 }
 
 }  // namespace
@@ -391,20 +398,26 @@ NormalFitResult normal_fit(const SubdivisionHierarchy& hierarchy, const std::vec
   const int levels = hierarchy.levels();
   const std::size_t base_count = hierarchy.vertex_count(0), fine = hierarchy.fine_vertex_count();
   NormalFitResult result;
-  // The directions come from the base as given; the coder sends it as the
-  // frame base (IswEncodeOptions::frame_base) and the fitted base as its
-  // refinement, so the base stays free: its points are the only low-pass
-  // entries (the wavelets of every level have almost no mean).
-  result.frame_base.assign(base_positions.begin(), base_positions.begin() + static_cast<std::ptrdiff_t>(base_count));
-  const std::vector<Vec3> normals = directions(result.frame_base);
-  check_directions(normals, fine);
   std::vector<Vec3> data(fine);
   std::vector<std::uint8_t> free(fine, 0);
   std::fill(free.begin(), free.begin() + static_cast<std::ptrdiff_t>(base_count), std::uint8_t{1});
-  const int first_level = options.start ? start_from(*options.start, hierarchy, normals, data, free, result) : 1;
-  if (first_level == 1)
+  int first_level = 1;
+  if (options.start) {
+    first_level = start_from(*options.start, hierarchy, data, free, result);
+  } else {
     std::copy(base_positions.begin(), base_positions.begin() + static_cast<std::ptrdiff_t>(base_count), data.begin());
+    result.frame_base.assign(data.begin(), data.begin() + static_cast<std::ptrdiff_t>(base_count));
+  }
+  std::vector<Vec3> normals =
+      take_directions(directions, fine, hierarchy.vertex_count(first_level - 1), free, data, result);
   for (int level = first_level; level <= levels; ++level) {
+    // The frame base: the base as the first level's fit leaves it (the base
+    // points are free to the finest level, but move little after it), so
+    // that the coder's base refinement from it costs few bits.
+    if (level == 2) {
+      result.frame_base.assign(data.begin(), data.begin() + static_cast<std::ptrdiff_t>(base_count));
+      normals = take_directions(directions, fine, hierarchy.vertex_count(1), free, data, result);
+    }
     result.levels.push_back(fit_level(in, level, normals, free, data));
     progress.update(double(level) / double(levels));
   }

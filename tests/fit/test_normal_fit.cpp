@@ -94,8 +94,8 @@ void check_fit(const Shape& shape, int levels, int start_levels = 0) {
   EXPECT_LT(worst_analytic, 0.08);  // plus the trilinear interpolant's own error
 
   // Every wavelet coefficient along its frame normal (the frames of the
-  // base the fit was given, which the coder sends): no tangential part.
-  ASSERT_EQ(fit.frame_base, std::vector<Vec3>(shape.base.positions.begin(), shape.base.positions.end()));
+  // base the fit reports, which the coder sends): no tangential part.
+  ASSERT_EQ(fit.frame_base.size(), shape.base.vertex_count());
   std::vector<Vec3> coefficients = fit.positions;
   analyze(h, coefficients);
   const std::vector<Vec3> normals = isw_frame_normals(h, fit.frame_base, kFrameStep);
@@ -141,15 +141,12 @@ TEST(NormalFit, RejectsBadInput) {
   NormalFitOptions options;
   options.rounds = 0;
   EXPECT_THROW(normal_fit(h, shape.base.positions, shape.field, 0.0, coder_normals(h), options), Error);
-  // A start of as many levels, or of another base.
+  // A start of as many levels.
   const NormalFitResult same = normal_fit(h, shape.base.positions, shape.field, 0.0, coder_normals(h));
   NormalFitOptions from_same;
   from_same.start = &same;
   EXPECT_THROW(normal_fit(h, shape.base.positions, shape.field, 0.0, coder_normals(h), from_same), Error);
   const SubdivisionHierarchy finer(shape.base, 3);
-  std::vector<Vec3> moved = shape.base.positions;
-  moved[0].x += 0.5;
-  EXPECT_THROW(normal_fit(finer, moved, shape.field, 0.0, coder_normals(finer), from_same), Error);
   EXPECT_NO_THROW(normal_fit(finer, shape.base.positions, shape.field, 0.0, coder_normals(finer), from_same));
 }
 

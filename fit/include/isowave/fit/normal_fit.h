@@ -7,7 +7,8 @@
 //
 // The representation and the fit:
 //  - each coefficient is s_i n_i, n_i the unit direction the coder will use
-//    (`directions`, from the base as given), the base points free 3-vectors;
+//    (`directions`, from the base as the first level's fit leaves it: the
+//    frame base), the base points free 3-vectors;
 //  - level by level, every entry up to the level (the base and the scalars
 //    of levels 1..j) is solved for at once, with a little damping, so that synthesis puts every
 //    control point of level j on the isosurface of the trilinear field in
@@ -85,8 +86,9 @@ struct NormalFitLevelStatistics {
 
 struct NormalFitResult {
   std::vector<Vec3> positions;  // level-L control points, ready for analyze()
-  // The base the directions came from (the base positions given): the
-  // coder's frame base (IswEncodeOptions::frame_base).
+  // The base the directions came from (the base after the first level's
+  // fit; the base positions given with one level): the coder's frame base
+  // (IswEncodeOptions::frame_base).
   std::vector<Vec3> frame_base;
   // The coarse-to-fine array fitted (base points, then each coefficient, a
   // multiple of its direction unless non-normal): analyze() of `positions`
@@ -100,8 +102,8 @@ struct NormalFitResult {
 
 // The unit direction of every entry of the coarse-to-fine array (fine vertex
 // count entries) for base control points `base`: the coder's local-frame
-// normals (codec: isw_frame_normals). Called once, with the base positions
-// given, which the coder must then send as its frame base.
+// normals (codec: isw_frame_normals). Called with the base positions given
+// and again with the frame base; the coder must send the last as its frame base.
 using NormalDirections = std::function<std::vector<Vec3>(const std::vector<Vec3>& base)>;
 
 // Fits `hierarchy` to the isosurface `iso` of `field` from `base_positions`.
