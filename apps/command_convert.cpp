@@ -115,9 +115,9 @@ cli::CommandSpec convert_spec() {
   std::vector<cli::OptionSpec> options = {
       {"iso", true, "isovalue(s), comma separated (default 0 for builtin: inputs)", "V[,V2,...]"},
       {"fit", true,
-       "how the fine mesh is fitted: 'shrink-wrap' (default; the paper's), 'parametrization' (the points of a "
-       "MAPS map of the extracted surface, moved onto the trilinear isosurface) or 'normal' (in development: "
-       "detail as one scalar along the normal; folds on noisy scans)",
+       "how the fine mesh is fitted: 'normal' (default: detail as one scalar along the normal, the fewest bits), "
+       "'shrink-wrap' (the paper's) or 'parametrization' (the points of a MAPS map of the extracted surface, "
+       "moved onto the trilinear isosurface)",
        "METHOD"},
       {"levels", true,
        "subdivision levels 1..6, or 'auto' (default): the fewest whose fitted surface lies within --max-error of "
@@ -173,10 +173,11 @@ ConvertOptions convert_options_from(const cli::Arguments& args) {
   options.prepare.extract = cli::extraction_options(args);
   const std::string levels_text = args.get("levels", "auto");
   options.levels = levels_text == "auto" ? 0 : args.get_int("levels", 0, 1, 6);
-  const std::string fit = args.get("fit", "shrink-wrap");
+  const std::string fit = args.get("fit", "normal");
   if (fit == "parametrization") options.fit = FitMethod::Parametrization;
   else if (fit == "normal") options.fit = FitMethod::Normal;
-  else if (fit != "shrink-wrap")
+  else if (fit == "shrink-wrap") options.fit = FitMethod::ShrinkWrap;
+  else
     throw Error(ErrorKind::InvalidArgument, "--fit must be 'shrink-wrap', 'parametrization' or 'normal', not '" + fit + "'");
   options.rate.max_error_cells = args.get_double("max-error", 0.0);
   if (!(options.rate.max_error_cells > 0) && args.has("max-error"))

@@ -370,7 +370,8 @@ int main(int argc, char** argv) {
   if (argc == 2 && std::strcmp(argv[1], "--self-test") == 0) return self_test();
   const std::string csv = take_csv_option(argc, argv);
   BenchOptions defaults;
-  defaults.fits = {FitMethod::ShrinkWrap};  // convert's default fit
+  const ConvertOptions convert_defaults;
+  defaults.fits = {convert_defaults.fit};
   const BenchOptions o = parse_options(argc, argv, "bench_rate_distortion", defaults, " [--csv FILE] | --self-test");
   try {
     return run(o, csv);

@@ -40,8 +40,8 @@ constexpr const char* kConvertDoc = R"(convert(field_or_path, iso, path, **optio
 
 Converts the isosurface at iso of a volume (a path or builtin: name as read_volume takes, or a 3-D
 array indexed [z, y, x], copied as extract() copies it) into the .isw file `path`, as `isowave
-convert -o path`. Options are the CLI's with '_' for '-': levels=1..6|'auto', fit='shrink-wrap'|
-'parametrization', max_error (cells), size (bytes), bits_per_vertex, base_vertices, base_ratio,
+convert -o path`. Options are the CLI's with '_' for '-': levels=1..6|'auto', fit='normal' (default)|
+'shrink-wrap'|'parametrization', max_error (cells), size (bytes), bits_per_vertex, base_vertices, base_ratio,
 step (cells), smooth, min_component_vertices, flip, allow_folded, force (replace an existing file); for a path
 the reader options of read_volume; for an array spacing, origin and source (its name in the
 file's metadata, default 'numpy array'). Returns the result `isowave convert --json` prints for it

@@ -64,10 +64,11 @@ ConvertOptions take_convert_options(py::dict& kwargs) {
   const py::object levels = take(kwargs, "levels");
   if (!levels.is_none() && !(py::isinstance<py::str>(levels) && levels.cast<std::string>() == "auto"))
     options.levels = cast_as<int>(levels, "levels");
-  const std::string fit = take_as<std::string>(kwargs, "fit", "shrink-wrap");
+  const std::string fit = take_as<std::string>(kwargs, "fit", "normal");
   if (fit == "parametrization") options.fit = FitMethod::Parametrization;
   else if (fit == "normal") options.fit = FitMethod::Normal;
-  else if (fit != "shrink-wrap")
+  else if (fit == "shrink-wrap") options.fit = FitMethod::ShrinkWrap;
+  else
     throw Error(ErrorKind::InvalidArgument, "fit must be 'shrink-wrap', 'parametrization' or 'normal', not '" + fit + "'");
   options.rate.max_error_cells = take_as<double>(kwargs, "max_error", 0.0);
   options.max_error_cells = kLevelShareOfMaxError * options.rate.max_error_cells;

@@ -96,7 +96,9 @@ struct ConvertOptions {
   // (extracted_surface_deviation), at least kLevelErrorFloorCells. D is
   // measured against the extracted mesh, on the fit as LevelReport says.
   double max_error_cells = 0;
-  FitMethod fit = FitMethod::ShrinkWrap;
+  // The normal fit by default: the lowest BD-rate against Draco on the
+  // shared volumes (docs/MEASUREMENTS.md, issue #47 item 4).
+  FitMethod fit = FitMethod::Normal;
   FinePoints fine_points = FinePoints::OnTrilinearIsosurface;
   // The shrink-wrap (Sec. 4.2); convert_volume() sets `surface` to the extracted mesh.
   ShrinkWrapOptions shrink_wrap;
