@@ -235,6 +235,36 @@ TEST(SurfaceError, AReferenceMeasuresManyMeshesAsEachAlone) {
   EXPECT_THROW(SurfaceErrorReference(reference, 0), Error);
 }
 
+// A reference kept with its first samples measures as one made with that
+// many (their samples are the same points), on both directions; the two
+// directions apart add up to measure().
+TEST(SurfaceError, AReferenceWithItsFirstSamplesMeasuresAsOneMadeWithThem) {
+  const PolygonMesh reference = icosphere(4);
+  const SurfaceErrorReference against(reference, 5000);
+  const SurfaceErrorReference fewer = against.with_first_samples(700);
+  EXPECT_EQ(fewer.samples(), 700u);
+  for (const int levels : {1, 2}) {
+    const SurfaceError kept = fewer.measure(icosphere(levels));
+    const SurfaceError made = surface_error(icosphere(levels), reference, 700);
+    EXPECT_EQ(kept.forward_rms, made.forward_rms);
+    EXPECT_EQ(kept.backward_rms, made.backward_rms);
+    EXPECT_EQ(kept.forward_max, made.forward_max);
+    EXPECT_EQ(kept.backward_max, made.backward_max);
+    double rms = 0, max = 0;
+    against.backward(icosphere(levels), rms, max);
+    const SurfaceError all = against.measure(icosphere(levels));
+    EXPECT_EQ(rms, all.backward_rms);
+    EXPECT_EQ(max, all.backward_max);
+  }
+  // Distances to the unit sphere's inscribed icosphere: at most its own gap.
+  const std::vector<double> to = against.distances_to_reference({{0, 0, 1}, {0, 0, 2}});
+  ASSERT_EQ(to.size(), 2u);
+  EXPECT_LT(to[0], 0.01);
+  EXPECT_NEAR(to[1], 1.0, 0.01);
+  EXPECT_THROW(against.with_first_samples(0), Error);
+  EXPECT_THROW(against.with_first_samples(5001), Error);
+}
+
 TEST(SurfaceError, MeshesWithoutAreaAreRefused) {
   PolygonMesh empty, degenerate;
   degenerate.positions = {{0, 0, 0}, {1, 1, 1}, {2, 2, 2}};
