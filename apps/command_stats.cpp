@@ -182,7 +182,8 @@ void print_stream_table(const IswDecoded& decoded, const std::vector<StreamRow>&
 }
 
 // D against bits per isosurface vertex (per fine vertex when the isosurface's
-// count is unknown) at the rows, the last row (the whole stream the file holds) labelled.
+// count is unknown) at the rows, the last row (the whole stream the file
+// holds) labelled, and a first row of no stream bytes (the base mesh alone).
 cli::Plot stream_plot(const std::vector<StreamRow>& stream, const Scale& s, const std::string& y_unit,
                       const std::string& name) {
   const bool per_isovertex = s.extracted > 0;
@@ -191,6 +192,7 @@ cli::Plot stream_plot(const std::vector<StreamRow>& stream, const Scale& s, cons
   for (const StreamRow& r : stream)
     plot.points.push_back({Scale::bits(r.bytes, per_isovertex ? s.extracted : s.fine), s.percent(r.error), ""});
   plot.points.back().label = "whole stream";
+  if (stream.size() > 1 && stream.front().stream_bytes == 0) plot.points.front().label = "base mesh";
   return plot;
 }
 

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
 
 #include <tbb/parallel_for.h>
 
@@ -117,13 +118,12 @@ namespace {
 constexpr std::uint64_t kMeshSeed = 0x6d657368, kReferenceSeed = 0x72656665;
 
 // The reference's samples, binned for the backward direction: the first
-// search radius is a quarter of their mean spacing, so that a block of
-// faces visits about one sample (docs/MEASUREMENTS.md gives the timings).
-PointSetDistance reference_points(const PolygonMesh& reference, std::size_t samples) {
-  if (samples == 0) throw Error(ErrorKind::InvalidArgument, "surface error: at least one sample is needed");
-  AreaSamples sampled = sample_area(reference, samples, kReferenceSeed);
-  const double spacing = std::sqrt(sampled.area / double(samples));
-  return PointSetDistance(std::move(sampled.samples), 0.25 * spacing);
+// search radius is a quarter of their mean spacing over the reference's
+// `area`, so that a block of faces visits about one sample
+// (docs/MEASUREMENTS.md gives the timings).
+PointSetDistance binned_samples(std::vector<Vec3> samples, double area) {
+  const double spacing = std::sqrt(area / double(samples.size()));
+  return PointSetDistance(std::move(samples), 0.25 * spacing);
 }
 
 // RMS and maximum of distances, summed in order.
@@ -139,14 +139,45 @@ void rms_and_max(const std::vector<double>& distance, double& rms, double& max) 
 
 }  // namespace
 
+SurfaceErrorReference::SurfaceErrorReference(PointSetDistance reference_samples, double area,
+                                             std::shared_ptr<const BinnedSurfaceDistance> distance)
+    : samples_(reference_samples.points().size()),
+      reference_samples_(std::move(reference_samples)),
+      area_(area),
+      distance_(std::move(distance)) {}
+
+SurfaceErrorReference SurfaceErrorReference::built(const PolygonMesh& reference, std::size_t samples) {
+  if (samples == 0) throw Error(ErrorKind::InvalidArgument, "surface error: at least one sample is needed");
+  AreaSamples sampled = sample_area(reference, samples, kReferenceSeed);
+  return SurfaceErrorReference(binned_samples(std::move(sampled.samples), sampled.area), sampled.area,
+                               std::make_shared<const BinnedSurfaceDistance>(reference));
+}
+
 SurfaceErrorReference::SurfaceErrorReference(const PolygonMesh& reference, std::size_t samples)
-    : samples_(samples), reference_samples_(reference_points(reference, samples)), distance_(reference) {}
+    : SurfaceErrorReference(built(reference, samples)) {}
+
+SurfaceErrorReference SurfaceErrorReference::with_first_samples(std::size_t fewer) const {
+  if (fewer == 0 || fewer > samples_)
+    throw Error(ErrorKind::InvalidArgument, "surface error: between 1 and " + std::to_string(samples_) +
+                                                " samples of this reference can be kept, not " + std::to_string(fewer));
+  const std::vector<Vec3>& all = reference_samples_.points();
+  std::vector<Vec3> first(all.begin(), all.begin() + static_cast<std::ptrdiff_t>(fewer));
+  return SurfaceErrorReference(binned_samples(std::move(first), area_), area_, distance_);
+}
 
 SurfaceError SurfaceErrorReference::measure(const PolygonMesh& mesh) const {
   SurfaceError error;
-  rms_and_max(distance_.distances(area_samples(mesh, samples_, kMeshSeed)), error.forward_rms, error.forward_max);
-  rms_and_max(reference_samples_.distances(mesh), error.backward_rms, error.backward_max);
+  rms_and_max(distances_to_reference(area_samples(mesh, samples_, kMeshSeed)), error.forward_rms, error.forward_max);
+  backward(mesh, error.backward_rms, error.backward_max);
   return error;
+}
+
+std::vector<double> SurfaceErrorReference::distances_to_reference(const std::vector<Vec3>& points) const {
+  return distance_->distances(points);
+}
+
+void SurfaceErrorReference::backward(const PolygonMesh& mesh, double& rms, double& max) const {
+  rms_and_max(reference_samples_.distances(mesh), rms, max);
 }
 
 SurfaceError surface_error(const PolygonMesh& mesh, const PolygonMesh& reference, std::size_t samples) {

@@ -134,7 +134,7 @@ TEST_F(StatsStreamTest, StatsTabulatesDAtPrefixesOfTheEmbeddedStream) {
 }
 
 // The plot of a file with an RDTB: D against bits per isosurface vertex,
-// one point per row, the whole stream labelled.
+// one point per row, the base mesh (row 0) and the whole stream labelled.
 TEST_F(StatsStreamTest, StatsPlotDrawsDAgainstBitsPerIsosurfaceVertex) {
   const std::string file = convert_sphere("b.isw");
   const std::size_t rows = read_isw(file).stream.rate_table.size();
@@ -146,6 +146,7 @@ TEST_F(StatsStreamTest, StatsPlotDrawsDAgainstBitsPerIsosurfaceVertex) {
   EXPECT_NE(svg.find(">D [% of cell edge]</text>"), std::string::npos) << svg;
   EXPECT_EQ(occurrences(svg, "<circle "), rows) << svg;
   EXPECT_EQ(occurrences(svg, ">whole stream</text>"), 1u) << svg;
+  EXPECT_EQ(occurrences(svg, ">base mesh</text>"), 1u) << svg;
 }
 
 // A version 1 file (chunks) and a version 2 file without an RDTB: Table 1,

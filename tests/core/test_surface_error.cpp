@@ -221,18 +221,46 @@ TEST(SurfaceError, SameResultForAnyThreadCount) {
   EXPECT_FALSE(area_samples(mesh, 50000, 18) == samples[0]) << "another seed gives other samples";
 }
 
+// Both directions' RMS and maximum alike, to the bit.
+void expect_same(const SurfaceError& a, const SurfaceError& b) {
+  EXPECT_EQ(a.forward_rms, b.forward_rms);
+  EXPECT_EQ(a.backward_rms, b.backward_rms);
+  EXPECT_EQ(a.forward_max, b.forward_max);
+  EXPECT_EQ(a.backward_max, b.backward_max);
+}
+
 TEST(SurfaceError, AReferenceMeasuresManyMeshesAsEachAlone) {
   const PolygonMesh reference = icosphere(4);
   const SurfaceErrorReference against(reference, 5000);
   for (const int levels : {1, 2, 3}) {
-    const SurfaceError once = against.measure(icosphere(levels));
-    const SurfaceError alone = surface_error(icosphere(levels), reference, 5000);
-    EXPECT_EQ(once.forward_rms, alone.forward_rms);
-    EXPECT_EQ(once.backward_rms, alone.backward_rms);
-    EXPECT_EQ(once.forward_max, alone.forward_max);
-    EXPECT_EQ(once.backward_max, alone.backward_max);
+    expect_same(against.measure(icosphere(levels)), surface_error(icosphere(levels), reference, 5000));
   }
   EXPECT_THROW(SurfaceErrorReference(reference, 0), Error);
+}
+
+// A reference kept with its first samples measures as one made with that
+// many (their samples are the same points), on both directions; the two
+// directions apart add up to measure().
+TEST(SurfaceError, AReferenceWithItsFirstSamplesMeasuresAsOneMadeWithThem) {
+  const PolygonMesh reference = icosphere(4);
+  const SurfaceErrorReference against(reference, 5000);
+  const SurfaceErrorReference fewer = against.with_first_samples(700);
+  EXPECT_EQ(fewer.samples(), 700u);
+  for (const int levels : {1, 2}) {
+    expect_same(fewer.measure(icosphere(levels)), surface_error(icosphere(levels), reference, 700));
+    double rms = 0, max = 0;
+    against.backward(icosphere(levels), rms, max);
+    const SurfaceError all = against.measure(icosphere(levels));
+    EXPECT_EQ(rms, all.backward_rms);
+    EXPECT_EQ(max, all.backward_max);
+  }
+  // Distances to the unit sphere's inscribed icosphere: at most its own gap.
+  const std::vector<double> to = against.distances_to_reference({{0, 0, 1}, {0, 0, 2}});
+  ASSERT_EQ(to.size(), 2u);
+  EXPECT_LT(to[0], 0.01);
+  EXPECT_NEAR(to[1], 1.0, 0.01);
+  EXPECT_THROW(against.with_first_samples(0), Error);
+  EXPECT_THROW(against.with_first_samples(5001), Error);
 }
 
 TEST(SurfaceError, MeshesWithoutAreaAreRefused) {

@@ -11,6 +11,7 @@
 // into triangles from their first vertex, as everywhere in isowave.
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "isowave/core/binned_surface_distance.h"
@@ -55,10 +56,31 @@ class SurfaceErrorReference {
   explicit SurfaceErrorReference(const PolygonMesh& reference, std::size_t samples = 200000);
   SurfaceError measure(const PolygonMesh& mesh) const;
 
+  std::size_t samples() const { return samples_; }
+  // The two directions apart, for callers that sample a mesh themselves:
+  // the distance (world units) from each of `points` (finite) to the
+  // reference's surface, in order (measure()'s forward distances for its
+  // own samples), and the RMS and maximum distance of the reference's
+  // samples to `mesh` (measure()'s backward direction). Errors as measure().
+  std::vector<double> distances_to_reference(const std::vector<Vec3>& points) const;
+  void backward(const PolygonMesh& mesh, double& rms, double& max) const;
+  // The same reference with fewer samples each way (1..samples()): its
+  // measure(mesh) equals surface_error(mesh, reference, fewer), whose samples
+  // are the first `fewer` of this one's on both surfaces (sample i depends
+  // only on the seed and i), so the two measures share their samples. The
+  // reference's distance bins are shared, not built again. Cost:
+  // O(fewer). Throws Error(InvalidArgument) for a count outside 1..samples().
+  SurfaceErrorReference with_first_samples(std::size_t fewer) const;
+
  private:
+  SurfaceErrorReference(PointSetDistance reference_samples, double area,
+                        std::shared_ptr<const BinnedSurfaceDistance> distance);
+  static SurfaceErrorReference built(const PolygonMesh& reference, std::size_t samples);
+
   std::size_t samples_;
-  PointSetDistance reference_samples_;  // the backward direction, against each mesh
-  BinnedSurfaceDistance distance_;      // the forward direction, from each mesh's samples
+  PointSetDistance reference_samples_;                    // the backward direction, against each mesh
+  double area_ = 0;                                       // the reference's, which spaces its samples
+  std::shared_ptr<const BinnedSurfaceDistance> distance_;  // the forward direction, from each mesh's samples
 };
 
 }  // namespace isowave
