@@ -31,6 +31,7 @@
 #include <vector>
 
 #include "coefficient_tree.h"
+#include "isowave/codec/isw_format.h"
 #include "isowave/core/vec3.h"
 
 namespace isowave::detail {
@@ -75,16 +76,21 @@ struct PlanePackets {
   std::size_t segments = 1;
   std::vector<std::string> packets;
 };
+// `minor_version` selects the coding: 0 as 2.0, 1 (and later) adds the
+// non-normal flags of 2.1. `account`, if given, receives the estimated bits
+// by what they code (components 1 and 2 tangential; a node of class 0 is a
+// base control point).
 PlanePackets encode_planes(const CoefficientTree& tree, const PlaneSymbols& symbols, std::size_t groups,
-                           int lowest_plane = 0);
+                           int minor_version, int lowest_plane = 0, IswPlaneBits* account = nullptr);
 
 // The decoder's state after any prefix of the packets.
 class PlaneDecoder {
  public:
-  // `node_class` and `classes` as in PlaneSymbols; top_plane in [-1, 31];
-  // groups in [1, kMaxGroups]. Keeps no reference to its arguments.
-  PlaneDecoder(const CoefficientTree& tree, const std::vector<std::uint8_t>& node_class, int classes, int top_plane,
-               std::size_t groups);
+  // `node_class` and `classes` as in PlaneSymbols; `minor_version` as in
+  // encode_planes(); top_plane in [-1, 31]; groups in [1, kMaxGroups]. Keeps
+  // no reference to its arguments.
+  PlaneDecoder(const CoefficientTree& tree, const std::vector<std::uint8_t>& node_class, int classes,
+               int minor_version, int top_plane, std::size_t groups);
   ~PlaneDecoder();
 
   // Decodes the packets in the encoder's order, the groups in parallel; a
