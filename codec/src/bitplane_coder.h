@@ -1,5 +1,5 @@
 #pragma once
-// Private: the embedded bit-plane coder of .isw 2.0 (docs/FORMAT.md, PLNS;
+// Private: the embedded bit-plane coder of .isw 2.0 and 2.1 (docs/FORMAT.md, PLNS;
 // issue #34). Every node of the coefficient tree carries three non-negative
 // integer magnitudes (its components in step units) and their signs. The
 // nodes form independent groups (split_tree), each coded on its own. Plane b
@@ -12,6 +12,10 @@
 //   significance: whether a not-yet-significant component reaches 2^b (one
 //     decision for the node, then one per component, then the sign of each
 //     new one);
+//   (2.1, minor version 1: at a wavelet coefficient's first significance, a
+//     flag "some tangential component is non-zero"; without it only the
+//     normal component is ever coded, and with it plane 0 implies the
+//     tangential bits a non-zero magnitude forces;)
 //   descendants: for a node with children whose descendants were all below
 //     2^(b+1), whether some descendant reaches 2^b, which opens its children
 //     (set partitioning as in SPIHT, Said and Pearlman 1996, with the

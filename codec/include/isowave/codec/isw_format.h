@@ -12,7 +12,8 @@
 //            PLNS  embedded bit planes of every coefficient in its local frame (normal,
 //                  tangent, bitangent), most significant plane first, set-partitioned over
 //                  the hierarchy's parent-child tree, in independent groups (decoded
-//                  in parallel): any prefix decodes
+//                  in parallel): any prefix decodes; 2.1 flags the coefficients with a
+//                  tangential part and codes none for the others
 //   version 1:
 //            CHNK  (several) wavelet coefficients, most important first: chunk k holds the coefficients
 //                  ranked in [start_k, end_k) by importance, coded by significance flags over the
