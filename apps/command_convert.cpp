@@ -420,6 +420,18 @@ Totals totals_of(const std::vector<Job>& jobs, const std::vector<cli::JobReport>
   return t;
 }
 
+// The plane stream's estimated bits by what they code (IswPlaneBits), and the tangential share.
+void render_json_plane_bits(std::string& out, const IswPlaneBits& b) {
+  if (b.total() <= 0) return;
+  appendf(out,
+          "\"tangential_bit_share\": %.6g, \"plane_bits\": {\"base\": %.0f, \"normal_significance\": %.0f, "
+          "\"normal_sign\": %.0f, \"normal_refinement\": %.0f, \"tangential_significance\": %.0f, "
+          "\"tangential_sign\": %.0f, \"tangential_refinement\": %.0f, \"joint_significance\": %.0f, "
+          "\"descendants\": %.0f}, ",
+          b.tangential_share(), b.base, b.normal_significance, b.normal_sign, b.normal_refinement,
+          b.tangential_significance, b.tangential_sign, b.tangential_refinement, b.joint_significance, b.descendants);
+}
+
 void render_json_result(std::string& out, const JobOutcome& o) {
   const ConvertResult& r = o.result;
   appendf(out,
@@ -452,6 +464,7 @@ void render_json_result(std::string& out, const JobOutcome& o) {
   for (std::size_t k = 0; k < r.normal_share.size(); ++k)
     appendf(out, "%s%.6g%s", k ? ", " : "\"normal_energy_share\": [", r.normal_share[k],
             k + 1 == r.normal_share.size() ? "], " : "");
+  render_json_plane_bits(out, r.plane_bits);
   for (std::size_t k = 0; k < r.normal_levels.size(); ++k) {
     const NormalFitLevelStatistics& l = r.normal_levels[k];
     appendf(out,
@@ -559,6 +572,12 @@ void render_table_rows(std::string& out, const std::string& output, const JobOut
       appendf(shares, "%s level %zu %.1f%%", k ? "," : "", k + 1, 100.0 * r.normal_share[k]);
     appendf(out, "%-28s detail energy along the local frames' normals:%s\n", "", shares.c_str());
   }
+  if (const IswPlaneBits& b = r.plane_bits; b.total() > 0)
+    appendf(out,
+            "%-28s plane stream (estimated bits): tangential %.1f%%, normal %.1f%%, normal and tangential together "
+            "%.1f%%, tree %.1f%%, base points %.1f%%\n",
+            "", 100 * b.tangential_share(), 100 * b.normal() / b.total(), 100 * b.joint_significance / b.total(),
+            100 * b.descendants / b.total(), 100 * b.base / b.total());
   for (const NormalFitLevelStatistics& l : r.normal_levels)
     appendf(out,
             "%-28s normal fit level %d: %zu points %.3g cell RMS (max %.3g) off their targets, %zu without one; "

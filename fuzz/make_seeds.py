@@ -114,6 +114,14 @@ def isw():
     write("isw", "golden_2_0_plns_repeated.isw", b"".join(head) + planes + planes + end)
     write("isw", "golden_2_0_rdtb_after_plns.isw", b"".join(head) + planes + rates + end)
     write("isw", "golden_2_0_rdtb.isw", b"".join(head) + rates + planes + end)
+    # Version 2.1 (non-normal flags in the planes): the golden file, a cut, and its planes under a 2.0 header
+    # (PLNS's coding flag and the header's minor version disagree: a reader must reject it).
+    shutil.copy(os.path.join(data, "golden_2_1.isw"), os.path.join(CORPUS, "isw", "golden_2_1.isw"))
+    with open(os.path.join(data, "golden_2_1.isw"), "rb") as f:
+        golden21 = f.read()
+    write("isw", "golden_2_1_cut_in_stream.isw", golden21[:500])
+    assert golden21[8:12] == b"\x02\x00\x01\x00"
+    write("isw", "golden_2_1_minor_0.isw", golden21[:10] + b"\x00\x00" + golden21[12:])
 
 
 def npy():

@@ -1,7 +1,9 @@
 #include "bitplane_coder.h"
 
 #include <algorithm>
+#include <array>
 #include <cassert>
+#include <cmath>
 #include <memory>
 
 #include <tbb/parallel_for.h>
@@ -16,12 +18,16 @@ constexpr std::uint32_t kNoParent = UINT32_MAX;
 constexpr std::uint8_t kSignificant = 7;      // flag bits 0-2: component k significant
 constexpr std::uint8_t kDescendants = 1 << 3;  // flag bit 3: some descendant significant
 constexpr int kSignShift = 4;                  // flag bits 4-6: component k negative
+constexpr std::uint8_t kNonNormal = 1 << 7;    // flag bit 7 (2.1): some tangential component non-zero
 
-// The adaptive contexts, one flat array (docs/FORMAT.md, PLNS).
+// The adaptive contexts, one flat array (docs/FORMAT.md, PLNS), and whether
+// the stream codes the non-normal flags (minor version 1 and later).
 struct Contexts {
-  explicit Contexts(int classes)
+  Contexts(int classes, int minor_version)
       : node_end(static_cast<std::size_t>(classes) * 6), component_end(node_end + 18), sign_end(component_end + 9),
-        descendant_end(sign_end + static_cast<std::size_t>(classes) * 2), size(descendant_end + 6) {}
+        descendant_end(sign_end + static_cast<std::size_t>(classes) * 2), refinement_end(descendant_end + 6),
+        size(refinement_end + (minor_version >= 1 ? static_cast<std::size_t>(classes) * 4 : 0)),
+        non_normal_flags(minor_version >= 1) {}
   // A node's significance: class, parent (0 root, 1 none significant, 2 some), own (0 none, 1 some).
   std::size_t node(int cls, int parent, int own) const { return static_cast<std::size_t>((cls * 3 + parent) * 2 + own); }
   // Component k: the parent's component k (0 root, 1 not significant, 2 significant), own.
@@ -33,8 +39,20 @@ struct Contexts {
   std::size_t descendants(int cls, int own) const { return sign_end + static_cast<std::size_t>(cls * 2 + own); }
   // Refinement of component k, base control point or wavelet coefficient.
   std::size_t refinement(int k, int base) const { return descendant_end + static_cast<std::size_t>(k * 2 + base); }
-  std::size_t node_end, component_end, sign_end, descendant_end, size;
+  // 2.1: a wavelet coefficient's non-normal flag: class, the parent's flag
+  // (0 root, 1 not known yet, 2 normal, 3 non-normal).
+  std::size_t non_normal(int cls, int parent) const {
+    return refinement_end + static_cast<std::size_t>(cls * 4 + parent);
+  }
+  std::size_t node_end, component_end, sign_end, descendant_end, refinement_end, size;
+  bool non_normal_flags;
 };
+
+// What a decision codes (IswPlaneBits), for the encoder's account: a base
+// control point's decisions, else by component k (0 normal) and kind.
+using PlaneBitCounts = std::array<double, 9>;  // by Part
+enum Part : std::uint8_t { kBase, kSignificance, kSign = kSignificance + 2, kRefinement = kSign + 2, kJoint = kRefinement + 2, kTree };
+constexpr int part_of(int base, int kind, int k) { return base ? kBase : kind + (k > 0); }
 
 // Where a plane stopped: the position and the mask of its components refined.
 struct PlaneCut {
@@ -113,86 +131,136 @@ struct GroupCoder {
   std::uint32_t first;               // the group's first position
 };
 
+// What code_node's steps share about one open node.
+struct NodeView {
+  std::uint32_t i, parent;
+  std::uint8_t pf;  // the parent's flags (0 for a root)
+  int cls, base;    // its class; 1 for a base control point
+};
+
+// Refinement: bit b of every component significant before the plane (a
+// node's flags change only on its own visit, after this).
+template <class Io>
+bool refine_node(Io& io, GroupCoder& s, const NodeView& v, std::uint8_t f, int b, PlaneCut& cut) {
+  std::uint8_t refined = 0;
+  for (int k = 0; k < 3; ++k) {
+    if (!((f >> k) & 1)) continue;
+    const int bit = io.bit(part_of(v.base, kRefinement, k), s.models[s.c.refinement(k, v.base)],
+                           [&] { return io.reaches(v.i, k, b); });
+    if (io.stopped()) {
+      cut = {v.i, refined};
+      return false;
+    }
+    io.refine(v.i, k, b, bit);
+    refined = static_cast<std::uint8_t>(refined | (1 << k));
+  }
+  return true;
+}
+
+// The components a node may still make significant: all three, but only the
+// normal for a wavelet coefficient of a 2.1 stream flagged normal.
+std::uint8_t candidates(const Contexts& c, const NodeView& v, std::uint8_t f) {
+  return c.non_normal_flags && !v.base && (f & kSignificant) && !(f & kNonNormal) ? 1 : kSignificant;
+}
+
+// 2.1: at a wavelet coefficient's first significance, whether it is
+// non-normal (some tangential component is non-zero); context: class and
+// the parent's flag (0 root, 1 unknown, 2 normal, 3 non-normal).
+template <class Io>
+std::uint8_t code_non_normal(Io& io, GroupCoder& s, const NodeView& v) {
+  const int pn = v.parent == kNoParent ? 0 : !(v.pf & kSignificant) ? 1 : (v.pf & kNonNormal) ? 3 : 2;
+  const int t = io.bit(kSignificance + 1, s.models[s.c.non_normal(v.cls, pn)], [&] { return io.non_normal(v.i); });
+  return t ? kNonNormal : 0;
+}
+
+// 2.1: whether plane b must make a tangential component of a node with
+// flags `f` significant: a non-normal coefficient none of whose tangential
+// components is significant yet, at plane 0 (one of them is then 1).
+bool tangential_due(const Contexts& c, const NodeView& v, std::uint8_t f, int b) {
+  return c.non_normal_flags && !v.base && b == 0 && (f & kNonNormal) && !(f & 6);
+}
+
+// Significance of the candidate components not yet significant, and their
+// signs; the node's new flags in `f`.
+template <class Io>
+bool code_significance(Io& io, GroupCoder& s, const NodeView& v, std::uint8_t& f, int b, PlaneCut& cut) {
+  const Contexts& c = s.c;
+  const std::uint8_t open = static_cast<std::uint8_t>(candidates(c, v, f) & ~f);
+  if (!open) return true;
+  const int pstate = v.parent == kNoParent ? 0 : ((v.pf & kSignificant) ? 2 : 1);
+  const int own = (f & kSignificant) ? 1 : 0;
+  const int z = own && tangential_due(c, v, f, b)
+                    ? 1
+                    : io.bit(v.base ? kBase : (f & 1) ? kSignificance + 1 : kJoint,
+                             s.models[c.node(v.cls, pstate, own)], [&] { return io.any_reaches(v.i, f, b); });
+  if (io.stopped()) {
+    cut = {v.i, kSignificant};
+    return false;
+  }
+  if (!z) return true;
+  std::uint8_t nf = f;
+  if (c.non_normal_flags && !v.base && !own) nf = static_cast<std::uint8_t>(nf | code_non_normal(io, s, v));
+  const std::uint8_t todo = static_cast<std::uint8_t>(candidates(c, v, static_cast<std::uint8_t>(nf | 1)) & ~f);
+  const bool due = tangential_due(c, v, nf, b);
+  int insignificant = __builtin_popcount(todo), seen_one = 0;
+  for (int k = 0; k < 3; ++k) {
+    if (!((todo >> k) & 1)) continue;
+    --insignificant;
+    const int pk = v.parent == kNoParent ? 0 : (((v.pf >> k) & 1) ? 2 : 1);
+    const int bit = (insignificant == 0 && !seen_one) || (k == 2 && due && !(nf & 2))
+                        ? 1
+                        : io.bit(part_of(v.base, kSignificance, k), s.models[c.component(k, pk, own)],
+                                 [&] { return io.reaches(v.i, k, b); });
+    if (!bit) continue;
+    seen_one = 1;
+    const int ps = pk == 2 ? 1 + ((v.pf >> (kSignShift + k)) & 1) : 0;
+    const int negative =
+        io.bit(part_of(v.base, kSign, k), s.models[c.sign(k, ps)], [&] { return io.negative_bit(v.i, k); });
+    nf = static_cast<std::uint8_t>(nf | (1 << k) | (negative << (kSignShift + k)));
+  }
+  if (io.stopped()) {
+    cut = {v.i, kSignificant};
+    return false;
+  }
+  for (int k = 0; k < 3; ++k)
+    if (((nf & ~f) >> k) & 1) io.set_significant(v.i, k, b);
+  s.flags[v.i] = f = nf;
+  return true;
+}
+
+// Whether some descendant reaches 2^b, which opens the children.
+template <class Io>
+bool code_descendants(Io& io, GroupCoder& s, const NodeView& v, std::uint8_t f, int b, PlaneCut& cut) {
+  const std::uint32_t first = s.t.child_offsets[v.i], last = s.t.child_offsets[v.i + 1];
+  if (first == last || (f & kDescendants)) return true;
+  const int own = (f & kSignificant) ? 1 : 0;
+  const int d =
+      io.bit(kTree, s.models[s.c.descendants(v.cls, own)], [&] { return io.descendants_reach(v.i, b); });
+  if (io.stopped()) {
+    cut = {v.i, kSignificant};
+    return false;
+  }
+  if (d) {
+    s.flags[v.i] = static_cast<std::uint8_t>(f | kDescendants);
+    for (std::uint32_t k = first; k < last; ++k) {
+      const std::uint32_t q = s.t.children[k] - s.first;
+      s.open[q / 64] |= std::uint64_t{1} << (q % 64);
+    }
+  }
+  return true;
+}
+
 // One open node of plane b: refinement, significance, descendants. Returns
 // false when the decoder stopped; `cut` then says where.
 template <class Io>
 bool code_node(Io& io, GroupCoder& s, std::uint32_t i, int b, PlaneCut& cut) {
-  const Contexts& c = s.c;
-  std::vector<std::uint8_t>& flags = s.flags;
-  std::vector<Probability>& models = s.models;
   const std::uint32_t parent = s.t.parent[i];
-  const std::uint8_t pf = parent == kNoParent ? 0 : flags[parent];
   const int cls = s.t.node_class[i];
-  std::uint8_t f = flags[i];
-  // Refinement: bit b of every component significant before the plane (a
-  // node's flags change only on its own visit, after this).
-  if (f & kSignificant) {
-    std::uint8_t refined = 0;
-    for (int k = 0; k < 3; ++k) {
-      if (!((f >> k) & 1)) continue;
-      const int bit = io.bit(models[c.refinement(k, parent == kNoParent && cls == 0)], [&] { return io.reaches(i, k, b); });
-      if (io.stopped()) {
-        cut = {i, refined};
-        return false;
-      }
-      io.refine(i, k, b, bit);
-      refined = static_cast<std::uint8_t>(refined | (1 << k));
-    }
-  }
-  const int pstate = parent == kNoParent ? 0 : ((pf & kSignificant) ? 2 : 1);
-  const int own = (f & kSignificant) ? 1 : 0;
-  // Significance of the components not yet significant, and their signs.
-  if ((f & kSignificant) != kSignificant) {
-    const int z = io.bit(models[c.node(cls, pstate, own)], [&] { return io.any_reaches(i, f, b); });
-    if (io.stopped()) {
-      cut = {i, kSignificant};
-      return false;
-    }
-    if (z) {
-      std::uint8_t nf = f;
-      int insignificant = 0;
-      for (int k = 0; k < 3; ++k) insignificant += (f >> k) & 1 ? 0 : 1;
-      int seen_one = 0;
-      for (int k = 0; k < 3; ++k) {
-        if ((f >> k) & 1) continue;
-        --insignificant;
-        const int pk = parent == kNoParent ? 0 : (((pf >> k) & 1) ? 2 : 1);
-        const int bit = insignificant == 0 && !seen_one
-                            ? 1
-                            : io.bit(models[c.component(k, pk, own)], [&] { return io.reaches(i, k, b); });
-        if (!bit) continue;
-        seen_one = 1;
-        const int ps = pk == 2 ? 1 + ((pf >> (kSignShift + k)) & 1) : 0;
-        const int negative = io.bit(models[c.sign(k, ps)], [&] { return io.negative_bit(i, k); });
-        nf = static_cast<std::uint8_t>(nf | (1 << k) | (negative << (kSignShift + k)));
-      }
-      if (io.stopped()) {
-        cut = {i, kSignificant};
-        return false;
-      }
-      for (int k = 0; k < 3; ++k)
-        if (((nf & ~f) >> k) & 1) io.set_significant(i, k, b);
-      flags[i] = f = nf;
-    }
-  }
-  // Whether some descendant reaches 2^b, which opens the children.
-  const std::uint32_t first = s.t.child_offsets[i], last = s.t.child_offsets[i + 1];
-  if (first != last && !(f & kDescendants)) {
-    const int own_now = (f & kSignificant) ? 1 : 0;
-    const int d = io.bit(models[c.descendants(cls, own_now)], [&] { return io.descendants_reach(i, b); });
-    if (io.stopped()) {
-      cut = {i, kSignificant};
-      return false;
-    }
-    if (d) {
-      flags[i] = static_cast<std::uint8_t>(f | kDescendants);
-      for (std::uint32_t k = first; k < last; ++k) {
-        const std::uint32_t q = s.t.children[k] - s.first;
-        s.open[q / 64] |= std::uint64_t{1} << (q % 64);
-      }
-    }
-  }
-  return true;
+  const NodeView v{i, parent, parent == kNoParent ? std::uint8_t{0} : s.flags[parent], cls,
+                   parent == kNoParent && cls == 0};
+  std::uint8_t f = s.flags[i];
+  return refine_node(io, s, v, f, b, cut) && code_significance(io, s, v, f, b, cut) &&
+         code_descendants(io, s, v, f, b, cut);
 }
 
 // One level of one plane of a group (positions [begin, end)), shared by
@@ -217,15 +285,31 @@ bool code_segment(Io& io, GroupCoder& s, int b, std::uint32_t begin, std::uint32
   return true;
 }
 
+// -log2 of the probability a model gives bit 0 (index p) and bit 1 (index p + 2^11).
+const std::array<double, 2 << kProbabilityBits>& bit_costs() {
+  static const std::array<double, 2 << kProbabilityBits> costs = [] {
+    std::array<double, 2 << kProbabilityBits> c{};
+    constexpr double one = 1 << kProbabilityBits;
+    for (std::size_t p = 1; p < (1 << kProbabilityBits); ++p) {
+      c[p] = -std::log2(double(p) / one);
+      c[p + (1 << kProbabilityBits)] = -std::log2(1 - double(p) / one);
+    }
+    return c;
+  }();
+  return costs;
+}
+
 // The encoder's side: decisions from the magnitudes (in positions).
 struct EncoderIo {
   RangeEncoder& rc;
   const std::vector<std::uint32_t>& magnitude;       // 3 per position
   const std::vector<std::uint8_t>& negative;         // per position
   const std::vector<std::uint32_t>& descendant_max;  // per position
+  PlaneBitCounts* account;                           // nullptr: none
   template <class Value>
-  int bit(Probability& p, Value value) {
+  int bit(int part, Probability& p, Value value) {
     const int v = value();
+    if (account) (*account)[static_cast<std::size_t>(part)] += bit_costs()[p + (static_cast<std::size_t>(v) << kProbabilityBits)];
     rc.encode_bit(p, v);
     return v;
   }
@@ -237,6 +321,7 @@ struct EncoderIo {
     return 0;
   }
   int negative_bit(std::uint32_t i, int k) const { return (negative[i] >> k) & 1; }
+  int non_normal(std::uint32_t i) const { return (m(i, 1) | m(i, 2)) != 0 ? 1 : 0; }
   int descendants_reach(std::uint32_t i, int b) const { return (descendant_max[i] >> b) != 0 ? 1 : 0; }
   bool stopped() const { return false; }
   void set_significant(std::uint32_t, int, int) {}
@@ -249,12 +334,13 @@ struct DecoderIo {
   Decoder& rc;
   std::vector<std::uint32_t>& magnitude;
   template <class Value>
-  int bit(Probability& p, Value) {
+  int bit(int, Probability& p, Value) {
     return rc.decode_bit(p);
   }
   int reaches(std::uint32_t, int, int) const { return 0; }
   int any_reaches(std::uint32_t, std::uint8_t, int) const { return 0; }
   int negative_bit(std::uint32_t, int) const { return 0; }
+  int non_normal(std::uint32_t) const { return 0; }
   int descendants_reach(std::uint32_t, int) const { return 0; }
   bool stopped() const { return rc.stopped(); }
   void set_significant(std::uint32_t i, int k, int b) { magnitude[3 * std::size_t{i} + static_cast<std::size_t>(k)] = 1u << b; }
@@ -287,23 +373,42 @@ PositionSymbols position_symbols(const GroupedTree& t, const PlaneSymbols& symbo
   return s;
 }
 
+// The groups' counts summed in group order (deterministic), by part.
+IswPlaneBits plane_bits_of(const std::vector<PlaneBitCounts>& counts) {
+  PlaneBitCounts sum{};
+  for (const PlaneBitCounts& c : counts)
+    for (std::size_t k = 0; k < sum.size(); ++k) sum[k] += c[k];
+  IswPlaneBits bits;
+  bits.base = sum[kBase];
+  bits.normal_significance = sum[kSignificance];
+  bits.tangential_significance = sum[kSignificance + 1];
+  bits.normal_sign = sum[kSign];
+  bits.tangential_sign = sum[kSign + 1];
+  bits.normal_refinement = sum[kRefinement];
+  bits.tangential_refinement = sum[kRefinement + 1];
+  bits.joint_significance = sum[kJoint];
+  bits.descendants = sum[kTree];
+  return bits;
+}
+
 }  // namespace
 
 PlanePackets encode_planes(const CoefficientTree& tree, const PlaneSymbols& symbols, std::size_t groups,
-                           int lowest_plane) {
+                           int minor_version, int lowest_plane, IswPlaneBits* account) {
   assert(symbols.magnitude.size() == 3 * tree.nodes && symbols.negative.size() == tree.nodes);
   PlanePackets result;
   const std::uint32_t largest =
       symbols.magnitude.empty() ? 0 : *std::max_element(symbols.magnitude.begin(), symbols.magnitude.end());
   result.top_plane = bit_length(largest) - 1;
   const int planes = std::max(0, result.top_plane + 1 - std::max(lowest_plane, 0));
-  const Contexts c(symbols.classes);
+  const Contexts c(symbols.classes, minor_version);
   const GroupedTree t = group_tree(tree, symbols.node_class, groups);
   const std::size_t segments = t.segment_count;
   result.segments = segments;
   result.packets.resize(static_cast<std::size_t>(planes) * segments * groups);
   const PositionSymbols s = position_symbols(t, symbols);
   std::vector<std::uint8_t> flags(tree.nodes, 0);
+  std::vector<PlaneBitCounts> counts(account ? groups : 0, PlaneBitCounts{});
   tbb::parallel_for(std::size_t{0}, groups, [&](std::size_t g) {
     std::vector<Probability> models(c.size, kProbabilityHalf);
     std::vector<std::uint64_t> open = roots_open(t, g);
@@ -312,13 +417,14 @@ PlanePackets encode_planes(const CoefficientTree& tree, const PlaneSymbols& symb
       const std::size_t level = k % segments;
       std::string& packet = result.packets[k * groups + g];
       RangeEncoder rc(packet);
-      EncoderIo io{rc, s.magnitude, s.negative, s.descendant_max};
+      EncoderIo io{rc, s.magnitude, s.negative, s.descendant_max, account ? &counts[g] : nullptr};
       PlaneCut cut;
       code_segment(io, coder, result.top_plane - static_cast<int>(k / segments), t.segment_begin(g, level),
                    t.segment_begin(g, level + 1), cut);
       rc.finish_trimmed(0);
     }
   });
+  if (account) *account = plane_bits_of(counts);
   return result;
 }
 
@@ -330,9 +436,9 @@ struct PlaneDecoder::State {
 };
 
 PlaneDecoder::PlaneDecoder(const CoefficientTree& tree, const std::vector<std::uint8_t>& node_class, int classes,
-                           int top_plane, std::size_t groups)
+                           int minor_version, int top_plane, std::size_t groups)
     : top_plane_(top_plane),
-      state_(std::make_unique<State>(State{group_tree(tree, node_class, groups), Contexts(classes),
+      state_(std::make_unique<State>(State{group_tree(tree, node_class, groups), Contexts(classes, minor_version),
                                            std::vector<std::uint32_t>(3 * tree.nodes, 0),
                                            std::vector<std::uint8_t>(tree.nodes, 0)})),
       group_state_(groups) {

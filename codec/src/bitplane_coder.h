@@ -1,5 +1,5 @@
 #pragma once
-// Private: the embedded bit-plane coder of .isw 2.0 (docs/FORMAT.md, PLNS;
+// Private: the embedded bit-plane coder of .isw 2.0 and 2.1 (docs/FORMAT.md, PLNS;
 // issue #34). Every node of the coefficient tree carries three non-negative
 // integer magnitudes (its components in step units) and their signs. The
 // nodes form independent groups (split_tree), each coded on its own. Plane b
@@ -12,6 +12,10 @@
 //   significance: whether a not-yet-significant component reaches 2^b (one
 //     decision for the node, then one per component, then the sign of each
 //     new one);
+//   (2.1, minor version 1: at a wavelet coefficient's first significance, a
+//     flag "some tangential component is non-zero"; without it only the
+//     normal component is ever coded, and with it plane 0 implies the
+//     tangential bits a non-zero magnitude forces;)
 //   descendants: for a node with children whose descendants were all below
 //     2^(b+1), whether some descendant reaches 2^b, which opens its children
 //     (set partitioning as in SPIHT, Said and Pearlman 1996, with the
@@ -31,6 +35,7 @@
 #include <vector>
 
 #include "coefficient_tree.h"
+#include "isowave/codec/isw_format.h"
 #include "isowave/core/vec3.h"
 
 namespace isowave::detail {
@@ -75,16 +80,21 @@ struct PlanePackets {
   std::size_t segments = 1;
   std::vector<std::string> packets;
 };
+// `minor_version` selects the coding: 0 as 2.0, 1 (and later) adds the
+// non-normal flags of 2.1. `account`, if given, receives the estimated bits
+// by what they code (components 1 and 2 tangential; a node of class 0 is a
+// base control point).
 PlanePackets encode_planes(const CoefficientTree& tree, const PlaneSymbols& symbols, std::size_t groups,
-                           int lowest_plane = 0);
+                           int minor_version, int lowest_plane = 0, IswPlaneBits* account = nullptr);
 
 // The decoder's state after any prefix of the packets.
 class PlaneDecoder {
  public:
-  // `node_class` and `classes` as in PlaneSymbols; top_plane in [-1, 31];
-  // groups in [1, kMaxGroups]. Keeps no reference to its arguments.
-  PlaneDecoder(const CoefficientTree& tree, const std::vector<std::uint8_t>& node_class, int classes, int top_plane,
-               std::size_t groups);
+  // `node_class` and `classes` as in PlaneSymbols; `minor_version` as in
+  // encode_planes(); top_plane in [-1, 31]; groups in [1, kMaxGroups]. Keeps
+  // no reference to its arguments.
+  PlaneDecoder(const CoefficientTree& tree, const std::vector<std::uint8_t>& node_class, int classes,
+               int minor_version, int top_plane, std::size_t groups);
   ~PlaneDecoder();
 
   // Decodes the packets in the encoder's order, the groups in parallel; a

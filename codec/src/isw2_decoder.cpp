@@ -43,6 +43,9 @@ void decode_plane_stream(const Section& section, const SubdivisionHierarchy& hie
   const PlaneStream planes = read_planes(reader, section.payload, section.cut, max_stream_bytes);
   if (planes.packets_total > 0 && planes.layout.segments != static_cast<std::size_t>(hierarchy.levels()) + 1)
     reader.fail("has a segment count other than the levels + 1");
+  // The coding, which the header's minor version (outside every CRC) must agree with.
+  if (section.payload.size() >= 2 && planes.layout.coding_minor() != std::min<int>(result.minor_version, 1))
+    reader.fail("codes its planes for another minor version than the file header's");
   IswStreamInfo& stream = result.stream;
   stream.offset = section.info.offset + kSectionHeader + planes.data_offset;
   stream.bytes = section.payload.size() > planes.data_offset ? section.payload.size() - planes.data_offset : 0;
@@ -58,7 +61,8 @@ void decode_plane_stream(const Section& section, const SubdivisionHierarchy& hie
   frames.run([&] { normals = frame_normals(hierarchy, frame_base); });
   const CoefficientTree tree = build_coefficient_tree(hierarchy);
   const std::vector<std::uint8_t> classes = node_classes(layout);
-  PlaneDecoder decoder(tree, classes, layout.count(), planes.layout.top_plane, planes.layout.groups);
+  PlaneDecoder decoder(tree, classes, layout.count(), planes.layout.coding_minor(), planes.layout.top_plane,
+                       planes.layout.groups);
   decoder.decode(planes.packets, planes.last_cut);
   for (std::string_view packet : planes.packets) stream.decoded += packet.size();
   stream.planes_decoded = decoder.planes_done();

@@ -33,6 +33,8 @@ void check_v2_options(const IswEncodeOptions& options) {
     throw Error(ErrorKind::InvalidArgument, "the tangential factor must be at least 1");
   if (options.frame_step < 0 || !std::isfinite(options.frame_step))
     throw Error(ErrorKind::InvalidArgument, "the frame step must be positive (or 0: automatic)");
+  if (options.minor_version < 0 || options.minor_version > kIswMinorVersion)
+    throw Error(ErrorKind::InvalidArgument, "the minor version must be 0 to " + std::to_string(kIswMinorVersion));
 }
 
 // One component in step units: magnitude and sign; false when it is not
@@ -129,15 +131,19 @@ std::string encode_isw_v2(const SubdivisionHierarchy& hierarchy, const std::vect
   std::vector<Vec3> normals = frame_normals(hierarchy, coarse_base);
   PlaneSymbols symbols = symbols_of(hierarchy, coefficients, coarse_base, normals, scales);
   const std::size_t groups = plane_groups(hierarchy.fine_vertex_count());
-  const PlanePackets planes = encode_planes(build_coefficient_tree(hierarchy), symbols, groups);
+  IswPlaneBits bits;
+  const PlanePackets planes =
+      encode_planes(build_coefficient_tree(hierarchy), symbols, groups, options.minor_version, 0,
+                    values ? &bits : nullptr);
 
   std::string out;
-  put_file_header(out, 2);
+  put_file_header(out, 2, options.minor_version);
   put_meta(out, metadata, 2);
   put_base(out, hierarchy.base(), 2);
   put_quantization_v2(out, scales, hierarchy.levels(), nonzero_wavelets(hierarchy, symbols));
   put_base_points(out, hierarchy.base(), base_q);
-  put_planes(out, {planes.top_plane, groups, planes.segments}, planes.packets, PlaneEnding::Complete);
+  put_planes(out, {planes.top_plane, groups, planes.segments, options.minor_version >= 1}, planes.packets,
+             PlaneEnding::Complete);
   put_section(out, "END ", std::string_view());
   std::uint64_t kept = UINT64_MAX;  // plane stream bytes
   if (values) values->plane_ends = stream_plane_ends(out);
@@ -154,6 +160,7 @@ std::string encode_isw_v2(const SubdivisionHierarchy& hierarchy, const std::vect
     values->scales = std::move(scales);
     values->frame_base = std::move(coarse_base);
     values->normals = std::move(normals);
+    values->bits = bits;
   }
   return out;
 }
@@ -162,10 +169,12 @@ std::string encode_isw_v2(const SubdivisionHierarchy& hierarchy, const std::vect
 
 namespace {
 
-// The sections of a complete version 2 file, in order; Error(InvalidArgument) otherwise.
-std::vector<Section> sections_of_v2(const std::string& file) {
+// The sections of a complete version 2 file, in order, and its minor
+// version; Error(InvalidArgument) otherwise.
+std::vector<Section> sections_of_v2(const std::string& file, int* minor_version = nullptr) {
   IswDecoded header;
   read_file_header(file, "rewrite_isw", header);
+  if (minor_version) *minor_version = header.minor_version;
   if (header.major_version != 2) throw Error(ErrorKind::InvalidArgument, "rewrite_isw: not a version 2 .isw file");
   SectionWalker walker(file, "rewrite_isw", 2);
   std::vector<Section> sections;
@@ -204,6 +213,11 @@ const std::vector<Vec3>& IswPlaneValues::frame_normals() const {
   return state_ ? state_->normals : none;
 }
 
+const IswPlaneBits& IswPlaneValues::plane_bits() const {
+  static const IswPlaneBits none;
+  return state_ ? state_->bits : none;
+}
+
 void IswPlaneValues::coefficients_at(std::size_t k, std::vector<Vec3>& out) const {
   assert(state_ && k < state_->plane_ends.size());
   const PlaneSymbols& s = state_->symbols;
@@ -222,9 +236,11 @@ void IswPlaneValues::coefficients_at(std::size_t k, std::vector<Vec3>& out) cons
 
 std::string rewrite_isw(const std::string& file, const IswRewrite& rewrite) {
   const std::uint64_t stream_bytes = rewrite.stream_bytes;
+  int minor = 0;
+  const std::vector<Section> sections = sections_of_v2(file, &minor);
   std::string out;
-  put_file_header(out, 2);
-  for (const Section& section : sections_of_v2(file)) {
+  put_file_header(out, 2, minor);  // the planes' coding
+  for (const Section& section : sections) {
     if (section.tag == "RDTB") continue;  // replaced
     if (section.tag == "META" && rewrite.metadata) {
       put_meta(out, *rewrite.metadata, 2);

@@ -63,7 +63,7 @@ void steps_to_world(const std::vector<std::uint8_t>& classes, const V2Scales& sc
 void put_planes(std::string& out, PlaneLayout layout, const std::vector<std::string_view>& packets, PlaneEnding last) {
   std::string payload;
   payload.push_back(static_cast<char>(static_cast<std::int8_t>(layout.top_plane)));
-  payload.push_back(last == PlaneEnding::Cut ? 1 : 0);
+  payload.push_back(static_cast<char>((last == PlaneEnding::Cut ? 1 : 0) | (layout.non_normal_flags ? 2 : 0)));
   put_varint(payload, layout.groups);
   put_varint(payload, layout.segments);
   put_varint(payload, packets.size());
@@ -81,7 +81,7 @@ PlaneStream read_planes(PayloadReader& reader, std::string_view payload, bool pa
   }
   const int top_plane = reader.read<std::int8_t>();
   const auto flags = reader.read<std::uint8_t>();
-  if (top_plane < -1 || top_plane > 31 || flags > 1) reader.fail("has an invalid plane header");
+  if (top_plane < -1 || top_plane > 31 || flags > 3) reader.fail("has an invalid plane header");
   std::uint64_t groups = 0, segments = 0, count = 0;
   if (!read_varint(reader, groups) || !read_varint(reader, segments) || !read_varint(reader, count)) {
     if (payload_cut) return stream;
@@ -89,7 +89,7 @@ PlaneStream read_planes(PayloadReader& reader, std::string_view payload, bool pa
   }
   if (groups < 1 || groups > kMaxGroups || segments < 1 || segments > kMaxSegments)
     reader.fail("has an invalid group or segment count");
-  stream.layout = {top_plane, static_cast<std::size_t>(groups), static_cast<std::size_t>(segments)};
+  stream.layout = {top_plane, static_cast<std::size_t>(groups), static_cast<std::size_t>(segments), (flags & 2) != 0};
   if (count > static_cast<std::uint64_t>(top_plane + 1) * stream.layout.packets_per_plane())
     reader.fail("holds more packets than planes");
   if (count > reader.remaining()) {  // every size takes a byte at least

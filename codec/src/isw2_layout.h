@@ -51,14 +51,17 @@ void steps_to_world(const std::vector<std::uint8_t>& classes, const V2Scales& sc
 // Per entry, its coefficient class (the plane coder's context class).
 std::vector<std::uint8_t> node_classes(const CoefficientClasses& classes);
 
-// PLNS: i8 top plane, u8 flags (bit 0: the last packet is cut), LEB128
-// group and segment (level) counts, LEB128 packet count and sizes, then the
-// packets (plane, then level, then group).
+// PLNS: i8 top plane, u8 flags (bit 0: the last packet is cut; bit 1: the
+// planes code non-normal flags, 2.1), LEB128 group and segment (level)
+// counts, LEB128 packet count and sizes, then the packets (plane, then
+// level, then group).
 enum class PlaneEnding { Complete, Cut };
 struct PlaneLayout {
   int top_plane = -1;
   std::size_t groups = 1;
   std::size_t segments = 1;  // levels + 1
+  bool non_normal_flags = false;  // the coding of minor version 1 (encode_planes)
+  int coding_minor() const { return non_normal_flags ? 1 : 0; }
   std::size_t packets_per_plane() const { return groups * segments; }
 };
 void put_planes(std::string& out, PlaneLayout layout, const std::vector<std::string_view>& packets, PlaneEnding last);
@@ -86,7 +89,7 @@ struct PlaneStream {
 // Reads a PLNS payload that may itself be cut (`payload_cut`), keeping at
 // most `max_stream_bytes` bytes of packets. Error(Format) through `reader`
 // for impossible tables (more than kMaxGroups groups or kMaxSegments
-// segments, more packets than planes).
+// segments, more packets than planes, unknown flags).
 PlaneStream read_planes(PayloadReader& reader, std::string_view payload, bool payload_cut,
                         std::uint64_t max_stream_bytes);
 
@@ -102,6 +105,7 @@ struct PlaneValuesState {
   std::vector<Vec3> frame_base, normals;
   int top_plane = -1;
   std::vector<std::uint64_t> plane_ends;  // of the file written (a cut one has fewer)
+  IswPlaneBits bits;                      // of the whole stream encoded
 };
 
 // The encoder (isw2_encoder.cpp): `weights` are the class weights; `values`,

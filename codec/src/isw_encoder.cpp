@@ -242,7 +242,7 @@ std::string encode_isw(const SubdivisionHierarchy& hierarchy, const std::vector<
   const std::vector<std::uint64_t> chunk_ends = chunk_ends_for(hierarchy, options.chunk_percents, ranked.size());
 
   std::string out;
-  put_file_header(out, 1);
+  put_file_header(out, 1, 0);
   put_meta(out, metadata, 1);
   put_base(out, hierarchy.base(), 1);
   put_quantization(out, options.step, hierarchy.levels(), weights, ranked.size(), chunk_ends);

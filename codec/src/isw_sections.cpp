@@ -85,10 +85,10 @@ bool fits(const std::string& bytes, std::size_t position, std::uint64_t size) {
 
 }  // namespace
 
-void put_file_header(std::string& out, int major) {
+void put_file_header(std::string& out, int major, int minor) {
   out.append(kIswMagic, kIswMagic + 8);
   put_u16(out, static_cast<std::uint16_t>(major));
-  put_u16(out, kIswMinorVersion);
+  put_u16(out, static_cast<std::uint16_t>(minor));
   put_u32(out, 0);
 }
 
@@ -112,10 +112,12 @@ void read_file_header(const std::string& bytes, const std::string& name, IswDeco
   std::memcpy(&major, bytes.data() + 8, 2);
   std::memcpy(&minor, bytes.data() + 10, 2);
   std::memcpy(&reserved, bytes.data() + 12, 4);
-  if (major != 1 && major != kIswMajorVersion)
+  if (major != 1 && (major != kIswMajorVersion || minor > kIswMinorVersion))
     throw Error(ErrorKind::Unsupported, name + ": .isw format version " + std::to_string(major) + "." +
                                             std::to_string(minor) + " is not supported (this build reads 1.x and " +
-                                            std::to_string(kIswMajorVersion) + ".x)");
+                                            std::to_string(kIswMajorVersion) + ".0-" +
+                                            std::to_string(kIswMajorVersion) + "." +
+                                            std::to_string(kIswMinorVersion) + ")");
   if (reserved != 0) throw Error(ErrorKind::Format, name + ": corrupt file header (reserved field is not zero)");
   result.major_version = major;
   result.minor_version = minor;

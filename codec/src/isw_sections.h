@@ -30,14 +30,16 @@ inline void put_u32(std::string& out, std::uint32_t v) { out.append(reinterpret_
 inline void put_u64(std::string& out, std::uint64_t v) { out.append(reinterpret_cast<const char*>(&v), 8); }
 inline void put_f64(std::string& out, double v) { out.append(reinterpret_cast<const char*>(&v), 8); }
 
-// The 16-byte file header of major version `major` (1 or 2), minor 0.
-void put_file_header(std::string& out, int major);
+// The 16-byte file header of version `major`.`minor` (1.0, 2.0 or 2.1).
+void put_file_header(std::string& out, int major, int minor = 0);
 // Appends one section: header, payload, CRC. `tag` is 4 characters.
 void put_section(std::string& out, const char* tag, std::string_view payload);
 
 // Checks the magic and the version of `bytes` and stores the version in
 // `result`. Errors: Format (not an .isw file, a truncated or corrupt header),
-// Unsupported (another major version). `name` heads the messages.
+// Unsupported (another major version, or a major 2 minor version above
+// kIswMinorVersion: a minor version may change the plane coding). `name`
+// heads the messages.
 void read_file_header(const std::string& bytes, const std::string& name, IswDecoded& result);
 
 // Bounds-checked little-endian reader over one section's payload; fail()

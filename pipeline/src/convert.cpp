@@ -542,6 +542,7 @@ std::vector<Vec3> analyze_and_encode(const std::shared_ptr<const SubdivisionHier
   IswPlaneValues planes;
   const std::string whole = encode_isw(*hierarchy, coefficients, metadata, encode_options, planes);
   result.normal_share = normal_energy_share(*hierarchy, coefficients, planes.frame_normals());
+  result.plane_bits = planes.plane_bits();
   std::vector<Vec3>().swap(coefficients);
   detail::RatePlan plan =
       detail::plan_rate(whole, planes, hierarchy, meter, options.rate, result.extracted_vertices, result.cell_size);

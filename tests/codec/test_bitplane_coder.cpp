@@ -1,9 +1,11 @@
-// The embedded plane coder of .isw 2.0 (codec/src/bitplane_coder.h) with
-// several independent groups and one packet per level: split_tree's
+// The embedded plane coder of .isw 2.0 and 2.1 (codec/src/bitplane_coder.h)
+// with several independent groups and one packet per level: split_tree's
 // partition, exact values after the last plane whatever the group count, the
 // bound of the last complete plane
 // at every packet boundary, cuts inside packets that decode only what they
-// are sure of, and hostile packets.
+// are sure of, and hostile packets, for both codings (2.1: non-normal flags),
+// on coefficients of which some lie along their frame normals (tangential
+// components zero); 2.1's estimated tangential bits on coefficients that all do.
 #include <algorithm>
 #include <cmath>
 #include <random>
@@ -25,8 +27,9 @@ struct Sample {
 };
 
 // Magnitudes of decreasing size down the tree (as wavelet details are), many
-// zeros, random signs, classes by level.
-Sample sample(std::uint32_t seed) {
+// zeros, random signs, classes by level; a wavelet coefficient lies along
+// its normal (components 1 and 2 zero) with probability `normal`.
+Sample sample(std::uint32_t seed, double normal = 0.7) {
   Sample s{test::make_coded_surface(test::genus_slab(2), 3, 0.05, seed), {}, {}};
   s.tree = build_coefficient_tree(*s.surface.hierarchy);
   const std::size_t n = s.tree.nodes;
@@ -39,8 +42,10 @@ Sample sample(std::uint32_t seed) {
   for (std::size_t i = 0; i < n; ++i) {
     const int level = s.surface.hierarchy->level_of_index(i);
     s.symbols.node_class[i] = static_cast<std::uint8_t>(level);
+    const bool along_normal = level > 0 && std::uniform_real_distribution<double>(0, 1)(rng) < normal;
     for (std::size_t k = 0; k < 3; ++k)
-      s.symbols.magnitude[3 * i + k] = static_cast<std::uint32_t>(std::ldexp(size(rng), 9 - 2 * level));
+      s.symbols.magnitude[3 * i + k] =
+          k > 0 && along_normal ? 0 : static_cast<std::uint32_t>(std::ldexp(size(rng), 9 - 2 * level));
     s.symbols.negative[i] = static_cast<std::uint8_t>(rng() & 7);
   }
   return s;
@@ -58,9 +63,23 @@ std::vector<std::string_view> views(const std::vector<std::string>& packets, std
   return {packets.begin(), packets.begin() + static_cast<std::ptrdiff_t>(count)};
 }
 
-std::vector<double> decode(const Sample& s, int top_plane, std::size_t groups, const std::vector<std::string_view>& packets,
-                           bool last_cut, int* planes_done = nullptr) {
-  PlaneDecoder decoder(s.tree, s.symbols.node_class, s.symbols.classes, top_plane, groups);
+// Both codings: minor version 0 (2.0) and 1 (2.1, non-normal flags).
+class PlaneCoder : public ::testing::TestWithParam<int> {
+ protected:
+  int minor() const { return GetParam(); }
+  PlanePackets encode(const Sample& s, std::size_t groups, IswPlaneBits* bits = nullptr) const {
+    return encode_planes(s.tree, s.symbols, groups, minor(), 0, bits);
+  }
+  std::vector<double> decode(const Sample& s, int top_plane, std::size_t groups,
+                             const std::vector<std::string_view>& packets, bool last_cut,
+                             int* planes_done = nullptr) const;
+};
+INSTANTIATE_TEST_SUITE_P(Minor, PlaneCoder, ::testing::Values(0, 1));
+
+std::vector<double> PlaneCoder::decode(const Sample& s, int top_plane, std::size_t groups,
+                                       const std::vector<std::string_view>& packets, bool last_cut,
+                                       int* planes_done) const {
+  PlaneDecoder decoder(s.tree, s.symbols.node_class, s.symbols.classes, minor(), top_plane, groups);
   decoder.decode(packets, last_cut);
   if (planes_done) *planes_done = decoder.planes_done();
   std::vector<Vec3> values(s.tree.nodes, Vec3{1, 1, 1});  // every entry must be written
@@ -70,7 +89,7 @@ std::vector<double> decode(const Sample& s, int top_plane, std::size_t groups, c
   return flat;
 }
 
-TEST(PlaneCoder, SplitTreeKeepsSubtreesTogetherAndBalancesThem) {
+TEST(PlaneTree, SplitTreeKeepsSubtreesTogetherAndBalancesThem) {
   const Sample s = sample(1);
   for (const std::size_t groups : {1, 2, 5, 64}) {
     const TreeGroups split = split_tree(s.tree, groups);
@@ -96,10 +115,10 @@ TEST(PlaneCoder, SplitTreeKeepsSubtreesTogetherAndBalancesThem) {
   }
 }
 
-TEST(PlaneCoder, EveryGroupCountDecodesTheExactValues) {
+TEST_P(PlaneCoder, EveryGroupCountDecodesTheExactValues) {
   const Sample s = sample(2);
   for (const std::size_t groups : {1, 2, 3, 7}) {
-    const PlanePackets planes = encode_planes(s.tree, s.symbols, groups);
+    const PlanePackets planes = encode(s, groups);
     ASSERT_EQ(planes.segments, s.tree.level_ends.size());
     ASSERT_EQ(planes.packets.size(), static_cast<std::size_t>(planes.top_plane + 1) * groups * planes.segments);
     int done = 0;
@@ -126,10 +145,10 @@ void expect_within_plane_bound(const Sample& s, const std::vector<double>& value
     }
 }
 
-TEST(PlaneCoder, PrefixesOfPacketsAndCutsInsideThemKeepTheBound) {
+TEST_P(PlaneCoder, PrefixesOfPacketsAndCutsInsideThemKeepTheBound) {
   const Sample s = sample(3);
   constexpr std::size_t kGroups = 3;
-  const PlanePackets planes = encode_planes(s.tree, s.symbols, kGroups);
+  const PlanePackets planes = encode(s, kGroups);
   const std::size_t per_plane = kGroups * planes.segments;
   std::vector<double> before;
   for (std::size_t count = 0; count <= planes.packets.size(); ++count) {
@@ -155,10 +174,10 @@ TEST(PlaneCoder, PrefixesOfPacketsAndCutsInsideThemKeepTheBound) {
   }
 }
 
-TEST(PlaneCoder, AStreamEndingBetweenALevelsPacketsDecodesThosePacketsOnly) {
+TEST_P(PlaneCoder, AStreamEndingBetweenALevelsPacketsDecodesThosePacketsOnly) {
   const Sample s = sample(5);
   constexpr std::size_t kGroups = 2;
-  const PlanePackets planes = encode_planes(s.tree, s.symbols, kGroups);
+  const PlanePackets planes = encode(s, kGroups);
   const std::size_t per_plane = kGroups * planes.segments;
   ASSERT_GT(planes.segments, 2u);
   std::vector<std::vector<double>> at_plane_ends;
@@ -186,7 +205,7 @@ TEST(PlaneCoder, AStreamEndingBetweenALevelsPacketsDecodesThosePacketsOnly) {
   }
 }
 
-TEST(PlaneCoder, HostilePacketsDecodeToBoundedValues) {
+TEST_P(PlaneCoder, HostilePacketsDecodeToBoundedValues) {
   const Sample s = sample(4);
   std::mt19937 rng(4);
   for (int trial = 0; trial < 20; ++trial) {
@@ -200,6 +219,70 @@ TEST(PlaneCoder, HostilePacketsDecodeToBoundedValues) {
     const std::vector<double> values = decode(s, top, groups, views(packets, packets.size()), trial % 2 == 1);
     for (const double v : values) ASSERT_LT(std::abs(v), std::ldexp(1.0, top + 1)) << trial;
   }
+}
+
+// The two codings carry the same values: after every plane (of one group
+// and of several), 2.0 and 2.1 decode alike.
+TEST(PlaneCoderMinors, BothCodingsDecodeTheSameValuesAtEveryPlaneEnd) {
+  const Sample s = sample(6);
+  for (const std::size_t groups : {1, 3}) {
+    const PlanePackets p0 = encode_planes(s.tree, s.symbols, groups, 0);
+    const PlanePackets p1 = encode_planes(s.tree, s.symbols, groups, 1);
+    ASSERT_EQ(p0.top_plane, p1.top_plane);
+    ASSERT_EQ(p0.packets.size(), p1.packets.size());
+    const std::size_t per_plane = groups * p0.segments;
+    for (std::size_t end = 0; end <= p0.packets.size(); end += per_plane) {
+      std::vector<std::vector<Vec3>> values;
+      for (int minor : {0, 1}) {
+        const PlanePackets& p = minor == 0 ? p0 : p1;
+        PlaneDecoder decoder(s.tree, s.symbols.node_class, s.symbols.classes, minor, p.top_plane, groups);
+        decoder.decode(views(p.packets, end), false);
+        values.emplace_back(s.tree.nodes);
+        decoder.values(values.back());
+      }
+      for (std::size_t i = 0; i < s.tree.nodes; ++i) ASSERT_EQ(values[0][i], values[1][i]) << end << " " << i;
+    }
+  }
+}
+
+// Coefficients that all lie along their normals: 2.1 codes one non-normal
+// flag (0) per wavelet coefficient that becomes significant, and nothing else
+// tangential. By the range coder's model (11-bit probabilities moved 1/32 of
+// the way, docs/FORMAT.md), a run of zeros in one context drives the
+// probability of a 1 down to 31/2048, where a 0 costs -log2(2017/2048) =
+// 0.0221 bits, and the way there from 1/2 costs under 32 bits (a geometric
+// sum: about 32 x 0.5 / ln 2 = 23). So the flags cost at most 0.0221 bits
+// each plus 32 bits per context (class x parent state, per group). The
+// account must also agree with the packets' real size (the coder's loss and
+// flush bytes only), and the values decode exactly.
+TEST(PlaneCoderMinors, CoefficientsAlongTheirNormalsSpendAlmostNoTangentialBits) {
+  const Sample s = sample(7, 1.0);
+  constexpr std::size_t kGroups = 2;
+  std::size_t significant = 0;
+  for (std::size_t i = s.tree.roots_end; i < s.tree.nodes; ++i) significant += s.symbols.magnitude[3 * i] != 0;
+  for (std::size_t i = 0; i < s.tree.roots_end; ++i)
+    significant += s.symbols.node_class[i] > 0 && s.symbols.magnitude[3 * i] != 0;
+  IswPlaneBits bits0, bits1;
+  const PlanePackets p0 = encode_planes(s.tree, s.symbols, kGroups, 0, 0, &bits0);
+  const PlanePackets p1 = encode_planes(s.tree, s.symbols, kGroups, 1, 0, &bits1);
+  const double bound = 0.0221 * double(significant) + 32.0 * s.symbols.classes * 4 * kGroups;
+  EXPECT_LE(bits1.tangential(), bound);
+  EXPECT_LT(bits1.tangential(), bits0.tangential());
+  EXPECT_LT(bits1.tangential_share(), bound / bits1.total());
+  EXPECT_EQ(bits1.tangential_sign + bits1.tangential_refinement, 0.0);
+  for (const PlanePackets* p : {&p0, &p1}) {
+    const IswPlaneBits& bits = p == &p0 ? bits0 : bits1;
+    double bytes = 0;
+    for (const std::string& packet : p->packets) bytes += double(packet.size());
+    EXPECT_LE(bits.total() / 8, bytes * 1.001 + 1);
+    EXPECT_LE(bytes, bits.total() / 8 * 1.01 + 5.0 * double(p->packets.size()));
+  }
+  PlaneDecoder decoder(s.tree, s.symbols.node_class, s.symbols.classes, 1, p1.top_plane, kGroups);
+  decoder.decode(views(p1.packets, p1.packets.size()), false);
+  std::vector<Vec3> values(s.tree.nodes);
+  decoder.values(values);
+  for (std::size_t i = 0; i < s.tree.nodes; ++i)
+    for (std::size_t k = 0; k < 3; ++k) ASSERT_EQ(values[i][k], exact(s.symbols, i, k)) << i;
 }
 
 }  // namespace

@@ -1,5 +1,5 @@
-// The golden .isw files: tests/codec/data/golden_1_0.isw and golden_2_0.isw
-// were written by the format 1.0 and 2.0 encoders from the surface that
+// The golden .isw files: tests/codec/data/golden_1_0.isw, golden_2_0.isw and
+// golden_2_1.isw were written by the format 1.0, 2.0 and 2.1 encoders from the surface that
 // golden_surface() defines, and every later reader must decode them to that surface. Its expected values
 // come from the generator below, not from a decode: base topology, sharp
 // flags and metadata exactly, base control points and coefficients within
@@ -7,7 +7,7 @@
 // and decimal constants, so it gives the same values on every platform.
 //
 // Regenerate only with a new format version (and keep the old files, whose
-// tests must keep passing): ISOWAVE_WRITE_GOLDEN_1_0=PATH (or _2_0) codec_tests
+// tests must keep passing): ISOWAVE_WRITE_GOLDEN_1_0=PATH (or _2_0, _2_1) codec_tests
 // --gtest_filter='IswGolden.*' writes that version's file to PATH.
 #include <algorithm>
 #include <cmath>
@@ -155,38 +155,53 @@ TEST(IswGolden, Format10FileDecodesTheMostImportantCoefficientsFirst) {
 // its headers decodes.
 constexpr double kTangentialFactor = 4;
 
-TEST(IswGolden, Format20FileDecodesToItsGenerator) {
-  const GoldenSurface expected = golden_surface();
-  if (const char* out = std::getenv("ISOWAVE_WRITE_GOLDEN_2_0")) {
-    IswEncodeOptions options;
-    options.major_version = 2;
-    options.step = kStep;
-    options.tangential_factor = kTangentialFactor;
-    std::ofstream(out, std::ios::binary)
-        << encode_isw(expected.base, kLevels, expected.coefficients, expected.metadata, options);
-    GTEST_SKIP() << "wrote " << out;
-  }
-  const IswDecoded d = read_isw(golden_path("golden_2_0.isw"));
+// Writes a version 2 golden file to the path in environment variable `env`
+// when it is set (returns true: the test then skips); `frame_step` 0 is the
+// encoder's automatic one.
+bool write_golden_2(const char* env, const GoldenSurface& expected, int minor, double frame_step) {
+  const char* out = std::getenv(env);
+  if (!out) return false;
+  IswEncodeOptions options;
+  options.major_version = 2;
+  options.minor_version = minor;
+  options.step = kStep;
+  options.tangential_factor = kTangentialFactor;
+  options.frame_step = frame_step;
+  std::ofstream(out, std::ios::binary)
+      << encode_isw(expected.base, kLevels, expected.coefficients, expected.metadata, options);
+  return true;
+}
+
+// A version 2.`minor` golden file, whole, against its generator: a dead-zone
+// quantizer, so every component within one step of its class (k steps along
+// the surface), whatever the frame; base control points in world axes.
+IswDecoded expect_golden_2(const char* name, const GoldenSurface& expected, int minor) {
+  IswDecoded d = read_isw(golden_path(name));
   EXPECT_EQ(d.major_version, 2);
-  EXPECT_EQ(d.minor_version, 0);
+  EXPECT_EQ(d.minor_version, minor);
   EXPECT_FALSE(d.truncated);
   EXPECT_EQ(d.stream.planes_decoded, d.stream.planes);
   EXPECT_DOUBLE_EQ(d.stream.tangential_factor, kTangentialFactor);
   expect_generator_headers(d, expected);
-  if (HasFatalFailure()) return;
-  // A dead-zone quantizer: every component within one step of its class
-  // (k steps along the surface), whatever the frame; base control points
-  // in world axes.
+  if (::testing::Test::HasFatalFailure()) return d;
   for (std::size_t i = 0; i < d.coefficients.size(); ++i) {
     const int cls = coefficient_class(*d.hierarchy, i);
     const double step = kStep / d.class_weights[static_cast<std::size_t>(cls)];
     const double bound = cls == 0 ? std::sqrt(3.0) * step : std::sqrt(1 + 2 * kTangentialFactor * kTangentialFactor) * step;
-    ASSERT_LE(norm(d.coefficients[i] - expected.coefficients[i]), bound * (1 + 1e-9)) << "value " << i;
+    EXPECT_LE(norm(d.coefficients[i] - expected.coefficients[i]), bound * (1 + 1e-9)) << name << " value " << i;
   }
+  return d;
 }
 
-TEST(IswGolden, Format20FileDecodesAtEveryByteOfItsStream) {
-  std::ifstream in(golden_path("golden_2_0.isw"), std::ios::binary);
+TEST(IswGolden, Format20FileDecodesToItsGenerator) {
+  const GoldenSurface expected = golden_surface();
+  if (write_golden_2("ISOWAVE_WRITE_GOLDEN_2_0", expected, 0, 0)) GTEST_SKIP() << "wrote the 2.0 golden file";
+  expect_golden_2("golden_2_0.isw", expected, 0);
+}
+
+// Every byte count of a golden file's stream decodes, as a truncated file.
+void expect_every_byte_decodes(const char* name) {
+  std::ifstream in(golden_path(name), std::ios::binary);
   const std::string bytes((std::istreambuf_iterator<char>(in)), {});
   const IswDecoded full = decode_isw(bytes, "golden");
   ASSERT_GT(full.stream.bytes, 0u);
@@ -196,6 +211,41 @@ TEST(IswGolden, Format20FileDecodesAtEveryByteOfItsStream) {
     ASSERT_LE(d.stream.decoded, n - full.stream.offset) << n;
   }
 }
+
+TEST(IswGolden, Format20FileDecodesAtEveryByteOfItsStream) { expect_every_byte_decodes("golden_2_0.isw"); }
+
+// Version 2.1 (non-normal flags): the same surface with two coefficients in
+// three (those of index not divisible by 3) along the normals of their local
+// frames, as isw_frame_normals() gives them for the frame step below (the
+// frames are part of the format). The others stay free 3-vectors.
+constexpr double kFrameStep21 = 0.02;
+
+GoldenSurface golden_surface_21() {
+  GoldenSurface s = golden_surface();
+  const SubdivisionHierarchy hierarchy(s.base, kLevels);
+  const std::vector<Vec3> normals = isw_frame_normals(hierarchy, s.base.positions, kFrameStep21);
+  for (std::size_t i = s.base.vertex_count(); i < s.coefficients.size(); ++i)
+    if (i % 3 != 0) s.coefficients[i] = normals[i] * dot(normals[i], s.coefficients[i]);
+  return s;
+}
+
+TEST(IswGolden, Format21FileDecodesToItsGenerator) {
+  const GoldenSurface expected = golden_surface_21();
+  if (write_golden_2("ISOWAVE_WRITE_GOLDEN_2_1", expected, 1, kFrameStep21)) GTEST_SKIP() << "wrote the 2.1 golden file";
+  const IswDecoded d = expect_golden_2("golden_2_1.isw", expected, 1);
+  if (HasFailure()) return;
+  EXPECT_DOUBLE_EQ(d.stream.frame_step, kFrameStep21);
+  // A normal coefficient decodes with no tangential part at all.
+  const SubdivisionHierarchy hierarchy(expected.base, kLevels);
+  const std::vector<Vec3> normals = isw_frame_normals(hierarchy, expected.base.positions, kFrameStep21);
+  for (std::size_t i = d.base.vertex_count(); i < d.coefficients.size(); ++i) {
+    if (i % 3 == 0) continue;
+    const Vec3 tangential = d.coefficients[i] - normals[i] * dot(normals[i], d.coefficients[i]);
+    ASSERT_LE(norm(tangential), 1e-12) << "value " << i;
+  }
+}
+
+TEST(IswGolden, Format21FileDecodesAtEveryByteOfItsStream) { expect_every_byte_decodes("golden_2_1.isw"); }
 
 }  // namespace
 }  // namespace isowave

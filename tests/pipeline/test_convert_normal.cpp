@@ -3,10 +3,11 @@
 // marching-cubes mesh's own distance from the true surface, without folds;
 // every wavelet coefficient of the file decodes along its frame normal (the
 // frames of the fit's frame base, renumbered with the base): no tangential
-// detail at all. A thin fin the base cannot span: its points' lines miss, so
-// their coefficients are non-normal, and the fin is still covered. A
-// truncated stream's surface moves along the normal only, where the
-// parametrization's slides along itself.
+// detail at all, and almost no bits spent on tangential parts. A thin fin
+// the base cannot span: its points' lines miss, so their coefficients are
+// non-normal, and the fin is still covered. A truncated stream's surface
+// moves along the normal only, where the parametrization's slides along
+// itself.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -40,6 +41,16 @@ TEST(ConvertNormal, DecodedTorusIsNearTheTrueSurfaceWithOnlyNormalDetail) {
   EXPECT_EQ(result.fit.folded_faces, 0u);
   ASSERT_EQ(result.normal_share.size(), std::size_t(result.levels));
   for (const double share : result.normal_share) EXPECT_GT(share, 1 - 1e-12);
+  // Codec 2.1 spends on tangential parts only one flag (0) per wavelet
+  // coefficient that becomes significant: at most 0.0221 bits each once its
+  // context has adapted, and under 32 bits per context to get there
+  // (tests/codec/test_bitplane_coder.cpp derives both); 4 contexts per class
+  // (1 + 2 levels) and group (G = clamp(round(N / 2^17), 1, 64), docs/FORMAT.md).
+  const std::size_t groups = std::min<std::size_t>(64, std::max<std::size_t>(1, (result.fine_vertices + 65536) >> 17));
+  const std::size_t classes = 1 + 2 * std::size_t(result.levels);
+  EXPECT_GT(result.plane_bits.total(), 0);
+  EXPECT_LE(result.plane_bits.tangential(), 0.0221 * double(result.fine_vertices) + 32.0 * 4 * classes * groups);
+  EXPECT_EQ(result.plane_bits.tangential_sign + result.plane_bits.tangential_refinement, 0.0);
 
   const IswDecoded decoded = decode_isw(result.bytes, "torus");
   const PolygonMesh fine = test::full_decode_mesh(decoded);

@@ -12,7 +12,8 @@
 //            PLNS  embedded bit planes of every coefficient in its local frame (normal,
 //                  tangent, bitangent), most significant plane first, set-partitioned over
 //                  the hierarchy's parent-child tree, in independent groups (decoded
-//                  in parallel): any prefix decodes
+//                  in parallel): any prefix decodes; 2.1 flags the coefficients with a
+//                  tangential part and codes none for the others
 //   version 1:
 //            CHNK  (several) wavelet coefficients, most important first: chunk k holds the coefficients
 //                  ranked in [start_k, end_k) by importance, coded by significance flags over the
@@ -39,10 +40,12 @@
 
 namespace isowave {
 
-// A reader decodes every minor version of majors 1 and 2 (it skips the
-// sections it does not know) and refuses other majors (Error(Unsupported)).
+// A reader decodes every minor version of major 1 (it skips the sections it
+// does not know) and versions 2.0 to 2.kIswMinorVersion of major 2 (2.1 codes
+// a non-normal flag per wavelet coefficient in the planes); it refuses other
+// versions (Error(Unsupported)).
 constexpr std::uint16_t kIswMajorVersion = 2;
-constexpr std::uint16_t kIswMinorVersion = 0;
+constexpr std::uint16_t kIswMinorVersion = 1;
 
 struct IswMetadata {
   // Free-form but conventional keys (docs/FORMAT.md, META): source, isovalue,
@@ -64,6 +67,10 @@ struct IswRatePoint {
 struct IswEncodeOptions {
   // The major version written: 2 (embedded planes in local frames) or 1.
   int major_version = kIswMajorVersion;
+  // Version 2: the minor version written, 0 or 1 (1 codes, at a wavelet
+  // coefficient's first significance, whether it is non-normal, and no
+  // tangential decision for the others; docs/FORMAT.md, version 2.1).
+  int minor_version = kIswMinorVersion;
   // Quantization step for importance-weighted coefficients, in world units,
   // finite and > 0: a coefficient of class c is quantized with step / weight_c,
   // so every kept coefficient adds about the same error to the fine control
@@ -151,6 +158,30 @@ struct PlaneValuesState;
 // coefficients_at(k, out) gives exactly the coefficients of decode_isw()
 // with max_stream_bytes = plane_ends()[k]. Holds about 40 bytes per fine
 // control point.
+// Version 2: a plane stream's estimated bits by what they code: the sum, over
+// the plane coder's adaptive decisions (it codes no direct bits), of -log2 of
+// the probability the coder gave the bit it coded (so the range coder's
+// output differs by its flush bytes only). Wavelet components are (normal,
+// tangent, bitangent) in the local frames (docs/FORMAT.md, PLNS).
+struct IswPlaneBits {
+  double base = 0;  // every decision of the base control points' residuals
+  // A wavelet coefficient's normal component: its bit "component 0 has bit b
+  // set" (significance), its sign, its refinement bits.
+  double normal_significance = 0, normal_sign = 0, normal_refinement = 0;
+  // Its tangential components, and the node decisions "some not-yet-significant
+  // component has bit b set" that cover only tangential components.
+  double tangential_significance = 0, tangential_sign = 0, tangential_refinement = 0;
+  // The node decisions that cover the normal and tangential components together.
+  double joint_significance = 0;
+  double descendants = 0;  // the tree: "some descendant reaches 2^b"
+
+  double tangential() const { return tangential_significance + tangential_sign + tangential_refinement; }
+  double normal() const { return normal_significance + normal_sign + normal_refinement; }
+  double total() const { return base + normal() + tangential() + joint_significance + descendants; }
+  // tangential() / total(), 0 for an empty stream.
+  double tangential_share() const { return total() > 0 ? tangential() / total() : 0.0; }
+};
+
 class IswPlaneValues {
  public:
   IswPlaneValues();
@@ -168,6 +199,9 @@ class IswPlaneValues {
   // The unit normal of every entry's local frame in the file written (as
   // isw_frame_normals() of its frame base); empty before an encoding.
   const std::vector<Vec3>& frame_normals() const;
+  // The estimated bits of the whole plane stream encoded (before any cut to
+  // max_bytes), by what they code; zero before an encoding.
+  const IswPlaneBits& plane_bits() const;
 
  private:
   friend std::string encode_isw(const SubdivisionHierarchy&, const std::vector<Vec3>&, const IswMetadata&,

@@ -219,6 +219,10 @@ struct ConvertResult {
   // squares) along the normals of the file's local frames (1 for a level of
   // zero detail).
   std::vector<double> normal_share;
+  // The plane stream's estimated bits by what they code, before any cut
+  // (IswPlaneValues::plane_bits()); its tangential_share() is the share spent
+  // on the coefficients' tangential components.
+  IswPlaneBits plane_bits;
   // With FitMethod::Normal: the base its directions came from, which the
   // file sends as its frame base (IswEncodeOptions::frame_base); else empty.
   std::vector<Vec3> frame_base;
