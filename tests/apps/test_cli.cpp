@@ -163,7 +163,7 @@ TEST_F(CliTest, AnInterruptedRunLeavesNoPartialOutput) {
   const int probe = open(dir_.c_str(), O_TMPFILE | O_WRONLY, 0600);
   const bool unnamed_files = probe >= 0 && access("/proc/self/fd", X_OK) == 0;
   if (probe >= 0) close(probe);
-  const std::pair<int, const char*> cases[] = {{SIGTERM, ", shrink-wrap "}, {SIGINT, ", encode "},
+  const std::pair<int, const char*> cases[] = {{SIGTERM, ", normal fit "}, {SIGINT, ", encode "},
                                                {SIGKILL, ", analysis "},    {SIGKILL, ", encode "},
                                                {SIGKILL, ", evaluate "},    {SIGTERM, ", evaluate "}};
   for (const auto& [signal_number, stage] : cases) {
