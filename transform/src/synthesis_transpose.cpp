@@ -29,32 +29,31 @@ inline bool edge_active(const RefinementStep& s, const Step& step, std::uint32_t
   return !step.skipped_on_sharp_edges || s.edge_smooth[edge];
 }
 
+// g[target + i] += weight * (the sum of g over the active e vertices that
+// list i holds, edges[offsets[i]] .. edges[offsets[i + 1] - 1]), for i < count.
+void gather_active_edges(const RefinementStep& s, const Step& step, std::uint32_t count,
+                         const std::vector<std::uint32_t>& offsets, const std::vector<std::uint32_t>& edges,
+                         double weight, std::uint32_t target, Vec3* g) {
+  const std::uint32_t first_e = s.first_edge_vertex();
+  detail::for_lifting_range(count, [&](std::uint32_t begin, std::uint32_t end) {
+    for (std::uint32_t i = begin; i < end; ++i) {
+      Vec3 sum;
+      for (std::uint32_t k = offsets[i]; k < offsets[i + 1]; ++k) {
+        const std::uint32_t edge = edges[k] - first_e;
+        if (edge_active(s, step, edge)) sum += g[first_e + edge];
+      }
+      g[target + i] += weight * sum;
+    }
+  });
+}
+
 // Transposed step with e targets: faces and vertices gather from their edges.
 void transpose_e_step(const RefinementStep& s, Vec3* g, const Step& step) {
   const Rule& r = step.smooth;
   const std::uint32_t first_e = s.first_edge_vertex(), first_f = s.first_face_vertex();
-  if (r.f != 0)
-    detail::for_lifting_range(s.parent_face_count, [&](std::uint32_t begin, std::uint32_t end) {
-      for (std::uint32_t f = begin; f < end; ++f) {
-        Vec3 sum;
-        for (std::uint32_t k = s.face_offsets[f]; k < s.face_offsets[f + 1]; ++k) {
-          const std::uint32_t edge = s.face_edges[k] - first_e;
-          if (edge_active(s, step, edge)) sum += g[first_e + edge];
-        }
-        g[first_f + f] += (0.5 * r.f) * sum;
-      }
-    });
+  if (r.f != 0) gather_active_edges(s, step, s.parent_face_count, s.face_offsets, s.face_edges, 0.5 * r.f, first_f, g);
   if (r.v != 0)
-    detail::for_lifting_range(s.parent_vertex_count, [&](std::uint32_t begin, std::uint32_t end) {
-      for (std::uint32_t v = begin; v < end; ++v) {
-        Vec3 sum;
-        for (std::uint32_t k = s.vertex_edge_offsets[v]; k < s.vertex_edge_offsets[v + 1]; ++k) {
-          const std::uint32_t edge = s.vertex_edges[k] - first_e;
-          if (edge_active(s, step, edge)) sum += g[first_e + edge];
-        }
-        g[v] += (0.5 * r.v) * sum;
-      }
-    });
+    gather_active_edges(s, step, s.parent_vertex_count, s.vertex_edge_offsets, s.vertex_edges, 0.5 * r.v, 0, g);
   detail::for_lifting_range(s.parent_edge_count, [&](std::uint32_t begin, std::uint32_t end) {
     for (std::uint32_t e = begin; e < end; ++e)
       if (edge_active(s, step, e)) g[first_e + e] = r.self * g[first_e + e];
