@@ -1,20 +1,42 @@
 #pragma once
-// For the conversion's tests: a file's full decode as a mesh, and analytic
-// surfaces (the builtin torus field's, any given distance) to measure it against.
+// For the conversion's tests: a conversion with its file's full decode as a
+// mesh, and analytic surfaces (the builtin torus field's, any given
+// distance) to measure it against.
 #include <cmath>
 #include <cstddef>
+#include <string>
 #include <vector>
 
 #include "isowave/codec/isw_format.h"
 #include "isowave/codec/statistics.h"
 #include "isowave/core/mesh.h"
 #include "isowave/core/surface_error.h"
+#include "isowave/pipeline/convert.h"
 
 namespace isowave::test {
 
 // The control mesh of a decode's finest level with every coefficient it holds.
 inline PolygonMesh full_decode_mesh(const IswDecoded& decoded) {
   return decoded.hierarchy->control_mesh(decoded.hierarchy->levels(), reconstruct(decoded, decoded.ranked.size()));
+}
+
+// A conversion with `fit` (the extracted mesh kept, the 100% summary row
+// only) and its file's full decode.
+struct DecodedConversion {
+  ConvertResult result;
+  IswDecoded decoded;
+  PolygonMesh fine;  // full_decode_mesh(decoded)
+};
+inline DecodedConversion convert_and_decode(const Volume& field, const std::string& name, FitMethod fit) {
+  ConvertOptions options;
+  options.fit = fit;
+  options.keep_extracted_mesh = true;
+  options.summary_percents = {100};
+  DecodedConversion out;
+  out.result = convert_volume(field, name, options);
+  out.decoded = decode_isw(out.result.bytes, name);
+  out.fine = full_decode_mesh(out.decoded);
+  return out;
 }
 
 // Distance to the builtin torus at n samples per axis (builtin_fields.h):

@@ -198,24 +198,29 @@ TEST(Convert, WarnsWhenFitPointsStayOffTheIsosurface) {
 }
 
 // The folded share convert reports is the fit's own count after its last
-// repair (the unfold runs on this fit); measured independently on the fitted
-// fine mesh by the quality report, it is the same.
+// repair (the shrink-wrap's unfold runs on its fit; the normal fit has none);
+// measured independently on the fitted fine mesh by the quality report, it
+// is the same.
 TEST(Convert, ReportsTheShareOfFoldedFineFaces) {
   const Volume field = make_builtin_field("mixing", 96);
-  ConvertOptions options;
-  options.keep_extracted_mesh = true;
-  options.summary_percents = {100};
-  const ConvertResult result = convert_volume(field, "mixing", options);
-  ASSERT_FALSE(result.fit.unfold.skipped);
-  const IswDecoded decoded = decode_isw(result.bytes, "test");
-  const BinnedSurfaceDistance reference(result.extracted_mesh);
-  const FitQuality quality = measure_fit_quality(*decoded.hierarchy, decoded.hierarchy->levels(), result.fit.positions,
-                                                 result.extracted_mesh, reference, field, options.prepare.extract.iso,
-                                                 orientation_from_flip(options.prepare.extract.flip));
-  EXPECT_GT(quality.folded_faces, 0u);
-  EXPECT_EQ(result.fine_faces, quality.faces);
-  EXPECT_EQ(result.fit.folded_faces, quality.folded_faces);
-  EXPECT_DOUBLE_EQ(result.folded_share(), quality.folded_fraction);
+  for (const FitMethod fit : {FitMethod::ShrinkWrap, FitMethod::Normal}) {
+    ConvertOptions options;
+    options.fit = fit;
+    options.keep_extracted_mesh = true;
+    options.summary_percents = {100};
+    const ConvertResult result = convert_volume(field, "mixing", options);
+    if (fit == FitMethod::ShrinkWrap) ASSERT_FALSE(result.fit.unfold.skipped);
+    const IswDecoded decoded = decode_isw(result.bytes, "test");
+    const BinnedSurfaceDistance reference(result.extracted_mesh);
+    const FitQuality quality =
+        measure_fit_quality(*decoded.hierarchy, decoded.hierarchy->levels(), result.fit.positions,
+                            result.extracted_mesh, reference, field, options.prepare.extract.iso,
+                            orientation_from_flip(options.prepare.extract.flip));
+    EXPECT_GT(quality.folded_faces, 0u);
+    EXPECT_EQ(result.fine_faces, quality.faces);
+    EXPECT_EQ(result.fit.folded_faces, quality.folded_faces);
+    EXPECT_DOUBLE_EQ(result.folded_share(), quality.folded_fraction);
+  }
 }
 
 // The mixing layer sampled coarsely (40^3) is all necks and specks a cell

@@ -32,11 +32,8 @@ using test::rms_from_torus;
 
 TEST(ConvertNormal, DecodedTorusIsNearTheTrueSurfaceWithOnlyNormalDetail) {
   constexpr std::size_t n = 48;
-  ConvertOptions options;
-  options.fit = FitMethod::Normal;
-  options.keep_extracted_mesh = true;
-  options.summary_percents = {100};
-  const ConvertResult result = convert_volume(make_builtin_field("torus", n), "torus", options);
+  const test::DecodedConversion conversion = test::convert_and_decode(make_builtin_field("torus", n), "torus", FitMethod::Normal);
+  const ConvertResult& result = conversion.result;
   EXPECT_EQ(result.non_normal_coefficients, 0u);
   EXPECT_EQ(result.fit.folded_faces, 0u);
   ASSERT_EQ(result.normal_share.size(), std::size_t(result.levels));
@@ -52,9 +49,8 @@ TEST(ConvertNormal, DecodedTorusIsNearTheTrueSurfaceWithOnlyNormalDetail) {
   EXPECT_LE(result.plane_bits.tangential(), 0.0221 * double(result.fine_vertices) + 32.0 * 4 * classes * groups);
   EXPECT_EQ(result.plane_bits.tangential_sign + result.plane_bits.tangential_refinement, 0.0);
 
-  const IswDecoded decoded = decode_isw(result.bytes, "torus");
-  const PolygonMesh fine = test::full_decode_mesh(decoded);
-  const double marching_cubes = rms_from_torus(result.extracted_mesh, n), fitted = rms_from_torus(fine, n);
+  const IswDecoded& decoded = conversion.decoded;
+  const double marching_cubes = rms_from_torus(result.extracted_mesh, n), fitted = rms_from_torus(conversion.fine, n);
   std::printf("torus %zu: marching cubes %.4f cell RMS from the torus, decoded normal fit %.4f (levels %d)\n", n,
               marching_cubes, fitted, result.levels);
   EXPECT_LE(fitted, 1.25 * marching_cubes);
@@ -82,13 +78,10 @@ TEST(ConvertNormal, SphereCutByTheBoxStaysInsideIt) {
   const double r = 14;
   const Volume field = test::sampled_volume(
       {36, 40, 44}, [&](double x, double y, double z) { return r - std::sqrt(squared_norm(Vec3{x, y, z} - c)); });
-  ConvertOptions options;
-  options.fit = FitMethod::Normal;
-  options.keep_extracted_mesh = true;
-  options.summary_percents = {100};
-  const ConvertResult result = convert_volume(field, "cut sphere", options);
-  const IswDecoded decoded = decode_isw(result.bytes, "cut sphere");
-  const PolygonMesh fine = test::full_decode_mesh(decoded);
+  const test::DecodedConversion conversion = test::convert_and_decode(field, "cut sphere", FitMethod::Normal);
+  const ConvertResult& result = conversion.result;
+  const IswDecoded& decoded = conversion.decoded;
+  const PolygonMesh& fine = conversion.fine;
   const auto from_sphere = [&](const PolygonMesh& mesh) {
     return test::rms_distance(mesh, [&](const Vec3& p) { return std::sqrt(squared_norm(p - c)) - r; });
   };
@@ -130,13 +123,10 @@ double tangential_share(const Vec3& c, const Vec3& n) {
 TEST(ConvertNormal, ThinFinIsCoveredByNonNormalCoefficients) {
   const FinField fin;
   const Volume field = test::sampled_volume({49, 48, 49}, [&](double x, double y, double z) { return fin({x, y, z}); });
-  ConvertOptions options;
-  options.fit = FitMethod::Normal;
-  options.keep_extracted_mesh = true;
-  options.summary_percents = {100};
-  const ConvertResult result = convert_volume(field, "fin", options);
-  const IswDecoded decoded = decode_isw(result.bytes, "fin");
-  const PolygonMesh fine = test::full_decode_mesh(decoded);
+  const test::DecodedConversion conversion = test::convert_and_decode(field, "fin", FitMethod::Normal);
+  const ConvertResult& result = conversion.result;
+  const IswDecoded& decoded = conversion.decoded;
+  const PolygonMesh& fine = conversion.fine;
   const std::vector<Vec3> normals =
       isw_frame_normals(*decoded.hierarchy, result.frame_base, kFrameStepCells * result.cell_size);
 

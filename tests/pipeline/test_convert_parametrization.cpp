@@ -37,14 +37,9 @@ using test::rms_from_torus;
 TEST(ConvertParametrization, DecodedTorusIsAsNearTheTrueSurfaceAsMarchingCubes) {
   constexpr std::size_t n = 48;
   const Volume field = make_builtin_field("torus", n);
-  ConvertOptions options;
-  options.fit = FitMethod::Parametrization;
-  options.keep_extracted_mesh = true;
-  options.summary_percents = {100};
-  const ConvertResult result = convert_volume(field, "torus", options);
-
-  const IswDecoded decoded = decode_isw(result.bytes, "torus");
-  const PolygonMesh fine = test::full_decode_mesh(decoded);
+  const test::DecodedConversion conversion = test::convert_and_decode(field, "torus", FitMethod::Parametrization);
+  const ConvertResult& result = conversion.result;
+  const PolygonMesh& fine = conversion.fine;
   const double marching_cubes = rms_from_torus(result.extracted_mesh, n);
   const double fitted = rms_from_torus(fine, n);
   std::printf("torus %zu: marching cubes %.4f cell RMS from the torus, decoded fit %.4f (levels %d)\n", n,
@@ -60,7 +55,7 @@ TEST(ConvertParametrization, DecodedTorusIsAsNearTheTrueSurfaceAsMarchingCubes) 
   // mesh beyond max_auto_fine_vertices().
   ASSERT_FALSE(result.level_reports.empty());
   const SubdivisionHierarchy next(result.hierarchy->base(), result.levels + 1);
-  if (double(next.fine_vertex_count()) <= max_auto_fine_vertices(options.fit, result.extracted_vertices)) {
+  if (double(next.fine_vertex_count()) <= max_auto_fine_vertices(FitMethod::Parametrization, result.extracted_vertices)) {
     EXPECT_LE(result.level_reports.back().d_cells(), result.max_error_cells);
   }
   for (std::size_t k = 0; k + 1 < result.level_reports.size(); ++k)
@@ -74,6 +69,7 @@ TEST(ConvertParametrization, DecodedTorusIsAsNearTheTrueSurfaceAsMarchingCubes) 
 TEST(ConvertParametrization, LiesNearerATurbulentIsosurfaceThanTheShrinkWrap) {
   const Volume field = make_builtin_field("mixing", 64);
   ConvertOptions options;
+  options.fit = FitMethod::ShrinkWrap;
   options.summary_percents = {100};
   options.folded_fit = FoldedFit::Keep;
   const ConvertResult wrapped = convert_volume(field, "mixing", options);
