@@ -137,8 +137,6 @@ cli::CommandSpec convert_spec() {
        "and --base-ratio, and with --levels auto, the base mesh doubles, up to twice, while the fit leaves more than "
        "1% of the isosurface over 2 cells away)",
        "R"},
-      {"no-flips", false, "base mesh by the paper's collapse rules only (no valence-lowering flips)", ""},
-      {"no-coverage-pull", false, "fit without pulling the fine levels toward isosurface parts they leave out", ""},
       {"allow-folded", false, "write the file even when most of the fit's faces fold (unusable)", ""},
       {"step", true, "the step of the stream's last bit plane in cells (default 0.01): the finest it goes", "CELLS"},
       {"output", true, "output file (one input and one isovalue)", "OUT.isw"},
@@ -148,15 +146,14 @@ cli::CommandSpec convert_spec() {
       {"quiet", false, "print nothing but errors", ""},
       {"json", false, "print machine-readable results as one JSON object", ""},
   };
-  cli::add_unfold_option(options);
   cli::add_extraction_options(options);
   cli::add_volume_options(options);
   return cli::CommandSpec{
       "convert",
       "INPUT... --iso V[,V2,...] [--levels L|auto] [--base-vertices N | --base-ratio R] [extract options]\n"
       "                (-o OUT.isw | --out-dir DIR) [--jobs N] [--force] [--quiet] [--json]",
-      "Converts isosurfaces of volumes into wavelet files: extraction -> base mesh -> signed distance ->\n"
-      "shrink-wrap -> wavelet analysis -> quantization and coding. INPUT may be files, directories (all their\n"
+      "Converts isosurfaces of volumes into wavelet files: extraction -> base mesh -> fit (--fit) ->\n"
+      "wavelet analysis -> embedded coding. INPUT may be files, directories (all their\n"
       "volume files) or glob patterns. A failing input is reported and skipped; the exit code is non-zero if\n"
       "any failed. Outputs are written atomically and never overwritten without --force. Prints each\n"
       "input's value range on load ('isowave info VOLUME' shows it with a histogram, to choose V).",
@@ -198,9 +195,6 @@ ConvertOptions convert_options_from(const cli::Arguments& args) {
     throw Error(ErrorKind::InvalidArgument, "--base-ratio must be in (0, 1]");
   options.base.growth =
       args.has("base-vertices") || args.has("base-ratio") ? BaseGrowth::Fixed : BaseGrowth::UntilCovered;
-  options.base.simplify.valence_flips = !args.has("no-flips");
-  options.shrink_wrap.coverage_pull = !args.has("no-coverage-pull");
-  cli::set_unfold_limit(args, options.shrink_wrap);
   options.step_cells = args.get_double("step", options.step_cells);
   if (!(options.step_cells > 0)) throw Error(ErrorKind::InvalidArgument, "--step must be positive");
   options.folded_fit = args.has("allow-folded") ? FoldedFit::Keep : FoldedFit::Refuse;

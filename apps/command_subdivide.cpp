@@ -6,6 +6,7 @@
 #include "cli.h"
 #include "commands.h"
 #include "isowave/core/error.h"
+#include "isowave/core/memory_check.h"
 #include "isowave/core/mesh_io.h"
 #include "isowave/pipeline/prepare.h"
 #include "isowave/transform/hierarchy.h"

@@ -36,7 +36,7 @@ std::string topology_tolerance_line(const IsosurfaceReport& report);
 // The same as a JSON object.
 std::string topology_tolerance_json(const IsosurfaceReport& report);
 
-// Appends --unfold-limit PERCENT (fit and convert) and applies it to the
+// Appends --unfold-limit PERCENT (the fit command) and applies it to the
 // shrink-wrap options: the unfold runs when untangle() left at most that
 // share of the finest level's faces folded (0: never); Error(InvalidArgument)
 // outside 0..100.

@@ -4,12 +4,10 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
-#include <functional>
 #include <future>
 #include <iomanip>
 #include <map>
 #include <memory>
-#include <optional>
 #include <sstream>
 #include <stdexcept>
 
@@ -19,10 +17,9 @@
 #include "isowave/codec/importance.h"
 #include "isowave/codec/statistics.h"
 #include "isowave/core/error.h"
+#include "isowave/core/memory_check.h"
 #include "isowave/core/surface_error.h"
-#include "isowave/fit/signed_distance.h"
 #include "isowave/transform/wavelet_transform.h"
-#include "levels_by_error.h"
 #include "rate_control.h"
 
 namespace isowave {
@@ -116,18 +113,6 @@ class BackgroundDistance {
   bool done_ = false;
 };
 
-// The fitted fine control points against the isosurface (first order), and
-// the share of the isosurface no fine point comes near (every stride-th
-// isosurface vertex, at most 100,000).
-void check_fit(const PreparedSurface& prepared, const ConvertOptions& options, ConvertResult& result) {
-  result.fit_isosurface =
-      isosurface_distance(result.fit.positions, result.fine_vertices, prepared.field, options.prepare.extract.iso, 1.0);
-  const PolygonMesh& surface = prepared.isosurface.mesh;
-  const std::size_t stride = std::max<std::size_t>(1, surface.vertex_count() / 100000);
-  result.uncovered_share = share_farther_than(surface.positions, stride, result.fit.positions, result.fine_vertices,
-                                              kUncoveredCells * result.cell_size);
-}
-
 // One base mesh of `target` vertices (simplify, Sec. 4.1), with the map for
 // the parametrization.
 simplify::SimplifyResult simplify_base(const PreparedSurface& prepared,
@@ -163,171 +148,63 @@ double max_auto_fine_vertices(FitMethod fit, std::size_t extracted_vertices) {
 
 namespace {
 
-LevelRule level_rule(const ConvertOptions& options, const ConvertResult& result) {
-  LevelRule rule;
-  rule.fixed_levels = options.levels;
-  rule.max_error_cells = result.max_error_cells;
-  rule.max_fine_vertices = max_auto_fine_vertices(options.fit, result.extracted_vertices);
-  return rule;
+// The fit's options and input over `prepared` (surface_fit.h).
+SurfaceFitOptions fit_options(const ConvertOptions& options, const ConvertResult& result) {
+  SurfaceFitOptions fit;
+  fit.method = options.fit;
+  fit.levels.fixed_levels = options.levels;
+  fit.levels.max_error_cells = result.max_error_cells;
+  fit.levels.max_fine_vertices = max_auto_fine_vertices(options.fit, result.extracted_vertices);
+  fit.fine_points = options.fine_points;
+  fit.shrink_wrap = options.shrink_wrap;
+  fit.normal = options.normal;
+  return fit;
 }
 
-void check_level_memory(const PolygonMesh& base, int levels) {
-  check_memory(double(fine_vertex_count(base, levels)), kFitBytesPerFineVertex,
-               std::to_string(levels) + " levels of a " + std::to_string(base.vertex_count()) + "-vertex base mesh");
-}
-
-// The fit's level L (the last tried): levels and fine mesh counts.
-void take_levels(const FittedLevel& fitted, ConvertResult& result) {
-  result.levels = fitted.hierarchy->levels();
-  result.fine_vertices = fitted.hierarchy->fine_vertex_count();
-  // Each parent face of n corners gives n quads.
-  result.fine_faces = fitted.hierarchy->step(result.levels).face_vertices.size();
-}
-
-// FinePoints::OnTrilinearIsosurface: the fitted points move along the field
-// gradient onto the trilinear isosurface; a point the correction took
-// farther than kFinePointMoveCells (its fallbacks: a neighbours' centroid, a
-// wide search) goes back onto the extracted surface, where it was, and so
-// does every corner of a face the moves fold (take_back_folding_moves). Then
-// the corners of the faces still folded move to unfold them (unfold()).
-void move_onto_isosurface(const WrapLevelMesh& level, const PreparedSurface& prepared, const ConvertOptions& options,
-                          ConvertResult& result) {
-  std::vector<Vec3>& positions = result.fit.positions;
-  const double iso = options.prepare.extract.iso;
-  const Orientation orientation = orientation_from_flip(options.prepare.extract.flip);
-  const std::vector<Vec3> on_surface = positions;
-  result.fit.correction = correct_to_isosurface(level, prepared.field, iso, kFinePointMoveCells, positions);
-  const double reach = kFinePointMoveCells * result.cell_size;
-  for (std::size_t v = 0; v < positions.size(); ++v)
-    if (!(squared_norm(positions[v] - on_surface[v]) <= reach * reach)) positions[v] = on_surface[v];
-  take_back_folding_moves(level, prepared.field, orientation, on_surface, positions);
-  result.fit.unfold = unfold(level, prepared.field, iso, orientation, kFineUnfoldRounds, kFinePointMoveCells, positions);
-  result.fit.folded_faces = result.fit.unfold.folded_after;
-}
-
-// The parametrization-based fit (fit/parametrized_fit.h) of `simplified`, at the
-// levels of fit_levels_by_error(); its points then move onto the trilinear
-// isosurface (FinePoints).
-std::shared_ptr<const SubdivisionHierarchy> fit_parametrized(const simplify::SimplifyResult& simplified,
-                                                             const PreparedSurface& prepared,
-                                                             const SurfaceErrorReference& against_surface,
-                                                             const ConvertOptions& options, ConvertResult& result,
-                                                             ProgressSink& progress) {
-  const auto start = Clock::now();
-  const PolygonMesh& surface = prepared.isosurface.mesh;
-  const double iso = options.prepare.extract.iso;
-  const Orientation orientation = orientation_from_flip(options.prepare.extract.flip);
-  // One connectivity of level L for the fold counts and the correction.
-  std::optional<WrapLevelMesh> level;
-  const auto fit_level = [&](int levels) {
-    check_level_memory(simplified.base, levels);
-    level.reset();
-    result.fit = ShrinkWrapResult{};
-    auto hierarchy = std::make_shared<const SubdivisionHierarchy>(simplified.base, levels);
-    ParametrizedFitResult fit = parametrized_fit(*hierarchy, simplified.base.positions, surface, simplified.map, progress);
-    result.fit.positions = std::move(fit.positions);
-    result.parametrization = fit.statistics;
-    level.emplace(make_wrap_level_mesh(*hierarchy, levels, result.fit.positions, prepared.field, iso));
-    const std::size_t folded = count_folded_faces(*level, result.fit.positions, prepared.field, orientation);
-    return FittedLevel{std::move(hierarchy), &result.fit.positions, folded};
-  };
-  const FittedLevel fitted = fit_levels_by_error(simplified.base, level_rule(options, result), against_surface,
-                                                 result.cell_size, fit_level, result.level_reports);
-  take_levels(fitted, result);
-  result.fit.folded_faces = fitted.folded_faces;
-  if (options.fine_points == FinePoints::OnTrilinearIsosurface) {
-    move_onto_isosurface(*level, prepared, options, result);
-  }
-  check_fit(prepared, options, result);
-  result.seconds.fit += seconds_since(start);
-  return fitted.hierarchy;
-}
-
-// fit_levels_by_error() of `base` with `fit_level`, then the levels taken and
-// the fit checked; the fit's seconds counted from `start`.
-std::shared_ptr<const SubdivisionHierarchy> fit_by_levels(const PolygonMesh& base,
-                                                          const std::function<FittedLevel(int)>& fit_level,
-                                                          const PreparedSurface& prepared,
-                                                          const SurfaceErrorReference& against_surface,
-                                                          const ConvertOptions& options, ConvertResult& result,
-                                                          Clock::time_point start) {
-  result.level_reports.clear();
-  const FittedLevel fitted = fit_levels_by_error(base, level_rule(options, result), against_surface, result.cell_size,
-                                                 fit_level, result.level_reports);
-  take_levels(fitted, result);
-  check_fit(prepared, options, result);
-  result.seconds.fit += seconds_since(start);
-  return fitted.hierarchy;
-}
-
-// The shrink-wrap of `base` (Sec. 4.2) at the levels of
-// fit_levels_by_error(), and the fit against the isosurface, both ways; the
-// error rows, measured against the fit, cannot show what it missed. A base
-// mesh too coarse for the surface leaves parts of it out of the attraction's
-// reach and the fine points there off the isosurface, and parts of the
-// isosurface no fine point comes near (thin features the base mesh spans;
-// every stride-th isosurface vertex, at most 100,000).
-std::shared_ptr<const SubdivisionHierarchy> fit_base(const PolygonMesh& base, const PreparedSurface& prepared,
-                                                     const SurfaceErrorReference& against_surface,
-                                                     const ConvertOptions& options, ConvertResult& result,
-                                                     ProgressSink& progress) {
-  const auto start = Clock::now();
-  ShrinkWrapOptions wrap_options = options.shrink_wrap;
-  wrap_options.surface = &prepared.isosurface.mesh;
-  const auto fit_level = [&](int levels) {
-    check_level_memory(base, levels);
-    result.fit = ShrinkWrapResult{};
-    auto hierarchy = std::make_shared<const SubdivisionHierarchy>(base, levels);
-    result.fit = shrink_wrap(*hierarchy, base.positions, prepared.distance, prepared.field, wrap_options, progress);
-    return FittedLevel{std::move(hierarchy), &result.fit.positions, result.fit.folded_faces};
-  };
-  return fit_by_levels(base, fit_level, prepared, against_surface, options, result, start);
-}
-
-// The normal fit (fit/normal_fit.h) of `base` at the levels of
-// fit_levels_by_error(), its coefficients along the coder's frame normals.
-std::shared_ptr<const SubdivisionHierarchy> fit_normal(const PolygonMesh& base, const PreparedSurface& prepared,
-                                                       const SurfaceErrorReference& against_surface,
-                                                       const ConvertOptions& options, ConvertResult& result,
-                                                       ProgressSink& progress) {
-  const auto start = Clock::now();
-  const double iso = options.prepare.extract.iso;
-  const Orientation orientation = orientation_from_flip(options.prepare.extract.flip);
+SurfaceFitInput fit_input(const PreparedSurface& prepared, const SurfaceErrorReference& against_surface,
+                          const ConvertOptions& options, const ConvertResult& result) {
+  SurfaceFitInput input;
+  input.field = &prepared.field;
+  input.iso = options.prepare.extract.iso;
+  input.orientation = orientation_from_flip(options.prepare.extract.flip);
+  input.isosurface = &prepared.isosurface.mesh;
+  input.reference = &against_surface;
+  input.cell_size = result.cell_size;
+  input.distance = &prepared.distance;
   const double frame_step = kFrameStepCells * result.cell_size;
-  // Each level tried starts from the previous one's entries (levels by error).
-  NormalFitResult previous;
-  const auto fit_level = [&](int levels) {
-    check_level_memory(base, levels);
-    result.fit = ShrinkWrapResult{};
-    auto hierarchy = std::make_shared<const SubdivisionHierarchy>(base, levels);
-    const NormalDirections directions = [&](const std::vector<Vec3>& points) {
-      return isw_frame_normals(*hierarchy, points, frame_step);
+  input.directions = [frame_step](const SubdivisionHierarchy& hierarchy) -> NormalDirections {
+    return [&hierarchy, frame_step](const std::vector<Vec3>& points) {
+      return isw_frame_normals(hierarchy, points, frame_step);
     };
-    NormalFitOptions normal = options.normal;
-    normal.surface = &prepared.isosurface.mesh;
-    normal.orientation = orientation;
-    normal.coverage_pull = options.shrink_wrap.coverage_pull;
-    normal.start = previous.levels.empty() ? nullptr : &previous;
-    previous = normal_fit(*hierarchy, base.positions, prepared.field, iso, directions, normal, progress);
-    result.fit.positions = std::move(previous.positions);
-    result.normal_levels = previous.levels;
-    result.non_normal_coefficients = previous.non_normal_count();
-    result.frame_base = previous.frame_base;
-    const WrapLevelMesh level = make_wrap_level_mesh(*hierarchy, levels, result.fit.positions, prepared.field, iso);
-    result.fit.folded_faces = count_folded_faces(level, result.fit.positions, prepared.field, orientation);
-    return FittedLevel{std::move(hierarchy), &result.fit.positions, result.fit.folded_faces};
   };
-  return fit_by_levels(base, fit_level, prepared, against_surface, options, result, start);
+  return input;
 }
 
-// Base mesh, levels, shrink-wrap and the fit check; with
+// The fit's figures into the result; returns its hierarchy.
+std::shared_ptr<const SubdivisionHierarchy> take_fit(SurfaceFit fit, ConvertResult& result) {
+  result.fit = std::move(fit.points);
+  result.parametrization = fit.parametrization;
+  result.normal_levels = std::move(fit.normal_levels);
+  result.non_normal_coefficients = fit.non_normal_coefficients;
+  result.frame_base = std::move(fit.frame_base);
+  result.level_reports = std::move(fit.level_reports);
+  result.levels = fit.levels;
+  result.fine_vertices = fit.fine_vertices;
+  result.fine_faces = fit.fine_faces;
+  result.fit_isosurface = fit.isosurface;
+  result.uncovered_share = fit.uncovered_share;
+  return std::move(fit.hierarchy);
+}
+
+// The base mesh (simplify_base) and the fit (fit_surface); with
 // BaseGrowth::UntilCovered, again from a base mesh twice as large while more
-// than kUncoveredWarning of the isosurface is left out. Returns the last
-// fit's hierarchy and, in `target`, the last base mesh's target.
-std::shared_ptr<const SubdivisionHierarchy> fit_surface(PreparedSurface& prepared,
-                                                        const SurfaceErrorReference& against_surface,
-                                                        const ConvertOptions& options, ConvertResult& result,
-                                                        std::size_t& target, ProgressSink& progress) {
+// than kUncoveredWarning of the isosurface is left out (not for the
+// parametrization: its map covers every part of the surface). Returns the
+// last fit's hierarchy and, in `target`, the last base mesh's target.
+std::shared_ptr<const SubdivisionHierarchy> base_and_fit(PreparedSurface& prepared,
+                                                         const SurfaceErrorReference& against_surface,
+                                                         const ConvertOptions& options, ConvertResult& result,
+                                                         std::size_t& target, ProgressSink& progress) {
   simplify::SimplifyOptions simplify_options = options.base.simplify;
   simplify_options.target_vertices = target = base_target(options.base, result.extracted_vertices);
   simplify_options.compute_distance = false;
@@ -336,31 +213,37 @@ std::shared_ptr<const SubdivisionHierarchy> fit_surface(PreparedSurface& prepare
   if (options.levels > 0)
     check_memory(double(std::min(target, result.extracted_vertices)) * std::pow(4.0, options.levels),
                  kFitBytesPerFineVertex, std::to_string(options.levels) + " levels");
-  if (options.fit == FitMethod::Parametrization) {
-    // Every part of the surface is in the map: no distance field, no growth.
+  const bool mapped = options.fit == FitMethod::Parametrization;
+  if (mapped) {
     simplify_options.surface_map = simplify::SurfaceMapping::Build;
     simplify_options.max_vertex_area_share = kParametrizationAreaShare;
-    simplify::SimplifyResult simplified = simplify_base(prepared, simplify_options, options, result, progress);
-    return fit_parametrized(simplified, prepared, against_surface, options, result, progress);
   }
-  // The shrink-wrap searches the signed-distance field, the normal fit the field itself.
+  // Only the shrink-wrap searches the signed-distance field.
   const bool wrap = options.fit == FitMethod::ShrinkWrap;
   BackgroundDistance distance(prepared, options.prepare);
   if (wrap) simplify_options.serial_phase_begins = [&distance] { distance.start(); };
+  const SurfaceFitOptions fit = fit_options(options, result);
+  SurfaceFitInput input = fit_input(prepared, against_surface, options, result);
   std::shared_ptr<const SubdivisionHierarchy> hierarchy;
   for (result.base_attempts = 1;; ++result.base_attempts) {
-    const PolygonMesh base = simplify_base(prepared, simplify_options, options, result, progress).base;
+    const simplify::SimplifyResult simplified = simplify_base(prepared, simplify_options, options, result, progress);
     simplify_options.serial_phase_begins = nullptr;  // the distance field is on its way
-    if (options.levels > 0) check_level_memory(base, options.levels);  // before the wait
+    const PolygonMesh& base = simplified.base;
+    if (options.levels > 0)  // before the wait
+      check_memory(double(fine_vertex_count(base, options.levels)), kFitBytesPerFineVertex,
+                   std::to_string(options.levels) + " levels of a " + std::to_string(base.vertex_count()) +
+                       "-vertex base mesh");
     if (wrap) result.seconds.distance += distance.wait(progress);
     result.fit = ShrinkWrapResult{};  // the previous try's, before the next one's peak
     hierarchy.reset();
-    hierarchy = wrap ? fit_base(base, prepared, against_surface, options, result, progress)
-                     : fit_normal(base, prepared, against_surface, options, result, progress);
+    input.map = &simplified.map;
+    const auto start = Clock::now();
+    hierarchy = take_fit(fit_surface(base, input, fit, progress), result);
+    result.seconds.fit += seconds_since(start);
     // With the levels fixed, a larger base multiplies the fine mesh: it grows
     // only when the levels follow it.
     const std::size_t grown = 2 * base.vertex_count();
-    if (options.base.growth != BaseGrowth::UntilCovered || options.levels != 0 ||
+    if (mapped || options.base.growth != BaseGrowth::UntilCovered || options.levels != 0 ||
         result.uncovered_share <= kUncoveredWarning || result.base_attempts == kBaseAttempts ||
         grown > result.extracted_vertices / 4)
       break;
@@ -610,7 +493,7 @@ ConvertResult convert_volume(Volume volume, const std::string& source, const Con
   result.max_error_cells = level_error_bound(prepared, options);
   result.seconds.fit = seconds_since(reference_start);
   const std::shared_ptr<const SubdivisionHierarchy> fitted =
-      fit_surface(prepared, against_surface, options, result, target, progress);
+      base_and_fit(prepared, against_surface, options, result, target, progress);
   add_fit_warnings(options, target, result);
   refuse_unusable_fit(source, options, result);
   // The same surface over the base in the order its coder sends compactly.

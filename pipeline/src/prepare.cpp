@@ -1,12 +1,7 @@
 #include "isowave/pipeline/prepare.h"
 
-#include <cstdio>
-#include <unistd.h>
-
 #include "isowave/core/error.h"
-#include "isowave/core/mesh_topology.h"
 #include "isowave/extract/volume_summary.h"
-#include "isowave/transform/hierarchy.h"
 
 namespace isowave {
 
@@ -57,23 +52,6 @@ PreparedSurface prepare_surface(Volume volume, const PrepareOptions& options, co
   PreparedSurface prepared = extract_surface(std::move(volume), options, source, progress);
   prepared.distance = surface_distance_field(prepared, options, progress);
   return prepared;
-}
-
-std::size_t fine_vertex_count(const PolygonMesh& base, int levels) {
-  const LevelCounts counts = level_counts(base, summarize_topology(base).edges);
-  return static_cast<std::size_t>(refinement_counts(counts, levels).back().vertices);
-}
-
-void check_memory(double fine_vertices, double bytes_per_vertex, const std::string& what) {
-  const double needed = fine_vertices * bytes_per_vertex;
-  const double physical = static_cast<double>(sysconf(_SC_PHYS_PAGES)) * static_cast<double>(sysconf(_SC_PAGESIZE));
-  if (physical > 0 && needed > physical) {
-    char message[256];
-    std::snprintf(message, sizeof message,
-                  "%s would make %.0f fine vertices, about %.1f GB, more than this machine's %.1f GB", what.c_str(),
-                  fine_vertices, needed / 1e9, physical / 1e9);
-    throw Error(ErrorKind::InvalidArgument, message);
-  }
 }
 
 }  // namespace isowave

@@ -371,7 +371,9 @@ TEST_F(CliTest, BadInputGivesOneLineAndANonZeroExitCode) {
       {"subdivide", path("garbage.ply"), "--levels", "2", "-o", path("x.ply")},
       {"convert", "builtin:nonsense", "-o", path("x.isw")},
       {"convert", "builtin:sphere:32", "--levels", "9", "-o", path("x.isw")},
-      {"convert", "builtin:sphere:32", "--unfold-limit", "101", "-o", path("x.isw")},
+      {"convert", "builtin:sphere:32", "--unfold-limit", "2", "-o", path("x.isw")},  // the fit command's, not convert's
+      {"fit", "builtin:sphere:32", "--base", path("garbage.ply"), "--levels", "2", "--unfold-limit", "101", "-o",
+       path("x.ply")},
       {"convert", "builtin:sphere:32", "--topology-tolerance", "-1", "-o", path("x.isw")},
       {"extract", "builtin:sphere:32", "--topology-tolerance", "nan", "-o", path("x.ply")},
       {"extract", "builtin:sphere:32", "--topology-tolerance", "abc", "-o", path("x.ply")},

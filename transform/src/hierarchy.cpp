@@ -37,6 +37,11 @@ LevelCounts level_counts(const PolygonMesh& base, std::size_t edges) {
   return {double(base.vertex_count()), double(base.face_count()), double(edges), double(base.face_vertices.size())};
 }
 
+std::size_t fine_vertex_count(const PolygonMesh& base, int levels) {
+  const LevelCounts counts = level_counts(base, summarize_topology(base).edges);
+  return static_cast<std::size_t>(refinement_counts(counts, levels).back().vertices);
+}
+
 std::pair<std::size_t, std::size_t> SubdivisionHierarchy::descendant_faces(std::size_t base_face, int level) const {
   assert(base_face < base_.face_count() && level >= 0 && level <= levels());
   if (level == 0) return {base_face, base_face + 1};

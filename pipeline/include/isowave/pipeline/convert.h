@@ -14,10 +14,7 @@
 #include "isowave/core/progress.h"
 #include "isowave/core/volume.h"
 #include "isowave/extract/isosurface.h"
-#include "isowave/fit/fit_quality.h"
-#include "isowave/fit/normal_fit.h"
-#include "isowave/fit/parametrized_fit.h"
-#include "isowave/fit/shrink_wrap.h"
+#include "isowave/fit/surface_fit.h"
 #include "isowave/pipeline/prepare.h"
 #include "isowave/simplify/simplify.h"
 
@@ -52,24 +49,6 @@ struct BaseMeshOptions {
 enum class FoldedFit {
   Refuse,  // throw Error(Unsupported) naming the remedy, before coding
   Keep,    // code it anyway (the warning stays)
-};
-
-// How the fine control points are fitted to the isosurface.
-enum class FitMethod {
-  ShrinkWrap,       // the paper's shrink-wrap (Sec. 4.2; fit/shrink_wrap.h)
-  Parametrization,  // surface points at the parameter positions of a MAPS map (fit/parametrized_fit.h)
-  Normal,           // detail as scalars along the coder's frame normals (fit/normal_fit.h)
-};
-
-// Where the parametrization puts the fine points (FitMethod::Parametrization).
-enum class FinePoints {
-  OnExtractedSurface,     // the map's points, on the marching-cubes triangles
-  // Those moved along the field gradient onto the isosurface of the trilinear
-  // field (correct_to_isosurface, within kFinePointMoveCells): off the
-  // marching-cubes mesh's own error, nearer the isosurface than it. A move
-  // that folds a face is taken back, and the corners of faces still folded
-  // move to unfold them (unfold(), kFineUnfoldRounds).
-  OnTrilinearIsosurface,
 };
 
 // What the .isw 2.0 file's size follows (issue #34): at most one target;
@@ -129,7 +108,6 @@ struct ConvertTimings {
 inline constexpr double kFarPointsWarning = 0.005;
 // Share of the isosurface that may lie more than kUncoveredCells cells from
 // every fine control point before convert_volume() warns.
-inline constexpr double kUncoveredCells = 2.0;
 inline constexpr double kUncoveredWarning = 0.01;
 // More than this share of the isosurface left out means the base mesh spans
 // whole parts of it: a fold warning then names a larger base mesh, not the
@@ -166,8 +144,6 @@ inline constexpr double kMaxAutoFineVertices = 8e6;
 // the base faces samples the surface evenly; the base keeps at least the
 // target divided by it.
 inline constexpr double kParametrizationAreaShare = 0.5;
-inline constexpr double kFinePointMoveCells = 0.5;
-inline constexpr int kFineUnfoldRounds = 10;  // FinePoints::OnTrilinearIsosurface's unfold()
 // Samples each way for the D convert measures (levels, summary rows):
 // enough for a few per mille of noise where no rare far point dominates.
 inline constexpr std::size_t kErrorSamples = 50000;
@@ -179,25 +155,6 @@ inline constexpr double kFrameStepCells = 0.125;
 // automatic levels' bound is this share of it: the quantization of the cut
 // stream adds the rest (errors add about in quadrature).
 inline constexpr double kLevelShareOfMaxError = 0.9;
-
-// One level a fit tried (issue #33, item 4): its fitted fine mesh before
-// quantization (the parametrization's before its points move onto the
-// trilinear isosurface; the shrink-wrap's after its own correction) against
-// the extracted isosurface.
-struct LevelReport {
-  int levels = 0;
-  std::size_t fine_vertices = 0;
-  // RMS distances of D (surface_error.h, kErrorSamples each way), cells:
-  // fine mesh -> isosurface and isosurface -> fine mesh.
-  double forward_rms_cells = 0, backward_rms_cells = 0;
-  double d_cells() const { return forward_rms_cells > backward_rms_cells ? forward_rms_cells : backward_rms_cells; }
-  // Share of the fine faces folded against the field gradient, as the fit
-  // counts them (count_folded_faces; the shrink-wrap's ShrinkWrapResult::folded_faces).
-  double folded_share = 0;
-  // Fine face areas (vector areas) over their mean.
-  double stretch_min = 0, stretch_median = 0, stretch_max = 0;
-  double seconds = 0;  // wall clock: the level's fit and these figures
-};
 
 // The largest fine mesh the automatic levels may reach for `fit` on an
 // isosurface of `extracted_vertices` (the constants above).

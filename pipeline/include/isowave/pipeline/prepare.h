@@ -58,19 +58,4 @@ SignedDistanceField surface_distance_field(const PreparedSurface& prepared, cons
 PreparedSurface prepare_surface(Volume volume, const PrepareOptions& options, const std::string& source,
                                 ProgressSink& progress = no_progress());
 
-// Fine control point count of `levels` subdivisions of `base`, from the
-// refinement's counting rules alone (no refinement; O(base size)).
-std::size_t fine_vertex_count(const PolygonMesh& base, int levels);
-
-// About the peak bytes per fine control point of a fit or a conversion, with
-// the volume, the distance field and the extracted mesh (an upper bound of
-// the peaks in docs/MEASUREMENTS.md).
-inline constexpr double kFitBytesPerFineVertex = 300;
-
-// Refuses, with Error(InvalidArgument) naming `what` (e.g. "6 levels"), a
-// job whose estimate (fine_vertices x bytes_per_vertex) exceeds this
-// machine's physical memory: one clear line at once rather than minutes of
-// swapping, the OOM killer or a bare std::bad_alloc.
-void check_memory(double fine_vertices, double bytes_per_vertex, const std::string& what);
-
 }  // namespace isowave

@@ -82,6 +82,9 @@ std::vector<LevelCounts> refinement_counts(const LevelCounts& base, int levels);
 // The counts of a base mesh with `edges` edges (all the refinement needs of
 // its topology).
 LevelCounts level_counts(const PolygonMesh& base, std::size_t edges);
+// Fine control point count of `levels` refinements of `base`, from the
+// counting rules alone (no refinement; O(base size)).
+std::size_t fine_vertex_count(const PolygonMesh& base, int levels);
 
 class SubdivisionHierarchy {
  public:
