@@ -20,7 +20,7 @@
 // encode and decode times beside Draco's on the same mesh in the same run.
 //
 // usage: bench_rate_distortion VOLUME --iso V [--levels N] [--min-component-vertices N] [--smooth S]
-//                              [--topology-tolerance T] [--no-flips] [--fit shrink-wrap|parametrization|normal|both|all] [--csv FILE]
+//                              [--topology-tolerance T] [--flips] [--fit shrink-wrap|parametrization|normal|both|all] [--csv FILE]
 //        bench_rate_distortion --self-test   (checks bd_rate() against analytic curves; exit code 1 on failure)
 #include <algorithm>
 #include <chrono>

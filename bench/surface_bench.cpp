@@ -36,7 +36,7 @@ double seconds_since(Clock::time_point start) { return std::chrono::duration<dou
 [[noreturn]] void exit_with_usage(const char* program, const std::string& problem, const char* extra_usage) {
   std::fprintf(stderr,
                "%s: %s\nusage: %s VOLUME --iso V [--levels N] [--min-component-vertices N] [--smooth S] "
-               "[--topology-tolerance T] [--no-flips] [--fit shrink-wrap|parametrization|normal|both|all]%s\n",
+               "[--topology-tolerance T] [--flips] [--fit shrink-wrap|parametrization|normal|both|all]%s\n",
                program, problem.c_str(), program, extra_usage);
   std::exit(2);
 }
@@ -66,8 +66,8 @@ BenchOptions parse_options(int argc, char** argv, const char* program, BenchOpti
         o.extract.smooth_sigma = std::stod(next());
       } else if (arg == "--topology-tolerance") {
         o.extract.topology_tolerance = std::stod(next());
-      } else if (arg == "--no-flips") {
-        o.valence_flips = false;
+      } else if (arg == "--flips") {
+        o.valence_flips = true;
       } else if (arg == "--fit") {
         const std::string fit = next();
         if (fit == "shrink-wrap") o.fits = {FitMethod::ShrinkWrap};

@@ -35,14 +35,15 @@ struct BenchOptions {
   std::string input;          // a volume file or builtin:NAME[:N]
   IsosurfaceOptions extract;  // iso, min_component_vertices, smooth_sigma
   int levels = 0;             // 0: automatic
-  bool valence_flips = true;  // false: --no-flips (the base mesh by the paper's collapse rules only)
+  // --flips: the simplifier's valence flips (off in convert).
+  bool valence_flips = BaseMeshOptions{}.simplify.valence_flips;
   std::vector<FitMethod> fits{FitMethod::ShrinkWrap, FitMethod::Parametrization};
   // The children's ConvertOptions::summary_percents (FitOutcome::summary).
   std::vector<double> summary_percents{100, 20, 10, 5};
 };
 
 // The options the programs take (VOLUME --iso V [--levels N]
-// [--min-component-vertices N] [--smooth S] [--topology-tolerance T] [--no-flips] [--fit ...]);
+// [--min-component-vertices N] [--smooth S] [--topology-tolerance T] [--flips] [--fit ...]);
 // anything else prints the usage under `program`'s name and exits with 2.
 // `defaults` holds what the program does without an option (e.g. its fits);
 // `extra_usage` ends the usage line (the program's own options, which it

@@ -37,7 +37,7 @@ struct BaseMeshOptions {
   std::size_t vertices = 0;
   double ratio = 0.0625;  // in (0, 1]
   BaseGrowth growth = BaseGrowth::Fixed;
-  // The simplifier's rules (Sec. 4.1, valence flips, edge removal);
+  // The simplifier's rules (Sec. 4.1, edge removal);
   // convert_volume() sets target_vertices, compute_distance and
   // serial_phase_begins itself.
   simplify::SimplifyOptions simplify;

@@ -76,18 +76,22 @@ struct SimplifyOptions {
   // (4.1) alone sees no cost in shrinking a loop on a flat stretch (an
   // isosurface grazing a box face) to a sliver the fit cannot open again.
   bool boundary_curve_error = true;
-  // Not in the paper (false reproduces it exactly): when the paper's rules
-  // stall (typically at mean valence ~7 on high-genus surfaces), an edge
-  // blocked only by its new vertex's valence first flips up to 4 edges at its
-  // endpoints (nearly flat quads, flip_min_normal_dot), undone if the
-  // collapse is still illegal. Input vertices above max_valence are flipped
-  // down first.
-  bool valence_flips = true;
+  // Not in the paper, off by default: input vertices above max_valence are
+  // flipped down first, and when the paper's rules stall (typically at mean
+  // valence ~7 on high-genus surfaces) an edge blocked only by its new
+  // vertex's valence first flips up to 4 edges at its endpoints (nearly flat
+  // quads, flip_min_normal_dot), undone if the collapse is still illegal.
+  // The base is up to 16% smaller, but the fits lie farther from noisy
+  // isosurfaces: without flips the fits' floors are 5-48% lower and their
+  // files 3-17% smaller at equal D (docs/MEASUREMENTS.md, "Valence flips and
+  // the fits' floor"). Without flips, an input vertex above max_valence that
+  // no collapse removes stays in the base (SimplifyReport::vertices_outside_valence_range).
+  bool valence_flips = false;
   // A flip needs all pairs of the old and new triangles' unit normals to have
   // a dot product >= this; in [-1, 1].
   double flip_min_normal_dot = 0.7;
-  // Flip rounds, >= 0: each queues every edge the relaxed valence rule
-  // admits; they stop early when one gains under 1% of the vertices.
+  // With valence_flips, flip rounds, >= 0: each queues every edge the relaxed
+  // valence rule admits; they stop early when one gains under 1% of the vertices.
   int max_flip_rounds = 1;
   int max_valence = 8;  // 3..32
   // Not in the paper (0 reproduces it): no base vertex may hold more than
