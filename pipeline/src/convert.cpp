@@ -301,8 +301,9 @@ void add_fit_warnings(const ConvertOptions& options, std::size_t target, Convert
     std::ostringstream warning;
     warning << "the fit leaves " << result.fit_isosurface.far << " of the " << result.fine_vertices
             << " fine control points (" << percent(double(result.fit_isosurface.far) / double(result.fine_vertices))
-            << ") more than a cell off the isosurface, up to " << std::setprecision(3) << result.fit_isosurface.max
-            << " cells: parts of the surface lie beyond the reach of the base mesh; a larger base mesh "
+            << ") more than a cell off the isosurface (first-order estimate |f - iso| / |grad f|, largest "
+            << std::setprecision(3) << result.fit_isosurface.max
+            << " cells): parts of the surface lie beyond the reach of the base mesh; a larger base mesh "
                "(--base-ratio, --base-vertices) usually fixes it";
     result.warnings.push_back(warning.str());
   }

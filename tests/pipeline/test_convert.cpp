@@ -210,7 +210,9 @@ TEST(Convert, ReportsTheShareOfFoldedFineFaces) {
     options.keep_extracted_mesh = true;
     options.summary_percents = {100};
     const ConvertResult result = convert_volume(field, "mixing", options);
-    if (fit == FitMethod::ShrinkWrap) ASSERT_FALSE(result.fit.unfold.skipped);
+    if (fit == FitMethod::ShrinkWrap) {
+      ASSERT_FALSE(result.fit.unfold.skipped);
+    }
     const IswDecoded decoded = decode_isw(result.bytes, "test");
     const BinnedSurfaceDistance reference(result.extracted_mesh);
     const FitQuality quality =

@@ -80,7 +80,6 @@ TEST(ConvertNormal, SphereCutByTheBoxStaysInsideIt) {
       {36, 40, 44}, [&](double x, double y, double z) { return r - std::sqrt(squared_norm(Vec3{x, y, z} - c)); });
   const test::DecodedConversion conversion = test::convert_and_decode(field, "cut sphere", FitMethod::Normal);
   const ConvertResult& result = conversion.result;
-  const IswDecoded& decoded = conversion.decoded;
   const PolygonMesh& fine = conversion.fine;
   const auto from_sphere = [&](const PolygonMesh& mesh) {
     return test::rms_distance(mesh, [&](const Vec3& p) { return std::sqrt(squared_norm(p - c)) - r; });

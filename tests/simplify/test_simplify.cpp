@@ -407,7 +407,9 @@ TEST(SimplifyAreaBudget, KeepsAtLeastTargetOverShareVertices) {
       const SimplifyResult result = simplify(input, options);
       EXPECT_GE(double(result.base.vertex_count()), double(options.target_vertices) / share - 1) << share;
       // With flips the collapse goes farther, where the budget is what stops it.
-      if (flips) EXPECT_GT(result.report.rejected_at_pop[static_cast<int>(Legality::AreaBudget)], 0u) << share;
+      if (flips) {
+        EXPECT_GT(result.report.rejected_at_pop[static_cast<int>(Legality::AreaBudget)], 0u) << share;
+      }
     }
   }
 }

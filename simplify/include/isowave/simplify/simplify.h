@@ -82,7 +82,7 @@ struct SimplifyOptions {
   // vertex's valence first flips up to 4 edges at its endpoints (nearly flat
   // quads, flip_min_normal_dot), undone if the collapse is still illegal.
   // The base is up to 16% smaller, but the fits lie farther from noisy
-  // isosurfaces: without flips the fits' floors are 5-48% lower and their
+  // isosurfaces: without flips their floors are 6-48% lower there and their
   // files 3-17% smaller at equal D (docs/MEASUREMENTS.md, "Valence flips and
   // the fits' floor"). Without flips, an input vertex above max_valence that
   // no collapse removes stays in the base (SimplifyReport::vertices_outside_valence_range).
