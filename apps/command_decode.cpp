@@ -4,16 +4,50 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <optional>
+#include <string>
 
 #include "cli.h"
 #include "commands.h"
+#include "isowave/codec/importance.h"
 #include "isowave/codec/isw_format.h"
+#include "isowave/codec/region.h"
 #include "isowave/codec/statistics.h"
 #include "isowave/core/error.h"
 #include "isowave/core/mesh_io.h"
 #include "isowave/transform/limit_surface.h"
 
 namespace isowave::commands {
+
+namespace {
+
+// --roi / --roi-sphere: the region, or nothing.
+std::optional<RegionOfInterest> region_option(const cli::Arguments& args) {
+  if (args.has("roi") && args.has("roi-sphere"))
+    throw Error(ErrorKind::InvalidArgument, "give at most one of --roi and --roi-sphere");
+  if (args.has("roi")) return parse_region(args.get("roi"), false, "--roi");
+  if (args.has("roi-sphere")) return parse_region(args.get("roi-sphere"), true, "--roi-sphere");
+  return std::nullopt;
+}
+
+// The fine control mesh with the region at full detail and, outside it, the
+// coefficients --percent or --coefficients keep (none: the base mesh's
+// surface); prints what it kept unless quiet.
+PolygonMesh region_mesh(const cli::Arguments& args, const IswDecoded& decoded, const RegionOfInterest& region,
+                        const std::string& input) {
+  const SubdivisionHierarchy& h = *decoded.hierarchy;
+  std::size_t outside = 0;
+  if (args.has("percent")) outside = coefficients_for_percent(h, args.get_double("percent", 0));
+  if (args.has("coefficients")) outside = static_cast<std::size_t>(args.get_double("coefficients", 0));
+  const RegionReconstruction r = reconstruct_region(decoded, region, outside);
+  if (!args.has("quiet"))
+    std::printf("%s: region: %zu of %zu fine control points inside, %zu coefficients there, %zu kept in all (of %zu)\n",
+                input.c_str(), r.inside_points, h.fine_vertex_count(), r.region_coefficients, r.kept_coefficients,
+                decoded.ranked.size());
+  return h.control_mesh(decoded.levels, r.fine);
+}
+
+}  // namespace
 
 int decode(const Args& raw) {
   const cli::CommandSpec spec{
@@ -30,6 +64,8 @@ int decode(const Args& raw) {
        {"max-error", true, "read the shortest prefix whose recorded error D is within E cells (version 2 files)", "E"},
        {"percent", true, "keep this percentage of full resolution (0..100)", "P"},
        {"coefficients", true, "keep this many wavelet coefficients (besides the base mesh)", "N"},
+       {"roi", true, "full detail inside this box (world units), --percent or --coefficients outside (default none: the base mesh's surface); the finest level", "X0,Y0,Z0,X1,Y1,Z1"},
+       {"roi-sphere", true, "the same inside this ball", "CX,CY,CZ,R"},
        {"level", true, "write the control mesh of this level (default: the finest)", "L"},
        {"limit", false, "move the vertices to the limit surface (OpenSubdiv)", ""},
        {"triangulate", false, "split quads into triangles", ""},
@@ -51,17 +87,22 @@ int decode(const Args& raw) {
   mesh_format_from_path(output);
   const auto start = std::chrono::steady_clock::now();
 
+  const std::optional<RegionOfInterest> region = region_option(args);
+  if (region && args.has("level")) throw Error(ErrorKind::InvalidArgument, "--roi gives the finest level: no --level");
   IswDecodeOptions options;
-  options.order = IswOrder::Index;  // the surface needs no ranking unless a limit asks for it
+  // The surface needs no ranking unless a limit asks for it; with a region
+  // the limit applies outside it, to a whole decode ranked by importance.
+  const bool limited = args.has("percent") || args.has("coefficients");
+  options.order = region && limited ? IswOrder::Importance : IswOrder::Index;
   if (args.has("percent")) {
-    options.max_percent = args.get_double("percent", 100);
-    if (!(options.max_percent >= 0 && options.max_percent <= 100))
-      throw Error(ErrorKind::InvalidArgument, "--percent must be in 0..100");
+    const double percent = args.get_double("percent", 100);
+    if (!(percent >= 0 && percent <= 100)) throw Error(ErrorKind::InvalidArgument, "--percent must be in 0..100");
+    if (!region) options.max_percent = percent;
   } else if (args.has("coefficients")) {
     const double n = args.get_double("coefficients", 0);
     if (!(n >= 0) || n != static_cast<double>(static_cast<std::uint64_t>(n)))
       throw Error(ErrorKind::InvalidArgument, "--coefficients must be a non-negative integer");
-    options.max_coefficients = static_cast<std::uint64_t>(n);
+    if (!region) options.max_coefficients = static_cast<std::uint64_t>(n);
   }
   if (args.has("bytes")) {
     const double n = args.get_double("bytes", 0);
@@ -83,7 +124,8 @@ int decode(const Args& raw) {
 
   // Synthesis in the decoded array and the mesh around it: no copies of the
   // fine-level arrays.
-  PolygonMesh mesh = decoded.hierarchy->control_mesh(level, take_reconstruction(decoded, decoded.ranked.size(), level));
+  PolygonMesh mesh = region ? region_mesh(args, decoded, *region, input)
+                            : decoded.hierarchy->control_mesh(level, take_reconstruction(decoded, decoded.ranked.size(), level));
   if (args.has("limit")) mesh.positions = limit_surface(mesh).positions;
   if (args.has("triangulate")) mesh = triangulate(mesh);
   MeshWriteOptions write_options;
@@ -105,7 +147,8 @@ int decode(const Args& raw) {
       std::printf("%g%% is below the base mesh's share (%.2f%% of the fine control points): writing the base mesh "
                   "alone\n",
                   options.max_percent, base_percent);
-    std::printf("%s: %.2f%% of %zu fine control points: base mesh + %zu non-zero coefficients (of %llu), level %d%s\n",
+    if (!region)
+      std::printf("%s: %.2f%% of %zu fine control points: base mesh + %zu non-zero coefficients (of %llu), level %d%s\n",
                 input.c_str(), percent, fine, decoded.ranked.size(),
                 static_cast<unsigned long long>(decoded.coefficients_total), level, args.has("limit") ? ", limit surface" : "");
     if (decoded.major_version >= 2)

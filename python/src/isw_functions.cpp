@@ -3,11 +3,16 @@
 #include <chrono>
 #include <cmath>
 #include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
 
 #include "arrays.h"
 #include "functions.h"
 #include "options.h"
+#include "isowave/codec/importance.h"
 #include "isowave/codec/isw_format.h"
+#include "isowave/codec/region.h"
 #include "isowave/codec/statistics.h"
 #include "isowave/core/error.h"
 #include "isowave/pipeline/convert.h"
@@ -146,28 +151,48 @@ py::dict convert(const py::object& field_or_path, double iso, const fs::path& ou
   return summary_of(result, path, input);
 }
 
+namespace {
+
+// roi / roi_sphere: a sequence of 6 or 4 numbers, as the CLI's --roi and --roi-sphere.
+std::optional<RegionOfInterest> region_argument(const py::object& roi, const py::object& roi_sphere) {
+  if (!roi.is_none() && !roi_sphere.is_none()) throw Error(ErrorKind::InvalidArgument, "give at most one of roi and roi_sphere");
+  const bool sphere = !roi_sphere.is_none();
+  const py::object& given = sphere ? roi_sphere : roi;
+  if (given.is_none()) return std::nullopt;
+  return make_region(given.cast<std::vector<double>>(), sphere, sphere ? "roi_sphere" : "roi");
+}
+
+}  // namespace
+
 py::tuple decode(const fs::path& file, const py::object& percent, const py::object& coefficients,
                  const py::object& max_error, const py::object& bytes, const py::object& level, bool limit,
-                 bool triangulate) {
+                 bool triangulate, const py::object& roi, const py::object& roi_sphere) {
   const std::string path = file.string();
   if (!max_error.is_none() && !bytes.is_none())
     throw Error(ErrorKind::InvalidArgument, "give at most one of max_error and bytes");
   if (!percent.is_none() && !coefficients.is_none())
     throw Error(ErrorKind::InvalidArgument, "give at most one of percent and coefficients");
+  const std::optional<RegionOfInterest> region = region_argument(roi, roi_sphere);
+  if (region && !level.is_none()) throw Error(ErrorKind::InvalidArgument, "roi gives the finest level: no level");
   IswDecodeOptions options;
-  options.order = IswOrder::Index;  // the surface needs no ranking unless a limit asks for it
+  // The surface needs no ranking unless a limit asks for it; with a region
+  // the limit applies outside it, to a whole decode ranked by importance.
+  const bool limited = !percent.is_none() || !coefficients.is_none();
+  options.order = region && limited ? IswOrder::Importance : IswOrder::Index;
+  double percent_value = 100;
   if (!percent.is_none()) {
-    options.max_percent = percent.cast<double>();
-    if (!(options.max_percent >= 0 && options.max_percent <= 100))
-      throw Error(ErrorKind::InvalidArgument, "percent must be in 0..100");
+    percent_value = percent.cast<double>();
+    if (!(percent_value >= 0 && percent_value <= 100)) throw Error(ErrorKind::InvalidArgument, "percent must be in 0..100");
+    if (!region) options.max_percent = percent_value;
   }
-  if (!coefficients.is_none()) options.max_coefficients = coefficients.cast<std::uint64_t>();
+  if (!coefficients.is_none() && !region) options.max_coefficients = coefficients.cast<std::uint64_t>();
   if (!bytes.is_none()) options.max_file_bytes = bytes.cast<std::uint64_t>();
   if (!max_error.is_none()) {
     options.max_error_cells = max_error.cast<double>();
     if (!(options.max_error_cells > 0) || !std::isfinite(options.max_error_cells))
       throw Error(ErrorKind::InvalidArgument, "max_error must be a positive number of cells");
   }
+  const std::size_t outside = coefficients.is_none() ? 0 : coefficients.cast<std::size_t>();
   const int requested_level = level.is_none() ? -1 : level.cast<int>();
   PolygonMesh mesh;
   std::string truncation;
@@ -179,7 +204,12 @@ py::tuple decode(const fs::path& file, const py::object& percent, const py::obje
     if (l < 0 || l > decoded.levels)
       throw Error(ErrorKind::InvalidArgument,
                   "level must be in 0.." + std::to_string(decoded.levels) + ", got " + std::to_string(l));
-    mesh = decoded.hierarchy->control_mesh(l, take_reconstruction(decoded, decoded.ranked.size(), l));
+    if (region) {
+      const std::size_t keep = percent.is_none() ? outside : coefficients_for_percent(*decoded.hierarchy, percent_value);
+      mesh = decoded.hierarchy->control_mesh(l, reconstruct_region(decoded, *region, keep).fine);
+    } else {
+      mesh = decoded.hierarchy->control_mesh(l, take_reconstruction(decoded, decoded.ranked.size(), l));
+    }
     if (limit) mesh.positions = limit_surface(mesh).positions;
     if (triangulate) mesh = isowave::triangulate(mesh);
   }

@@ -48,7 +48,7 @@ file's metadata, default 'numpy array'). Returns the result `isowave convert --j
 (bytes, vertex counts, levels, seconds per stage, fit quality, the rate-distortion rows with D, the
 quantization error, warnings).)";
 
-constexpr const char* kDecodeDoc = R"(decode(path, *, percent=None, coefficients=None, max_error=None, bytes=None, level=None, limit=False, triangulate=False) -> (vertices, faces)
+constexpr const char* kDecodeDoc = R"(decode(path, *, percent=None, coefficients=None, max_error=None, bytes=None, level=None, limit=False, triangulate=False, roi=None, roi_sphere=None) -> (vertices, faces)
 
 Rebuilds the surface of an .isw file as `isowave decode`: the base mesh and the most important
 wavelet coefficients, at most one of percent (0..100 of full resolution, counted as the paper does;
@@ -57,7 +57,10 @@ level (default the finest; 0 is the base mesh); limit=True moves the vertices to
 triangulate=True splits quads. vertices (n, 3) float64 and faces (m, k) uint32 (k = 4 above level
 0) own the decoder's buffers (no copy). bytes reads only the file's first bytes (any prefix of a
 version 2 stream decodes); max_error (cells) reads the shortest prefix whose error the file records
-within it. A file cut inside its coefficients decodes what it holds, with a UserWarning.)";
+within it. roi=(x0, y0, z0, x1, y1, z1) or roi_sphere=(cx, cy, cz, r), world units: the finest level
+with every point inside the region equal to the full decode's, percent or coefficients applying
+outside it (none: the base mesh's surface there), as `isowave decode --roi`. A file cut inside its
+coefficients decodes what it holds, with a UserWarning.)";
 
 constexpr const char* kStatsDoc = R"(stats(path, percents=(100, 20, 10, 5)) -> list of dict
 
@@ -100,7 +103,8 @@ PYBIND11_MODULE(isowave, m) {
   m.def("convert", &convert, py::arg("field_or_path"), py::arg("iso"), py::arg("path"), kConvertDoc);
   m.def("decode", &decode, py::arg("path"), py::kw_only(), py::arg("percent") = py::none(),
         py::arg("coefficients") = py::none(), py::arg("max_error") = py::none(), py::arg("bytes") = py::none(),
-        py::arg("level") = py::none(), py::arg("limit") = false, py::arg("triangulate") = false, kDecodeDoc);
+        py::arg("level") = py::none(), py::arg("limit") = false, py::arg("triangulate") = false,
+        py::arg("roi") = py::none(), py::arg("roi_sphere") = py::none(), kDecodeDoc);
   m.def("stats", &stats, py::arg("path"), py::arg("percents") = std::vector<double>{100, 20, 10, 5}, kStatsDoc);
   m.def("keep_freed_memory_for_reuse", &isowave::keep_freed_memory_for_reuse, kKeepMemoryDoc);
   m.def("release_freed_memory", &isowave::release_freed_memory, kReleaseMemoryDoc);

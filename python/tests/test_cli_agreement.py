@@ -122,3 +122,22 @@ def test_a_cut_file_decodes_what_it_holds_with_the_cli_warning(cli, sphere_isw, 
     np.testing.assert_allclose(vertices, cli_vertices, rtol=1e-7, atol=1e-7)
     np.testing.assert_array_equal(faces, cli_faces)
     assert not np.array_equal(vertices, isowave.decode(cli_path)[0])
+
+
+def test_decode_of_a_region_gives_the_cli_mesh_and_the_full_decode_inside(cli, sphere_isw, tmp_path):
+    cli_path, _ = sphere_isw
+    full, _ = isowave.decode(cli_path)
+    low, high = full.min(axis=0), full.max(axis=0)
+    box = np.concatenate([low, low + 0.4 * (high - low)])
+    obj = tmp_path / "region.obj"
+    cli("decode", cli_path, "--roi", ",".join(repr(float(v)) for v in box), "-o", obj, "--quiet")
+    cli_vertices, cli_faces = read_obj(obj)
+    vertices, faces = isowave.decode(cli_path, roi=box)
+    np.testing.assert_allclose(vertices, cli_vertices, rtol=1e-7, atol=1e-7)
+    np.testing.assert_array_equal(faces, cli_faces)
+    inside = np.all((full >= box[:3]) & (full <= box[3:]), axis=1)
+    assert 0 < inside.sum() < len(full)
+    np.testing.assert_allclose(vertices[inside], full[inside], rtol=0, atol=1e-9 * float(np.max(high - low)))
+    assert not np.allclose(vertices[~inside], full[~inside])
+    with pytest.raises(isowave.Error, match="roi expects 6 numbers"):
+        isowave.decode(cli_path, roi=(1, 2, 3))

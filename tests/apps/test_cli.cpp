@@ -366,6 +366,8 @@ TEST_F(CliTest, BadInputGivesOneLineAndANonZeroExitCode) {
       {"decode", path("garbage.isw"), "--percent", "5", "-o", path("x.ply")},
       {"decode", path("missing.isw"), "--percent", "5", "-o", path("x.ply")},
       {"decode", path("garbage.isw"), "-o", path("x.ply")},
+      {"decode", path("missing.isw"), "--roi", "1,2,3", "-o", path("x.ply")},
+      {"decode", path("missing.isw"), "--roi-sphere", "1,2,3,0", "-o", path("x.ply")},
       {"stats", path("garbage.isw")},
       {"info", path("garbage.isw")},
       {"subdivide", path("garbage.ply"), "--levels", "2", "-o", path("x.ply")},

@@ -1,0 +1,61 @@
+#pragma once
+// Region-of-interest reconstruction (issue #48, item 1; Gross, Staadt and
+// Gatti's "magnifying glass" as a hard region): inside a region of the
+// world every fine control point equals the full decode's, elsewhere only the
+// most important coefficients are kept. The coefficients a region needs are
+// found exactly, through the synthesis' transpose: entry k is needed iff some
+// fine control point inside the region depends on it (its row of the
+// synthesis has a non-zero weight there). The output is the uniform fine
+// control mesh, so it is as watertight as the full decode.
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "isowave/codec/isw_format.h"
+#include "isowave/core/vec3.h"
+#include "isowave/transform/hierarchy.h"
+
+namespace isowave {
+
+// A box or a ball in world units (the volume's coordinates).
+struct RegionOfInterest {
+  enum class Shape : std::uint8_t { Box, Sphere };
+  Shape shape = Shape::Box;
+  Vec3 low, high;    // Box: corners, low <= high componentwise
+  Vec3 centre;       // Sphere
+  double radius = 0;  // Sphere: > 0
+  bool contains(const Vec3& p) const;
+};
+
+// Parses "x0,y0,z0,x1,y1,z1" (a box, the corners in any order) or
+// "cx,cy,cz,r" (sphere = true; r > 0). Throws Error(InvalidArgument) naming
+// `option` for anything else, including non-finite numbers.
+RegionOfInterest parse_region(const std::string& text, bool sphere, const std::string& option);
+// The same from the numbers themselves (6 for a box, 4 for a sphere).
+RegionOfInterest make_region(const std::vector<double>& values, bool sphere, const std::string& option);
+
+// Per entry of the coarse-to-fine array (fine_vertex_count() entries): 1 if
+// some fine control point of `fine` (the level-L control points, at least
+// fine_vertex_count()) inside `region` depends on it; the base entries a
+// region point depends on included. Cost: one transposed synthesis, O(fine
+// control points), parallel; deterministic.
+std::vector<std::uint8_t> entries_for_region(const SubdivisionHierarchy& hierarchy, const std::vector<Vec3>& fine,
+                                             const RegionOfInterest& region);
+
+struct RegionReconstruction {
+  std::vector<Vec3> fine;             // level-L control points
+  std::size_t inside_points = 0;      // fine control points inside the region
+  std::size_t region_coefficients = 0;  // non-zero wavelet coefficients the region needs
+  std::size_t kept_coefficients = 0;    // non-zero wavelet coefficients kept in all
+};
+
+// The level-L control points of `decoded` (a complete decode ranked by
+// importance, IswOrder::Importance) with every coefficient the region needs
+// and, outside it, the `outside_keep` most important others (the ranked
+// order); base control points always. Inside the region the points equal the
+// full decode's up to rounding. Throws Error(InvalidArgument) for a decode
+// without a hierarchy. Cost: two syntheses and one transposed synthesis.
+RegionReconstruction reconstruct_region(const IswDecoded& decoded, const RegionOfInterest& region,
+                                        std::size_t outside_keep);
+
+}  // namespace isowave

@@ -1,0 +1,130 @@
+#include "isowave/codec/region.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <sstream>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include "isowave/core/error.h"
+#include "isowave/transform/wavelet_transform.h"
+
+namespace isowave {
+
+namespace {
+
+constexpr std::size_t kGrain = 1 << 15;
+
+template <class Body>
+void for_each_index(std::size_t n, const Body& body) {
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, kGrain), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t i = r.begin(); i < r.end(); ++i) body(i);
+  });
+}
+
+// A weight in [1, 2) that depends on the index only: with distinct positive
+// weights on the region's points, the transpose's sums cancel to zero only by
+// coincidence, never where a point depends on an entry through one path.
+double index_weight(std::size_t i, unsigned salt) {
+  std::uint64_t x = (std::uint64_t(i) + 1) * 0x9E3779B97F4A7C15ull + salt * 0xBF58476D1CE4E5B9ull;
+  x ^= x >> 31;
+  x *= 0x94D049BB133111EBull;
+  x ^= x >> 29;
+  return 1.0 + double(x >> 11) * (1.0 / 9007199254740992.0);
+}
+
+}  // namespace
+
+bool RegionOfInterest::contains(const Vec3& p) const {
+  if (shape == Shape::Sphere) return squared_norm(p - centre) <= radius * radius;
+  return p.x >= low.x && p.x <= high.x && p.y >= low.y && p.y <= high.y && p.z >= low.z && p.z <= high.z;
+}
+
+RegionOfInterest parse_region(const std::string& text, bool sphere, const std::string& option) {
+  const std::size_t expected = sphere ? 4 : 6;
+  std::vector<double> values;
+  std::stringstream in(text);
+  std::string item;
+  while (std::getline(in, item, ',')) {
+    std::size_t used = 0;
+    double v = 0;
+    try {
+      v = std::stod(item, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used == 0 || used != item.size() || !std::isfinite(v))
+      throw Error(ErrorKind::InvalidArgument, option + " expects " + std::to_string(expected) +
+                                                  " comma-separated finite numbers, got '" + text + "'");
+    values.push_back(v);
+  }
+  return make_region(values, sphere, option);
+}
+
+RegionOfInterest make_region(const std::vector<double>& values, bool sphere, const std::string& option) {
+  const std::size_t expected = sphere ? 4 : 6;
+  if (values.size() != expected)
+    throw Error(ErrorKind::InvalidArgument,
+                option + " expects " + std::to_string(expected) + " numbers, got " + std::to_string(values.size()));
+  for (const double v : values)
+    if (!std::isfinite(v)) throw Error(ErrorKind::InvalidArgument, option + " expects finite numbers");
+  RegionOfInterest region;
+  if (sphere) {
+    region.shape = RegionOfInterest::Shape::Sphere;
+    region.centre = {values[0], values[1], values[2]};
+    region.radius = values[3];
+    if (!(region.radius > 0)) throw Error(ErrorKind::InvalidArgument, option + ": the radius must be positive");
+  } else {
+    region.low = {std::min(values[0], values[3]), std::min(values[1], values[4]), std::min(values[2], values[5])};
+    region.high = {std::max(values[0], values[3]), std::max(values[1], values[4]), std::max(values[2], values[5])};
+  }
+  return region;
+}
+
+std::vector<std::uint8_t> entries_for_region(const SubdivisionHierarchy& hierarchy, const std::vector<Vec3>& fine,
+                                             const RegionOfInterest& region) {
+  const std::size_t n = hierarchy.fine_vertex_count();
+  if (fine.size() < n) throw Error(ErrorKind::InvalidArgument, "region: fewer points than the fine level");
+  // g: distinct positive weights on the region's fine points, then S^T g
+  // level by level down to the base and every level's coefficients.
+  std::vector<Vec3> g(n);
+  for_each_index(n, [&](std::size_t v) {
+    if (region.contains(fine[v])) g[v] = {index_weight(v, 1), index_weight(v, 2), index_weight(v, 3)};
+  });
+  for (int level = hierarchy.levels(); level >= 1; --level) synthesize_level_transpose(hierarchy, level, g);
+  std::vector<std::uint8_t> needed(n);
+  for_each_index(n, [&](std::size_t k) { needed[k] = g[k].x != 0 || g[k].y != 0 || g[k].z != 0; });
+  return needed;
+}
+
+RegionReconstruction reconstruct_region(const IswDecoded& decoded, const RegionOfInterest& region,
+                                        std::size_t outside_keep) {
+  if (!decoded.hierarchy) throw Error(ErrorKind::InvalidArgument, "reconstruct needs a decoded file");
+  const SubdivisionHierarchy& h = *decoded.hierarchy;
+  const std::size_t n = h.fine_vertex_count(), base = h.vertex_count(0);
+  RegionReconstruction out;
+  // 1. The full decode, to know which fine points lie inside.
+  std::vector<Vec3> full = decoded.coefficients;
+  synthesize(h, full);
+  out.inside_points = static_cast<std::size_t>(
+      std::count_if(full.begin(), full.begin() + static_cast<std::ptrdiff_t>(n), [&](const Vec3& p) { return region.contains(p); }));
+  // 2. What those points depend on, and the most important others.
+  std::vector<std::uint8_t> keep = entries_for_region(h, full, region);
+  std::fill(keep.begin(), keep.begin() + static_cast<std::ptrdiff_t>(base), std::uint8_t{1});
+  for (std::size_t k = base; k < n; ++k)
+    out.region_coefficients += keep[k] && squared_norm(decoded.coefficients[k]) > 0;
+  for (std::size_t r = 0; r < std::min(outside_keep, decoded.ranked.size()); ++r) keep[decoded.ranked[r]] = 1;
+  // 3. The reconstruction from the kept entries.
+  out.fine = decoded.coefficients;
+  for (std::size_t k = base; k < n; ++k) {
+    if (!keep[k]) out.fine[k] = Vec3{};
+    out.kept_coefficients += keep[k] && squared_norm(out.fine[k]) > 0;
+  }
+  synthesize(h, out.fine);
+  out.fine.resize(n);
+  return out;
+}
+
+}  // namespace isowave
