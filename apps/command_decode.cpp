@@ -15,6 +15,7 @@
 #include "isowave/codec/statistics.h"
 #include "isowave/core/error.h"
 #include "isowave/core/mesh_io.h"
+#include "isowave/transform/adaptive_mesh.h"
 #include "isowave/transform/limit_surface.h"
 
 namespace isowave::commands {
@@ -44,7 +45,10 @@ PolygonMesh region_mesh(const cli::Arguments& args, const IswDecoded& decoded, c
     std::printf("%s: region: %zu of %zu fine control points inside, %zu coefficients there, %zu kept in all (of %zu)\n",
                 input.c_str(), r.inside_points, h.fine_vertex_count(), r.region_coefficients, r.kept_coefficients,
                 decoded.ranked.size());
-  return h.control_mesh(decoded.levels, r.fine);
+  // Nothing kept outside: the base faces the region does not reach stay
+  // whole, joined to the fine ones without cracks.
+  if (outside > 0) return h.control_mesh(decoded.levels, r.fine);
+  return adaptive_control_mesh(h, region_face_levels(h, r.fine, region, 0), r.fine);
 }
 
 }  // namespace

@@ -127,4 +127,27 @@ RegionReconstruction reconstruct_region(const IswDecoded& decoded, const RegionO
   return out;
 }
 
+std::vector<int> region_face_levels(const SubdivisionHierarchy& hierarchy, const std::vector<Vec3>& fine,
+                                    const RegionOfInterest& region, int outside_level) {
+  const int levels = hierarchy.levels();
+  std::vector<int> face_levels(hierarchy.base().face_count(), outside_level);
+  if (levels == 0) {
+    std::fill(face_levels.begin(), face_levels.end(), 0);
+    return face_levels;
+  }
+  // A base face's fine points: the corners, e vertices and f vertices of the
+  // finest refinement of its level L - 1 faces.
+  const RefinementStep& s = hierarchy.step(levels);
+  for_each_index(face_levels.size(), [&](std::size_t f) {
+    const auto [first, end] = hierarchy.descendant_faces(f, levels - 1);
+    for (std::size_t p = first; p < end && face_levels[f] != levels; ++p) {
+      bool inside = region.contains(fine[s.first_face_vertex() + p]);
+      for (std::uint32_t k = s.face_offsets[p]; k < s.face_offsets[p + 1] && !inside; ++k)
+        inside = region.contains(fine[s.face_vertices[k]]) || region.contains(fine[s.face_edges[k]]);
+      if (inside) face_levels[f] = levels;
+    }
+  });
+  return face_levels;
+}
+
 }  // namespace isowave

@@ -107,7 +107,19 @@ PolygonMesh triangulate(const PolygonMesh& mesh) {
       }
       continue;
     }
-    for (std::uint32_t k = 1; k + 1 < n; ++k) result.add_face({v[0], v[k], v[k + 1]});
+    if (n == 3) {
+      result.add_face({v[0], v[1], v[2]});
+      continue;
+    }
+    // A fan around a new centroid vertex: a fan from a corner could draw a
+    // diagonal that is another face's edge (two base faces sharing two
+    // corners), or slivers along a transition face's straight run of corners.
+    Vec3 centroid;
+    for (std::uint32_t k = 0; k < n; ++k) centroid += mesh.positions[v[k]];
+    const std::uint32_t c = static_cast<std::uint32_t>(result.positions.size());
+    result.positions.push_back(centroid * (1.0 / double(n)));
+    if (!result.sharp.empty()) result.sharp.push_back(0);
+    for (std::uint32_t k = 0; k < n; ++k) result.add_face({v[k], v[(k + 1) % n], c});
   }
   return result;
 }

@@ -12,6 +12,7 @@
 #include "codec_test_data.h"
 #include "isowave/codec/region.h"
 #include "isowave/core/error.h"
+#include "isowave/transform/adaptive_mesh.h"
 
 namespace isowave {
 namespace {
@@ -112,6 +113,23 @@ TEST(Region, TheOutsideKeepsTheRankedCoefficientsAskedFor) {
   const RegionReconstruction none = reconstruct_region(c.decoded, c.region, 0);
   EXPECT_GT(some.kept_coefficients, none.kept_coefficients);
   EXPECT_LE(some.kept_coefficients, none.kept_coefficients + 100);
+}
+
+// The decode's mesh with nothing kept outside: the region's base faces at the
+// finest level keep every fine point inside, the others are whole base faces.
+TEST(Region, TheAdaptiveMeshKeepsEveryPointInsideAndFewOutside) {
+  const RegionCase c = make_case();
+  const SubdivisionHierarchy& h = *c.decoded.hierarchy;
+  const RegionReconstruction r = reconstruct_region(c.decoded, c.region, 0);
+  const std::vector<int> levels = region_face_levels(h, r.fine, c.region, 0);
+  const PolygonMesh mesh = adaptive_control_mesh(h, levels, r.fine);
+  std::size_t inside = 0;
+  for (const Vec3& p : mesh.positions) inside += c.region.contains(p);
+  EXPECT_EQ(inside, r.inside_points);
+  const std::size_t fine_faces = static_cast<std::size_t>(std::count(levels.begin(), levels.end(), 3));
+  EXPECT_GT(fine_faces, 0u);
+  EXPECT_LT(fine_faces, levels.size() / 4);
+  EXPECT_LT(mesh.vertex_count(), h.fine_vertex_count() / 4);
 }
 
 TEST(Region, ParsesBoxesAndBallsAndRefusesAnythingElse) {

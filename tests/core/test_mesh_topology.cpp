@@ -88,6 +88,38 @@ std::string topology_error(const PolygonMesh& mesh) {
   return {};
 }
 
+// triangulate() on every face size of the corpus: the same surface (vector
+// area per original face kept), orientation kept, and the triangulated mesh
+// still a manifold with the same Euler characteristic (a centroid vertex per
+// polygon of 5 or more corners adds one vertex and as many edges as faces).
+TEST(MeshTopology, TriangulateKeepsTheSurfaceAndItsTopology) {
+  for (const test::NamedMesh& named : test::generated_corpus()) {
+    const PolygonMesh triangles = triangulate(named.mesh);
+    const TopologySummary before = summarize_topology(named.mesh), after = summarize_topology(triangles);
+    EXPECT_EQ(after.euler_characteristic, before.euler_characteristic) << named.name;
+    EXPECT_EQ(after.genus, before.genus) << named.name;
+    // Triangles come in face order: 1 for a triangle, 2 for a quad, n for an n-gon.
+    const auto vector_area = [](const PolygonMesh& m, std::size_t f) {
+      const std::uint32_t* v = m.face_begin(f);
+      Vec3 a;
+      for (std::uint32_t k = 0; k < m.face_size(f); ++k) a += cross(m.positions[v[k]], m.positions[v[(k + 1) % m.face_size(f)]]);
+      return a;
+    };
+    std::size_t t = 0;
+    for (std::size_t f = 0; f < named.mesh.face_count(); ++f) {
+      const std::uint32_t n = named.mesh.face_size(f);
+      Vec3 parts;
+      for (std::uint32_t k = 0; k < (n == 3 ? 1u : n == 4 ? 2u : n); ++k, ++t) {
+        ASSERT_EQ(triangles.face_size(t), 3u);
+        parts += vector_area(triangles, t);
+      }
+      const Vec3 whole = vector_area(named.mesh, f);
+      EXPECT_LT(norm(parts - whole), 1e-9 * (1 + norm(whole))) << named.name << " face " << f;
+    }
+    EXPECT_EQ(t, triangles.face_count()) << named.name;
+  }
+}
+
 TEST(MeshTopology, RejectsNonManifoldEdge) {
   PolygonMesh mesh;
   mesh.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}};

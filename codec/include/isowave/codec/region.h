@@ -5,8 +5,9 @@
 // most important coefficients are kept. The coefficients a region needs are
 // found exactly, through the synthesis' transpose: entry k is needed iff some
 // fine control point inside the region depends on it (its row of the
-// synthesis has a non-zero weight there). The output is the uniform fine
-// control mesh, so it is as watertight as the full decode.
+// synthesis has a non-zero weight there). The mesh is the fine control mesh
+// where the region reaches and, where nothing else is kept, the base faces
+// elsewhere, joined crack-free (transform/adaptive_mesh.h).
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -57,5 +58,11 @@ struct RegionReconstruction {
 // without a hierarchy. Cost: two syntheses and one transposed synthesis.
 RegionReconstruction reconstruct_region(const IswDecoded& decoded, const RegionOfInterest& region,
                                         std::size_t outside_keep);
+
+// Per base face: the finest level where one of its fine control points (of
+// `fine`, at least fine_vertex_count()) lies inside `region`, else
+// `outside_level` (0..levels()). O(fine control points).
+std::vector<int> region_face_levels(const SubdivisionHierarchy& hierarchy, const std::vector<Vec3>& fine,
+                                    const RegionOfInterest& region, int outside_level);
 
 }  // namespace isowave

@@ -43,9 +43,9 @@ void validate_indices(const PolygonMesh& mesh, const std::string& source);
 // Returns how many were removed. O(vertices + corners).
 std::size_t remove_unreferenced_vertices(PolygonMesh& mesh);
 
-// Splits every face into triangles (quads along their shorter diagonal,
-// larger polygons as a fan), keeping orientation, vertices and sharp flags.
-// O(corners).
+// Splits every face into triangles, keeping orientation, vertices and sharp
+// flags: quads along their shorter diagonal, larger polygons as a fan around
+// a new vertex at their centroid (appended, not sharp). O(corners).
 PolygonMesh triangulate(const PolygonMesh& mesh);
 
 }  // namespace isowave

@@ -1,0 +1,140 @@
+#include "isowave/transform/adaptive_mesh.h"
+
+#include <algorithm>
+#include <cstdint>
+#include <string>
+#include <unordered_map>
+
+#include "isowave/core/error.h"
+
+namespace isowave {
+
+namespace {
+
+using Chain = std::vector<std::uint32_t>;
+
+std::uint64_t edge_key(std::uint32_t a, std::uint32_t b) {
+  return a < b ? (std::uint64_t{a} << 32) | b : (std::uint64_t{b} << 32) | a;
+}
+
+// The e vertex (a level + 1 index) of the level-`level` edge (u, w): among
+// u's incident edges' e vertices, the one whose edge joins u and w.
+std::uint32_t edge_child(const SubdivisionHierarchy& h, int level, std::uint32_t u, std::uint32_t w) {
+  const RefinementStep& s = h.step(level + 1);
+  for (std::uint32_t k = s.vertex_edge_offsets[u]; k < s.vertex_edge_offsets[u + 1]; ++k) {
+    const std::uint32_t e = s.vertex_edges[k], edge = e - s.first_edge_vertex();
+    const std::uint32_t a = s.edge_vertices[2 * std::size_t{edge}], b = s.edge_vertices[2 * std::size_t{edge} + 1];
+    if ((a == u && b == w) || (a == w && b == u)) return e;
+  }
+  throw Error(ErrorKind::InvalidArgument, "adaptive mesh: an edge without a child (inconsistent hierarchy)");
+}
+
+// The vertices along the level-`from` edge (u, w) at level `to`, u first and w last.
+void edge_chain(const SubdivisionHierarchy& h, int from, int to, std::uint32_t u, std::uint32_t w, Chain& out) {
+  if (from == to) {
+    if (out.empty()) out.push_back(u);
+    out.push_back(w);
+    return;
+  }
+  const std::uint32_t e = edge_child(h, from, u, w);
+  edge_chain(h, from + 1, to, u, e, out);
+  edge_chain(h, from + 1, to, e, w, out);
+}
+
+// The corners of the level-`level` faces of base face f, appended to `faces`
+// as (offsets, corners) rows.
+void append_patch(const SubdivisionHierarchy& h, std::size_t f, int level, PolygonMesh& faces) {
+  if (level == 0) {
+    faces.add_face(h.base().face_begin(f), h.base().face_size(f));
+    return;
+  }
+  // Each parent face with n corners splits into n quads: corner k, the e
+  // vertex of edge k, the f vertex, the e vertex of edge k - 1 (as control_mesh()).
+  const RefinementStep& s = h.step(level);
+  const auto [first, end] = h.descendant_faces(f, level - 1);
+  for (std::size_t p = first; p < end; ++p) {
+    const std::uint32_t row = s.face_offsets[p], row_end = s.face_offsets[p + 1];
+    for (std::uint32_t k = row; k < row_end; ++k) {
+      const std::uint32_t previous = k == row ? row_end - 1 : k - 1;
+      faces.add_face({s.face_vertices[k], s.face_edges[k], s.first_face_vertex() + std::uint32_t(p),
+                      s.face_edges[previous]});
+    }
+  }
+}
+
+// Per coarse-side edge along a base edge between two levels: the finer side's
+// vertices strictly between its ends, ordered from the smaller index to the larger.
+std::unordered_map<std::uint64_t, Chain> transitions(const SubdivisionHierarchy& h, const std::vector<int>& levels) {
+  std::unordered_map<std::uint64_t, Chain> inserted;
+  if (h.levels() == 0) return inserted;
+  const RefinementStep& s = h.step(1);
+  for (std::uint32_t edge = 0; edge < s.parent_edge_count; ++edge) {
+    const std::uint32_t f = s.edge_faces[2 * std::size_t{edge}] - s.first_face_vertex();
+    const std::uint32_t g = s.edge_faces[2 * std::size_t{edge} + 1] - s.first_face_vertex();
+    const int coarse = std::min(levels[f], levels[g]), fine = std::max(levels[f], levels[g]);
+    if (f == g || coarse == fine) continue;
+    const std::uint32_t a = s.edge_vertices[2 * std::size_t{edge}], b = s.edge_vertices[2 * std::size_t{edge} + 1];
+    Chain coarse_chain, fine_chain;
+    edge_chain(h, 0, coarse, a, b, coarse_chain);
+    edge_chain(h, 0, fine, a, b, fine_chain);
+    // The coarse chain's vertices recur in the fine chain every 2^(fine - coarse) steps.
+    const std::size_t stride = std::size_t{1} << (fine - coarse);
+    for (std::size_t k = 0; k + 1 < coarse_chain.size(); ++k) {
+      Chain between(fine_chain.begin() + std::ptrdiff_t(k * stride + 1), fine_chain.begin() + std::ptrdiff_t((k + 1) * stride));
+      if (coarse_chain[k] > coarse_chain[k + 1]) std::reverse(between.begin(), between.end());
+      inserted.emplace(edge_key(coarse_chain[k], coarse_chain[k + 1]), std::move(between));
+    }
+  }
+  return inserted;
+}
+
+}  // namespace
+
+PolygonMesh adaptive_control_mesh(const SubdivisionHierarchy& hierarchy, const std::vector<int>& levels,
+                                  const std::vector<Vec3>& fine) {
+  const std::size_t base_faces = hierarchy.base().face_count();
+  if (levels.size() != base_faces)
+    throw Error(ErrorKind::InvalidArgument, "adaptive mesh: " + std::to_string(levels.size()) + " levels for " +
+                                                std::to_string(base_faces) + " base faces");
+  for (const int l : levels)
+    if (l < 0 || l > hierarchy.levels())
+      throw Error(ErrorKind::InvalidArgument, "adaptive mesh: a level outside 0.." + std::to_string(hierarchy.levels()));
+  if (fine.size() < hierarchy.fine_vertex_count())
+    throw Error(ErrorKind::InvalidArgument, "adaptive mesh: fewer points than the fine level");
+  // 1. Each base face's faces at its level.
+  PolygonMesh patches;
+  patches.face_offsets = {0};
+  for (std::size_t f = 0; f < base_faces; ++f) append_patch(hierarchy, f, levels[f], patches);
+  // 2. The transitions: a coarse face's edge along a finer neighbour gets its vertices.
+  const std::unordered_map<std::uint64_t, Chain> inserted = transitions(hierarchy, levels);
+  PolygonMesh out;
+  out.face_offsets = {0};
+  Chain corners;
+  for (std::size_t f = 0; f < patches.face_count(); ++f) {
+    corners.clear();
+    const std::uint32_t* c = patches.face_begin(f);
+    const std::uint32_t n = patches.face_size(f);
+    for (std::uint32_t k = 0; k < n; ++k) {
+      const std::uint32_t u = c[k], w = c[(k + 1) % n];
+      corners.push_back(u);
+      const auto it = inserted.find(edge_key(u, w));
+      if (it == inserted.end()) continue;
+      if (u < w) corners.insert(corners.end(), it->second.begin(), it->second.end());
+      else corners.insert(corners.end(), it->second.rbegin(), it->second.rend());
+    }
+    out.add_face(corners.data(), corners.size());
+  }
+  // 3. Only the vertices the faces use, in ascending index order.
+  std::vector<std::uint32_t> new_index(hierarchy.fine_vertex_count(), UINT32_MAX);
+  for (const std::uint32_t v : out.face_vertices) new_index[v] = 0;
+  std::uint32_t next = 0;
+  for (std::size_t v = 0; v < new_index.size(); ++v)
+    if (new_index[v] == 0) {
+      new_index[v] = next++;
+      out.positions.push_back(fine[v]);
+    }
+  for (std::uint32_t& v : out.face_vertices) v = new_index[v];
+  return out;
+}
+
+}  // namespace isowave
