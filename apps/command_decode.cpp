@@ -131,7 +131,10 @@ int decode(const Args& raw) {
   PolygonMesh mesh = region ? region_mesh(args, decoded, *region, input)
                             : decoded.hierarchy->control_mesh(level, take_reconstruction(decoded, decoded.ranked.size(), level));
   if (args.has("limit")) mesh.positions = limit_surface(mesh).positions;
-  if (args.has("triangulate")) mesh = triangulate(mesh);
+  // Base faces (level 0, or outside a region) may share two corners: their
+  // quads' diagonals must not repeat an edge.
+  if (args.has("triangulate"))
+    mesh = triangulate(mesh, level == 0 || region ? QuadSplit::ShorterAvoidingEdges : QuadSplit::Shorter);
   MeshWriteOptions write_options;
   write_options.ascii = args.has("ascii");
   write_mesh(output, mesh, write_options);

@@ -1,6 +1,8 @@
 #include "isowave/core/mesh.h"
 
 #include <algorithm>
+#include <cstdint>
+#include <unordered_set>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_reduce.h>
@@ -86,40 +88,76 @@ std::size_t remove_unreferenced_vertices(PolygonMesh& mesh) {
   return removed;
 }
 
-PolygonMesh triangulate(const PolygonMesh& mesh) {
+namespace {
+
+std::uint64_t undirected(std::uint32_t a, std::uint32_t b) {
+  return a < b ? (std::uint64_t{a} << 32) | b : (std::uint64_t{b} << 32) | a;
+}
+
+// A fan around a new vertex at the face's centroid.
+void add_centroid_fan(const PolygonMesh& mesh, std::size_t f, PolygonMesh& result) {
+  const std::uint32_t* v = mesh.face_begin(f);
+  const std::uint32_t n = mesh.face_size(f);
+  Vec3 centroid;
+  for (std::uint32_t k = 0; k < n; ++k) centroid += mesh.positions[v[k]];
+  const std::uint32_t c = static_cast<std::uint32_t>(result.positions.size());
+  result.positions.push_back(centroid * (1.0 / double(n)));
+  if (!result.sharp.empty()) result.sharp.push_back(0);
+  for (std::uint32_t k = 0; k < n; ++k) result.add_face({v[k], v[(k + 1) % n], c});
+}
+
+}  // namespace
+
+PolygonMesh triangulate(const PolygonMesh& mesh, QuadSplit split) {
   PolygonMesh result;
   result.positions = mesh.positions;
   result.sharp = mesh.sharp;
   result.face_offsets.reserve(mesh.face_vertices.size());
   result.face_vertices.reserve(3 * mesh.face_vertices.size());
+  // ShorterAvoidingEdges: the mesh's edges, sorted, and the diagonals taken.
+  std::vector<std::uint64_t> edges;
+  std::unordered_set<std::uint64_t> taken;
+  if (split == QuadSplit::ShorterAvoidingEdges) {
+    edges.reserve(mesh.face_vertices.size());
+    for (std::size_t f = 0; f < mesh.face_count(); ++f) {
+      const std::uint32_t* v = mesh.face_begin(f);
+      for (std::uint32_t k = 0, n = mesh.face_size(f); k < n; ++k) edges.push_back(undirected(v[k], v[(k + 1) % n]));
+    }
+    std::sort(edges.begin(), edges.end());
+  }
+  const auto free_diagonal = [&](std::uint32_t a, std::uint32_t b) {
+    const std::uint64_t key = undirected(a, b);
+    return !std::binary_search(edges.begin(), edges.end(), key) && taken.count(key) == 0;
+  };
   for (std::size_t f = 0; f < mesh.face_count(); ++f) {
     const std::uint32_t* v = mesh.face_begin(f);
     const std::uint32_t n = mesh.face_size(f);
-    if (n == 4) {
-      const double d02 = squared_norm(mesh.positions[v[0]] - mesh.positions[v[2]]);
-      const double d13 = squared_norm(mesh.positions[v[1]] - mesh.positions[v[3]]);
-      if (d02 <= d13) {
+    if (n == 3) {
+      result.add_face({v[0], v[1], v[2]});
+    } else if (n == 4) {
+      bool along02 = squared_norm(mesh.positions[v[0]] - mesh.positions[v[2]]) <=
+                     squared_norm(mesh.positions[v[1]] - mesh.positions[v[3]]);
+      if (split == QuadSplit::ShorterAvoidingEdges) {
+        const bool free02 = free_diagonal(v[0], v[2]), free13 = free_diagonal(v[1], v[3]);
+        if (!free02 && !free13) {
+          add_centroid_fan(mesh, f, result);
+          continue;
+        }
+        along02 = along02 ? free02 : !free13;
+        taken.insert(along02 ? undirected(v[0], v[2]) : undirected(v[1], v[3]));
+      }
+      if (along02) {
         result.add_face({v[0], v[1], v[2]});
         result.add_face({v[0], v[2], v[3]});
       } else {
         result.add_face({v[0], v[1], v[3]});
         result.add_face({v[1], v[2], v[3]});
       }
-      continue;
+    } else {
+      // A fan from a corner could draw a diagonal that is another face's
+      // edge, or slivers along a transition face's straight run of corners.
+      add_centroid_fan(mesh, f, result);
     }
-    if (n == 3) {
-      result.add_face({v[0], v[1], v[2]});
-      continue;
-    }
-    // A fan around a new centroid vertex: a fan from a corner could draw a
-    // diagonal that is another face's edge (two base faces sharing two
-    // corners), or slivers along a transition face's straight run of corners.
-    Vec3 centroid;
-    for (std::uint32_t k = 0; k < n; ++k) centroid += mesh.positions[v[k]];
-    const std::uint32_t c = static_cast<std::uint32_t>(result.positions.size());
-    result.positions.push_back(centroid * (1.0 / double(n)));
-    if (!result.sharp.empty()) result.sharp.push_back(0);
-    for (std::uint32_t k = 0; k < n; ++k) result.add_face({v[k], v[(k + 1) % n], c});
   }
   return result;
 }

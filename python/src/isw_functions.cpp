@@ -214,7 +214,8 @@ py::tuple decode(const fs::path& file, const py::object& percent, const py::obje
       mesh = decoded.hierarchy->control_mesh(l, take_reconstruction(decoded, decoded.ranked.size(), l));
     }
     if (limit) mesh.positions = limit_surface(mesh).positions;
-    if (triangulate) mesh = isowave::triangulate(mesh);
+    if (triangulate)  // base faces (level 0, or outside a region) may share two corners
+      mesh = isowave::triangulate(mesh, l == 0 || region ? QuadSplit::ShorterAvoidingEdges : QuadSplit::Shorter);
   }
   if (!truncation.empty() && PyErr_WarnEx(PyExc_UserWarning, truncation.c_str(), 1) != 0) throw py::error_already_set();
   return mesh_arrays(std::move(mesh));

@@ -3,6 +3,9 @@
 // meshes whose genus and boundary are known by construction.
 #include <gtest/gtest.h>
 
+#include <set>
+#include <utility>
+
 #include "isowave/core/error.h"
 #include "isowave/core/mesh_topology.h"
 #include "support/test_meshes.h"
@@ -118,6 +121,29 @@ TEST(MeshTopology, TriangulateKeepsTheSurfaceAndItsTopology) {
     }
     EXPECT_EQ(t, triangles.face_count()) << named.name;
   }
+}
+
+// Two faces sharing two corners: the quad's shorter diagonal 0-2 is the
+// triangle's edge, so the plain split repeats the directed edge 2 -> 0 and the
+// careful one takes the diagonal 1-3.
+TEST(MeshTopology, TriangulateAvoidsADiagonalThatIsAnotherFacesEdge) {
+  PolygonMesh mesh;
+  mesh.positions = {{0, 0, 0}, {1, -2, 0}, {1, 0, 0}, {0, 2, 0}, {0.5, 1, 1}};
+  mesh.add_face({0, 1, 2, 3});
+  mesh.add_face({2, 0, 4});
+  const auto repeated = [](const PolygonMesh& m) {
+    std::set<std::pair<std::uint32_t, std::uint32_t>> seen;
+    int count = 0;
+    for (std::size_t f = 0; f < m.face_count(); ++f)
+      for (std::uint32_t k = 0; k < 3; ++k)
+        count += !seen.insert({m.face_begin(f)[k], m.face_begin(f)[(k + 1) % 3]}).second;
+    return count;
+  };
+  EXPECT_EQ(repeated(triangulate(mesh, QuadSplit::Shorter)), 1);
+  const PolygonMesh careful = triangulate(mesh, QuadSplit::ShorterAvoidingEdges);
+  EXPECT_EQ(repeated(careful), 0);
+  EXPECT_EQ(careful.face_count(), 3u);
+  EXPECT_EQ(careful.vertex_count(), 5u);
 }
 
 TEST(MeshTopology, RejectsNonManifoldEdge) {

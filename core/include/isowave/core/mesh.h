@@ -43,9 +43,18 @@ void validate_indices(const PolygonMesh& mesh, const std::string& source);
 // Returns how many were removed. O(vertices + corners).
 std::size_t remove_unreferenced_vertices(PolygonMesh& mesh);
 
+// How triangulate() splits quads.
+enum class QuadSplit {
+  Shorter,  // along the shorter diagonal (a refined level's quads: no diagonal is another face's edge)
+  // Along the shorter diagonal unless it is an edge of the mesh or another
+  // quad's diagonal, then the other, and failing both around a centroid
+  // (base faces may share two corners). O(corners log corners) more.
+  ShorterAvoidingEdges,
+};
+
 // Splits every face into triangles, keeping orientation, vertices and sharp
-// flags: quads along their shorter diagonal, larger polygons as a fan around
-// a new vertex at their centroid (appended, not sharp). O(corners).
-PolygonMesh triangulate(const PolygonMesh& mesh);
+// flags: quads as `split` says, larger polygons as a fan around a new vertex
+// at their centroid (appended, not sharp). O(corners).
+PolygonMesh triangulate(const PolygonMesh& mesh, QuadSplit split = QuadSplit::Shorter);
 
 }  // namespace isowave
