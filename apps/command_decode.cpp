@@ -31,9 +31,10 @@ std::optional<RegionOfInterest> region_option(const cli::Arguments& args) {
   return std::nullopt;
 }
 
-// The fine control mesh with the region at full detail and, outside it, the
-// coefficients --percent or --coefficients keep (none: the base mesh's
-// surface); prints what it kept unless quiet.
+// The region at full detail and, outside it, the coefficients --percent or
+// --coefficients keep on the fine control mesh; with none, the base faces
+// the region does not reach, whole (adaptive_control_mesh). Prints what it
+// kept unless quiet.
 PolygonMesh region_mesh(const cli::Arguments& args, const IswDecoded& decoded, const RegionOfInterest& region,
                         const std::string& input) {
   const SubdivisionHierarchy& h = *decoded.hierarchy;
