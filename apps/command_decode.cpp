@@ -15,7 +15,6 @@
 #include "isowave/codec/statistics.h"
 #include "isowave/core/error.h"
 #include "isowave/core/mesh_io.h"
-#include "isowave/transform/adaptive_mesh.h"
 #include "isowave/transform/limit_surface.h"
 
 namespace isowave::commands {
@@ -31,25 +30,21 @@ std::optional<RegionOfInterest> region_option(const cli::Arguments& args) {
   return std::nullopt;
 }
 
-// The region at full detail and, outside it, the coefficients --percent or
-// --coefficients keep on the fine control mesh; with none, the base faces
-// the region does not reach, whole (adaptive_control_mesh). Prints what it
-// kept unless quiet.
-PolygonMesh region_mesh(const cli::Arguments& args, const IswDecoded& decoded, const RegionOfInterest& region,
+// region_mesh() with what --percent or --coefficients keep outside the
+// region; prints what it kept unless quiet.
+PolygonMesh decode_region(const cli::Arguments& args, const IswDecoded& decoded, const RegionOfInterest& region,
                         const std::string& input) {
   const SubdivisionHierarchy& h = *decoded.hierarchy;
   std::size_t outside = 0;
   if (args.has("percent")) outside = coefficients_for_percent(h, args.get_double("percent", 0));
   if (args.has("coefficients")) outside = static_cast<std::size_t>(args.get_double("coefficients", 0));
-  const RegionReconstruction r = reconstruct_region(decoded, region, outside);
+  RegionReconstruction r;
+  PolygonMesh mesh = isowave::region_mesh(decoded, region, outside, &r);
   if (!args.has("quiet"))
     std::printf("%s: region: %zu of %zu fine control points inside, %zu coefficients there, %zu kept in all (of %zu)\n",
                 input.c_str(), r.inside_points, h.fine_vertex_count(), r.region_coefficients, r.kept_coefficients,
                 decoded.ranked.size());
-  // Nothing kept outside: the base faces the region does not reach stay
-  // whole, joined to the fine ones without cracks.
-  if (outside > 0) return h.control_mesh(decoded.levels, r.fine);
-  return adaptive_control_mesh(h, region_face_levels(h, r.fine, region, 0), r.fine);
+  return mesh;
 }
 
 }  // namespace
@@ -129,7 +124,7 @@ int decode(const Args& raw) {
 
   // Synthesis in the decoded array and the mesh around it: no copies of the
   // fine-level arrays.
-  PolygonMesh mesh = region ? region_mesh(args, decoded, *region, input)
+  PolygonMesh mesh = region ? decode_region(args, decoded, *region, input)
                             : decoded.hierarchy->control_mesh(level, take_reconstruction(decoded, decoded.ranked.size(), level));
   if (args.has("limit")) mesh.positions = limit_surface(mesh).positions;
   // Base faces (level 0, or outside a region) may share two corners: their

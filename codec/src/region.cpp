@@ -9,6 +9,7 @@
 #include <tbb/parallel_for.h>
 
 #include "isowave/core/error.h"
+#include "isowave/transform/adaptive_mesh.h"
 #include "isowave/transform/wavelet_transform.h"
 
 namespace isowave {
@@ -106,25 +107,38 @@ RegionReconstruction reconstruct_region(const IswDecoded& decoded, const RegionO
   const std::size_t n = h.fine_vertex_count(), base = h.vertex_count(0);
   RegionReconstruction out;
   // 1. The full decode, to know which fine points lie inside.
-  std::vector<Vec3> full = decoded.coefficients;
-  synthesize(h, full);
+  std::vector<Vec3> data = decoded.coefficients;
+  synthesize(h, data);
   out.inside_points = static_cast<std::size_t>(
-      std::count_if(full.begin(), full.begin() + static_cast<std::ptrdiff_t>(n), [&](const Vec3& p) { return region.contains(p); }));
+      std::count_if(data.begin(), data.begin() + static_cast<std::ptrdiff_t>(n), [&](const Vec3& p) { return region.contains(p); }));
   // 2. What those points depend on, and the most important others.
-  std::vector<std::uint8_t> keep = entries_for_region(h, full, region);
+  std::vector<std::uint8_t> keep = entries_for_region(h, data, region);
   std::fill(keep.begin(), keep.begin() + static_cast<std::ptrdiff_t>(base), std::uint8_t{1});
   for (std::size_t k = base; k < n; ++k)
     out.region_coefficients += keep[k] && squared_norm(decoded.coefficients[k]) > 0;
   for (std::size_t r = 0; r < std::min(outside_keep, decoded.ranked.size()); ++r) keep[decoded.ranked[r]] = 1;
-  // 3. The reconstruction from the kept entries.
-  out.fine = decoded.coefficients;
-  for (std::size_t k = base; k < n; ++k) {
-    if (!keep[k]) out.fine[k] = Vec3{};
-    out.kept_coefficients += keep[k] && squared_norm(out.fine[k]) > 0;
+  // 3. The reconstruction from the kept entries, in the same buffer.
+  for (std::size_t k = 0; k < n; ++k) {
+    data[k] = keep[k] ? decoded.coefficients[k] : Vec3{};
+    out.kept_coefficients += k >= base && keep[k] && squared_norm(data[k]) > 0;
   }
-  synthesize(h, out.fine);
-  out.fine.resize(n);
+  synthesize(h, data);
+  data.resize(n);
+  out.fine = std::move(data);
   return out;
+}
+
+PolygonMesh region_mesh(const IswDecoded& decoded, const RegionOfInterest& region, std::size_t outside_keep,
+                        RegionReconstruction* counts) {
+  RegionReconstruction r = reconstruct_region(decoded, region, outside_keep);
+  const SubdivisionHierarchy& h = *decoded.hierarchy;
+  PolygonMesh mesh = outside_keep > 0 ? h.control_mesh(decoded.levels, std::move(r.fine))
+                                      : adaptive_control_mesh(h, region_face_levels(h, r.fine, region, 0), r.fine);
+  if (counts) {
+    *counts = std::move(r);
+    counts->fine.clear();
+  }
+  return mesh;
 }
 
 std::vector<int> region_face_levels(const SubdivisionHierarchy& hierarchy, const std::vector<Vec3>& fine,

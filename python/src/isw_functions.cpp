@@ -17,7 +17,6 @@
 #include "isowave/core/error.h"
 #include "isowave/pipeline/convert.h"
 #include "isowave/pipeline/prepare.h"
-#include "isowave/transform/adaptive_mesh.h"
 #include "isowave/transform/limit_surface.h"
 
 namespace isowave::python {
@@ -207,9 +206,7 @@ py::tuple decode(const fs::path& file, const py::object& percent, const py::obje
                   "level must be in 0.." + std::to_string(decoded.levels) + ", got " + std::to_string(l));
     if (region) {
       const std::size_t keep = percent.is_none() ? outside : coefficients_for_percent(*decoded.hierarchy, percent_value);
-      RegionReconstruction r = reconstruct_region(decoded, *region, keep);
-      mesh = keep > 0 ? decoded.hierarchy->control_mesh(l, std::move(r.fine))
-                      : adaptive_control_mesh(*decoded.hierarchy, region_face_levels(*decoded.hierarchy, r.fine, *region, 0), r.fine);
+      mesh = region_mesh(decoded, *region, keep);
     } else {
       mesh = decoded.hierarchy->control_mesh(l, take_reconstruction(decoded, decoded.ranked.size(), l));
     }

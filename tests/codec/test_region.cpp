@@ -12,7 +12,6 @@
 #include "codec_test_data.h"
 #include "isowave/codec/region.h"
 #include "isowave/core/error.h"
-#include "isowave/transform/adaptive_mesh.h"
 
 namespace isowave {
 namespace {
@@ -120,9 +119,9 @@ TEST(Region, TheOutsideKeepsTheRankedCoefficientsAskedFor) {
 TEST(Region, TheAdaptiveMeshKeepsEveryPointInsideAndFewOutside) {
   const RegionCase c = make_case();
   const SubdivisionHierarchy& h = *c.decoded.hierarchy;
-  const RegionReconstruction r = reconstruct_region(c.decoded, c.region, 0);
-  const std::vector<int> levels = region_face_levels(h, r.fine, c.region, 0);
-  const PolygonMesh mesh = adaptive_control_mesh(h, levels, r.fine);
+  RegionReconstruction r;
+  const PolygonMesh mesh = region_mesh(c.decoded, c.region, 0, &r);
+  const std::vector<int> levels = region_face_levels(h, reconstruct_region(c.decoded, c.region, 0).fine, c.region, 0);
   std::size_t inside = 0;
   for (const Vec3& p : mesh.positions) inside += c.region.contains(p);
   EXPECT_EQ(inside, r.inside_points);

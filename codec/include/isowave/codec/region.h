@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "isowave/codec/isw_format.h"
+#include "isowave/core/mesh.h"
 #include "isowave/core/vec3.h"
 #include "isowave/transform/hierarchy.h"
 
@@ -64,5 +65,14 @@ RegionReconstruction reconstruct_region(const IswDecoded& decoded, const RegionO
 // `outside_level` (0..levels()). O(fine control points).
 std::vector<int> region_face_levels(const SubdivisionHierarchy& hierarchy, const std::vector<Vec3>& fine,
                                     const RegionOfInterest& region, int outside_level);
+
+// What a region decode writes (decode --roi, Python's decode(roi=...)):
+// reconstruct_region()'s points as the finest control mesh when coefficients
+// are kept outside; with none, the base faces the region does not reach stay
+// whole, joined crack-free to the fine ones (adaptive_control_mesh, the
+// vertices it uses only). `counts` (optional) receives the reconstruction's
+// counts, without its points.
+PolygonMesh region_mesh(const IswDecoded& decoded, const RegionOfInterest& region, std::size_t outside_keep,
+                        RegionReconstruction* counts = nullptr);
 
 }  // namespace isowave
