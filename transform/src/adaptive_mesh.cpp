@@ -41,11 +41,11 @@ void edge_chain(const SubdivisionHierarchy& h, int from, int to, std::uint32_t u
   edge_chain(h, from + 1, to, e, w, out);
 }
 
-// The corners of the level-`level` faces of base face f, appended to `faces`
-// as (offsets, corners) rows.
-void append_patch(const SubdivisionHierarchy& h, std::size_t f, int level, PolygonMesh& faces) {
+// Calls emit(corners, count) for each level-`level` face of base face f.
+template <class Emit>
+void for_each_patch_face(const SubdivisionHierarchy& h, std::size_t f, int level, const Emit& emit) {
   if (level == 0) {
-    faces.add_face(h.base().face_begin(f), h.base().face_size(f));
+    emit(h.base().face_begin(f), h.base().face_size(f));
     return;
   }
   // Each parent face with n corners splits into n quads: corner k, the e
@@ -56,8 +56,9 @@ void append_patch(const SubdivisionHierarchy& h, std::size_t f, int level, Polyg
     const std::uint32_t row = s.face_offsets[p], row_end = s.face_offsets[p + 1];
     for (std::uint32_t k = row; k < row_end; ++k) {
       const std::uint32_t previous = k == row ? row_end - 1 : k - 1;
-      faces.add_face({s.face_vertices[k], s.face_edges[k], s.first_face_vertex() + std::uint32_t(p),
-                      s.face_edges[previous]});
+      const std::uint32_t quad[4] = {s.face_vertices[k], s.face_edges[k], s.first_face_vertex() + std::uint32_t(p),
+                                     s.face_edges[previous]};
+      emit(quad, 4u);
     }
   }
 }
@@ -101,19 +102,14 @@ PolygonMesh adaptive_control_mesh(const SubdivisionHierarchy& hierarchy, const s
       throw Error(ErrorKind::InvalidArgument, "adaptive mesh: a level outside 0.." + std::to_string(hierarchy.levels()));
   if (fine.size() < hierarchy.fine_vertex_count())
     throw Error(ErrorKind::InvalidArgument, "adaptive mesh: fewer points than the fine level");
-  // 1. Each base face's faces at its level.
-  PolygonMesh patches;
-  patches.face_offsets = {0};
-  for (std::size_t f = 0; f < base_faces; ++f) append_patch(hierarchy, f, levels[f], patches);
-  // 2. The transitions: a coarse face's edge along a finer neighbour gets its vertices.
+  // Each base face's faces at its level; a coarse face's edge along a finer
+  // neighbour gets that neighbour's vertices on it.
   const std::unordered_map<std::uint64_t, Chain> inserted = transitions(hierarchy, levels);
   PolygonMesh out;
   out.face_offsets = {0};
   Chain corners;
-  for (std::size_t f = 0; f < patches.face_count(); ++f) {
+  const auto emit = [&](const std::uint32_t* c, std::uint32_t n) {
     corners.clear();
-    const std::uint32_t* c = patches.face_begin(f);
-    const std::uint32_t n = patches.face_size(f);
     for (std::uint32_t k = 0; k < n; ++k) {
       const std::uint32_t u = c[k], w = c[(k + 1) % n];
       corners.push_back(u);
@@ -123,8 +119,9 @@ PolygonMesh adaptive_control_mesh(const SubdivisionHierarchy& hierarchy, const s
       else corners.insert(corners.end(), it->second.rbegin(), it->second.rend());
     }
     out.add_face(corners.data(), corners.size());
-  }
-  // 3. Only the vertices the faces use, in ascending index order.
+  };
+  for (std::size_t f = 0; f < base_faces; ++f) for_each_patch_face(hierarchy, f, levels[f], emit);
+  // Only the vertices the faces use, in ascending index order.
   std::vector<std::uint32_t> new_index(hierarchy.fine_vertex_count(), UINT32_MAX);
   for (const std::uint32_t v : out.face_vertices) new_index[v] = 0;
   std::uint32_t next = 0;
