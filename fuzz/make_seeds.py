@@ -122,6 +122,15 @@ def isw():
     write("isw", "golden_2_1_cut_in_stream.isw", golden21[:500])
     assert golden21[8:12] == b"\x02\x00\x01\x00"
     write("isw", "golden_2_1_minor_0.isw", golden21[:10] + b"\x00\x00" + golden21[12:])
+    # Version 2.2 (groups by space, GIDX): the golden file, a cut inside GIDX, and PLNS without its GIDX.
+    shutil.copy(os.path.join(data, "golden_2_2.isw"), os.path.join(CORPUS, "isw", "golden_2_2.isw"))
+    with open(os.path.join(data, "golden_2_2.isw"), "rb") as f:
+        golden22 = f.read()
+    sections22 = isw_sections(golden22)
+    assert sections22[5][:4] == b"GIDX" and sections22[6][:4] == b"PLNS"
+    offset = golden22.index(b"GIDX")
+    write("isw", "golden_2_2_cut_in_index.isw", golden22[:offset + 16 + (len(sections22[5]) - 20) // 2])
+    write("isw", "golden_2_2_no_index.isw", b"".join(sections22[:5]) + b"".join(sections22[6:]))
 
 
 def npy():

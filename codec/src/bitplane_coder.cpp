@@ -77,8 +77,8 @@ struct GroupedTree {
   std::uint32_t segment_begin(std::size_t g, std::size_t s) const { return segments[g * (segment_count + 1) + s]; }
 };
 
-GroupedTree group_tree(const CoefficientTree& tree, const std::vector<std::uint8_t>& node_class, std::size_t groups) {
-  TreeGroups split = split_tree(tree, groups);
+GroupedTree group_tree(const CoefficientTree& tree, const std::vector<std::uint8_t>& node_class, TreeGroups split) {
+  const std::size_t groups = split.count();
   GroupedTree t;
   t.group_offsets = std::move(split.offsets);
   t.node = std::move(split.members);
@@ -393,8 +393,9 @@ IswPlaneBits plane_bits_of(const std::vector<PlaneBitCounts>& counts) {
 
 }  // namespace
 
-PlanePackets encode_planes(const CoefficientTree& tree, const PlaneSymbols& symbols, std::size_t groups,
+PlanePackets encode_planes(const CoefficientTree& tree, const PlaneSymbols& symbols, const TreeGroups& split,
                            int minor_version, int lowest_plane, IswPlaneBits* account) {
+  const std::size_t groups = split.count();
   assert(symbols.magnitude.size() == 3 * tree.nodes && symbols.negative.size() == tree.nodes);
   PlanePackets result;
   const std::uint32_t largest =
@@ -402,7 +403,7 @@ PlanePackets encode_planes(const CoefficientTree& tree, const PlaneSymbols& symb
   result.top_plane = bit_length(largest) - 1;
   const int planes = std::max(0, result.top_plane + 1 - std::max(lowest_plane, 0));
   const Contexts c(symbols.classes, minor_version);
-  const GroupedTree t = group_tree(tree, symbols.node_class, groups);
+  const GroupedTree t = group_tree(tree, symbols.node_class, split);
   const std::size_t segments = t.segment_count;
   result.segments = segments;
   result.packets.resize(static_cast<std::size_t>(planes) * segments * groups);
@@ -436,13 +437,13 @@ struct PlaneDecoder::State {
 };
 
 PlaneDecoder::PlaneDecoder(const CoefficientTree& tree, const std::vector<std::uint8_t>& node_class, int classes,
-                           int minor_version, int top_plane, std::size_t groups)
+                           int minor_version, int top_plane, const TreeGroups& groups)
     : top_plane_(top_plane),
       state_(std::make_unique<State>(State{group_tree(tree, node_class, groups), Contexts(classes, minor_version),
                                            std::vector<std::uint32_t>(3 * tree.nodes, 0),
                                            std::vector<std::uint8_t>(tree.nodes, 0)})),
-      group_state_(groups) {
-  for (std::size_t g = 0; g < groups; ++g) {
+      group_state_(groups.count()) {
+  for (std::size_t g = 0; g < group_state_.size(); ++g) {
     group_state_[g].models.assign(state_->contexts.size, kProbabilityHalf);
     group_state_[g].open = roots_open(state_->tree, g);
   }
@@ -450,8 +451,16 @@ PlaneDecoder::PlaneDecoder(const CoefficientTree& tree, const std::vector<std::u
 
 PlaneDecoder::~PlaneDecoder() = default;
 
-void PlaneDecoder::decode(const std::vector<std::string_view>& packets, bool last_cut) {
-  tbb::parallel_for(std::size_t{0}, group_state_.size(), [&](std::size_t g) { decode_group(g, packets, last_cut); });
+void PlaneDecoder::decode(const std::vector<std::string_view>& packets, bool last_cut,
+                          const std::vector<std::uint8_t>* selected) {
+  assert(!selected || selected->size() == group_state_.size());
+  tbb::parallel_for(std::size_t{0}, group_state_.size(), [&](std::size_t g) {
+    if (selected && !(*selected)[g]) {
+      group_state_[g].decoded = false;
+      return;
+    }
+    decode_group(g, packets, last_cut);
+  });
 }
 
 void PlaneDecoder::decode_group(std::size_t g, const std::vector<std::string_view>& packets, bool last_cut) {
@@ -496,7 +505,8 @@ void PlaneDecoder::decode_group(std::size_t g, const std::vector<std::string_vie
 
 int PlaneDecoder::planes_done() const {
   int done = top_plane_ + 1;
-  for (const Group& g : group_state_) done = std::min(done, g.planes_done);
+  for (const Group& g : group_state_)
+    if (g.decoded) done = std::min(done, g.planes_done);
   return done;
 }
 

@@ -84,25 +84,37 @@ struct PlanePackets {
 // non-normal flags of 2.1. `account`, if given, receives the estimated bits
 // by what they code (components 1 and 2 tangential; a node of class 0 is a
 // base control point).
-PlanePackets encode_planes(const CoefficientTree& tree, const PlaneSymbols& symbols, std::size_t groups,
+PlanePackets encode_planes(const CoefficientTree& tree, const PlaneSymbols& symbols, const TreeGroups& groups,
                            int minor_version, int lowest_plane = 0, IswPlaneBits* account = nullptr);
+// The same with split_tree(tree, groups), the groups of minor versions 0 and 1.
+inline PlanePackets encode_planes(const CoefficientTree& tree, const PlaneSymbols& symbols, std::size_t groups,
+                                  int minor_version, int lowest_plane = 0, IswPlaneBits* account = nullptr) {
+  return encode_planes(tree, symbols, split_tree(tree, groups), minor_version, lowest_plane, account);
+}
 
 // The decoder's state after any prefix of the packets.
 class PlaneDecoder {
  public:
   // `node_class` and `classes` as in PlaneSymbols; `minor_version` as in
-  // encode_planes(); top_plane in [-1, 31]; groups in [1, kMaxGroups]. Keeps
+  // encode_planes(); top_plane in [-1, 31]; `groups` as the encoder's. Keeps
   // no reference to its arguments.
   PlaneDecoder(const CoefficientTree& tree, const std::vector<std::uint8_t>& node_class, int classes,
-               int minor_version, int top_plane, std::size_t groups);
+               int minor_version, int top_plane, const TreeGroups& groups);
+  // With split_tree(tree, groups), groups in [1, kMaxGroups].
+  PlaneDecoder(const CoefficientTree& tree, const std::vector<std::uint8_t>& node_class, int classes,
+               int minor_version, int top_plane, std::size_t groups)
+      : PlaneDecoder(tree, node_class, classes, minor_version, top_plane, split_tree(tree, groups)) {}
   ~PlaneDecoder();
 
   // Decodes the packets in the encoder's order, the groups in parallel; a
   // `last_cut` last packet stops at the first decision its missing bytes
   // could change. Any bytes decode (to some values) in O(nodes x planes):
-  // the section's CRC is what detects damage. Call once.
-  void decode(const std::vector<std::string_view>& packets, bool last_cut);
-  // Planes complete in every group.
+  // the section's CRC is what detects damage. With `selected` (one flag per
+  // group), only those groups decode (the others' packets are not read and
+  // their values stay zero). Call once.
+  void decode(const std::vector<std::string_view>& packets, bool last_cut,
+              const std::vector<std::uint8_t>* selected = nullptr);
+  // Planes complete in every group decoded.
   int planes_done() const;
 
   // Per node, its three components in step units (0 where not significant),
@@ -115,6 +127,7 @@ class PlaneDecoder {
     std::vector<std::uint16_t> models;
     std::vector<std::uint64_t> open;  // one bit per position of the group
     int planes_done = 0;
+    bool decoded = true;
     // Where a cut stopped: the plane (-1: none), the position, and the mask
     // of that node's components refined in the plane.
     int cut_plane = -1;

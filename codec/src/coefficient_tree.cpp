@@ -45,16 +45,23 @@ CoefficientTree build_coefficient_tree(const SubdivisionHierarchy& hierarchy) {
 }
 
 TreeGroups split_tree(const CoefficientTree& tree, std::size_t groups) {
-  assert(groups >= 1 && groups <= 256);
+  assert(groups >= 1);
   // Subtree sizes (children have larger indices than their parents).
   std::vector<std::uint32_t> size(tree.nodes, 1);
   for (std::size_t i = tree.nodes; i-- > tree.roots_end;) size[tree.parent[i]] += size[i];
-  std::vector<std::uint8_t> group(tree.nodes, 0);
+  std::vector<std::uint32_t> root_group(tree.roots_end, 0);
   std::uint64_t before = 0;
   for (std::size_t r = 0; r < tree.roots_end; ++r) {
-    group[r] = static_cast<std::uint8_t>(std::min<std::uint64_t>(groups - 1, before * groups / tree.nodes));
+    root_group[r] = static_cast<std::uint32_t>(std::min<std::uint64_t>(groups - 1, before * groups / tree.nodes));
     before += size[r];
   }
+  return split_tree(tree, root_group, groups);
+}
+
+TreeGroups split_tree(const CoefficientTree& tree, const std::vector<std::uint32_t>& root_group, std::size_t groups) {
+  assert(groups >= 1 && root_group.size() == tree.roots_end);
+  std::vector<std::uint32_t> group(tree.nodes, 0);
+  std::copy(root_group.begin(), root_group.end(), group.begin());
   for (std::size_t i = tree.roots_end; i < tree.nodes; ++i) group[i] = group[tree.parent[i]];
   TreeGroups result;
   result.offsets.assign(groups + 1, 0);

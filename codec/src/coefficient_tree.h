@@ -31,12 +31,15 @@ CoefficientTree build_coefficient_tree(const SubdivisionHierarchy& hierarchy);
 // in index order cut into runs of about equal subtree size, each with all its
 // descendants. Group g's members, ascending (so parents before children):
 // members[offsets[g] .. offsets[g + 1]]. Requires groups >= 1; groups may
-// exceed the roots (then some are empty). Cost: O(nodes), 9 bytes per node.
+// exceed the roots (then some are empty). Cost: O(nodes), 12 bytes per node.
 struct TreeGroups {
   std::vector<std::uint32_t> offsets;
   std::vector<std::uint32_t> members;
   std::size_t count() const { return offsets.size() - 1; }
 };
 TreeGroups split_tree(const CoefficientTree& tree, std::size_t groups);
+// The same with each root's group given (`root_group`, tree.roots_end
+// values below `groups`; version 2.2's groups by space, plane_groups.h).
+TreeGroups split_tree(const CoefficientTree& tree, const std::vector<std::uint32_t>& root_group, std::size_t groups);
 
 }  // namespace isowave::detail

@@ -7,6 +7,8 @@
 
 #include <tbb/task_group.h>
 
+#include "isowave/codec/region.h"
+#include "isowave/core/error.h"
 #include "isowave/core/huge_page_vector.h"
 #include "bitplane_coder.h"
 #include "coefficient_tree.h"
@@ -35,20 +37,118 @@ void to_world(const PlaneDecoder& decoder, const CoefficientClasses& layout, con
 
 }  // namespace
 
+namespace {
+
+// The tree's groups: runs of roots in index order (2.0, 2.1) or GIDX's runs
+// of base faces in Morton order (2.2); `face_group` receives each base
+// face's group in the latter case.
+TreeGroups stream_groups(const SubdivisionHierarchy& hierarchy, const CoefficientTree& tree, const PlaneStream& planes,
+                         const StreamAccess& access, std::vector<std::uint32_t>& face_group) {
+  if (!access.index) return split_tree(tree, planes.layout.groups);
+  const FaceOrder order = morton_face_order(hierarchy.base(), *access.base_q);
+  const std::vector<std::uint32_t> owners = root_faces(hierarchy, tree);
+  face_group = face_groups(order.faces, access.index->runs);
+  return split_tree(tree, root_groups(owners, face_group), access.index->count());
+}
+
+// The groups a region needs: those holding an entry that some fine control
+// point of a base face that may meet the region (its corners' box grown by
+// its group's reach) depends on.
+std::vector<std::uint8_t> groups_for_region(const SubdivisionHierarchy& hierarchy, const std::vector<Vec3>& frame_base,
+                                            const TreeGroups& split, const GroupIndex& index,
+                                            const std::vector<std::uint32_t>& face_group,
+                                            const RegionOfInterest& region) {
+  std::vector<std::uint8_t> points(hierarchy.fine_vertex_count(), 0);
+  for (std::size_t f = 0; f < face_group.size(); ++f) {
+    Vec3 lo, hi;
+    face_box(hierarchy.base(), frame_base, f, index.reach[face_group[f]], lo, hi);
+    if (region.meets_box(lo, hi)) for_each_fine_point(hierarchy, f, [&](std::size_t v) { return points[v] = 1; });
+  }
+  const std::vector<std::uint8_t> needed = entries_for_points(hierarchy, points);
+  std::vector<std::uint8_t> selected(index.count(), 0);
+  for (std::size_t g = 0; g < index.count(); ++g)
+    for (std::uint32_t k = split.offsets[g]; k < split.offsets[g + 1] && !selected[g]; ++k)
+      selected[g] = needed[split.members[k]];
+  return selected;
+}
+
+// The packets of a file read in part: those of the selected groups, fetched
+// in runs of neighbouring groups into `store`; the others empty.
+std::vector<std::string_view> fetch_packets(const Section& section, const PlaneStream& planes,
+                                            std::uint64_t max_stream_bytes, const StreamAccess& access,
+                                            const std::vector<std::uint8_t>& selected, std::string& store,
+                                            bool& last_cut) {
+  const std::uint64_t first = section.info.offset + kSectionHeader + planes.data_offset;
+  const std::uint64_t in_file = access.file_size > first ? access.file_size - first : 0;
+  const std::uint64_t declared = section.payload_size - planes.data_offset;
+  const std::vector<PacketSpan> spans =
+      present_packets(planes.sizes, std::min({in_file, declared, max_stream_bytes}), planes.encoder_cut, last_cut);
+  const std::size_t groups = selected.size();
+  std::uint64_t total = 0;
+  for (std::size_t j = 0; j < spans.size(); ++j) total += selected[j % groups] ? spans[j].size : 0;
+  store.clear();
+  store.reserve(static_cast<std::size_t>(total));  // views into it stay valid
+  std::vector<std::string_view> packets(spans.size());
+  for (std::size_t j = 0; j < spans.size();) {
+    if (!selected[j % groups]) {
+      ++j;
+      continue;
+    }
+    std::size_t end = j + 1;  // a run of selected groups in one plane's level: contiguous bytes
+    while (end < spans.size() && end % groups != 0 && selected[end % groups]) ++end;
+    const std::uint64_t offset = spans[j].offset, size = spans[end - 1].offset + spans[end - 1].size - offset;
+    const std::size_t at = store.size();
+    store += access.fetch(first + offset, size);
+    if (store.size() - at != size) throw Error(ErrorKind::Io, section.where + ": the file changed while it was read");
+    for (std::size_t k = j; k < end; ++k)
+      packets[k] = std::string_view(store).substr(at + static_cast<std::size_t>(spans[k].offset - offset),
+                                                  static_cast<std::size_t>(spans[k].size));
+    j = end;
+  }
+  return packets;
+}
+
+// 2.2: the packet table's CRC, and each selected group's when all of its
+// packets are present (a cut stream's last group is not checked, as a cut
+// section is not).
+void check_group_crcs(PayloadReader& reader, const Section& section, const PlaneStream& planes,
+                      const GroupIndex& index, const std::vector<std::string_view>& packets, bool last_cut,
+                      const std::vector<std::uint8_t>* selected) {
+  if (bytes_crc(section.payload.substr(0, static_cast<std::size_t>(planes.data_offset))) != index.table_crc)
+    reader.fail("is corrupt (its packet table does not match GIDX's CRC)");
+  if (packets.size() != planes.sizes.size() || last_cut) return;
+  const std::vector<std::uint32_t> crcs = group_crcs(packets, index.count());
+  for (std::size_t g = 0; g < index.count(); ++g)
+    if ((!selected || (*selected)[g]) && crcs[g] != index.group_crc[g])
+      reader.fail("is corrupt (group " + std::to_string(g) + "'s packets do not match GIDX's CRC)");
+}
+
+}  // namespace
+
 void decode_plane_stream(const Section& section, const SubdivisionHierarchy& hierarchy,
                          const CoefficientClasses& layout, const V2Scales& scales, std::uint64_t max_stream_bytes,
-                         IswDecoded& result) {
+                         const StreamAccess& access, IswDecoded& result) {
   const auto start = Clock::now();
   PayloadReader reader = section.reader();
-  const PlaneStream planes = read_planes(reader, section.payload, section.cut, max_stream_bytes);
+  const bool by_space = result.minor_version >= 2;
+  if (by_space && !access.index) reader.fail("comes without its group index (GIDX)");
+  const PlaneStream planes = read_planes(reader, section.payload, section.cut, max_stream_bytes,
+                                         by_space ? access.index->count() : kMaxGroups);
   if (planes.packets_total > 0 && planes.layout.segments != static_cast<std::size_t>(hierarchy.levels()) + 1)
     reader.fail("has a segment count other than the levels + 1");
   // The coding, which the header's minor version (outside every CRC) must agree with.
   if (section.payload.size() >= 2 && planes.layout.coding_minor() != std::min<int>(result.minor_version, 1))
     reader.fail("codes its planes for another minor version than the file header's");
+  if (by_space && planes.table && planes.layout.groups != access.index->count())
+    reader.fail("has another group count than its index (GIDX)");
   IswStreamInfo& stream = result.stream;
   stream.offset = section.info.offset + kSectionHeader + planes.data_offset;
-  stream.bytes = section.payload.size() > planes.data_offset ? section.payload.size() - planes.data_offset : 0;
+  // Packet bytes in the file: those in memory, or up to the file's end.
+  const std::uint64_t payload_start = section.info.offset + kSectionHeader;
+  const std::uint64_t in_file =
+      access.fetch ? std::min(section.payload_size, access.file_size > payload_start ? access.file_size - payload_start : 0)
+                   : section.payload.size();
+  stream.bytes = in_file > planes.data_offset ? in_file - planes.data_offset : 0;
   stream.top_plane = planes.layout.top_plane;
   stream.planes = static_cast<int>(planes.planes_total);
   stream.plane_ends = planes.plane_ends;
@@ -60,11 +160,29 @@ void decode_plane_stream(const Section& section, const SubdivisionHierarchy& hie
   tbb::task_group frames;
   frames.run([&] { normals = frame_normals(hierarchy, frame_base); });
   const CoefficientTree tree = build_coefficient_tree(hierarchy);
+  std::vector<std::uint32_t> face_group;
+  const TreeGroups split = stream_groups(hierarchy, tree, planes, by_space ? access : StreamAccess{}, face_group);
+  std::vector<std::uint8_t> selected;
+  if (by_space && access.region)
+    selected = groups_for_region(hierarchy, frame_base, split, *access.index, face_group, *access.region);
+  const std::vector<std::uint8_t>* only = selected.empty() ? nullptr : &selected;
+  std::string fetched;
+  bool last_cut = planes.last_cut;
+  const std::vector<std::string_view> packets =
+      access.fetch && planes.table
+          ? fetch_packets(section, planes, max_stream_bytes, access,
+                          only ? selected : std::vector<std::uint8_t>(split.count(), 1), fetched, last_cut)
+          : planes.packets;
+  if (by_space && planes.table && (access.fetch || only))
+    check_group_crcs(reader, section, planes, *access.index, packets, last_cut, only);
   const std::vector<std::uint8_t> classes = node_classes(layout);
-  PlaneDecoder decoder(tree, classes, layout.count(), planes.layout.coding_minor(), planes.layout.top_plane,
-                       planes.layout.groups);
-  decoder.decode(planes.packets, planes.last_cut);
-  for (std::string_view packet : planes.packets) stream.decoded += packet.size();
+  PlaneDecoder decoder(tree, classes, layout.count(), planes.layout.coding_minor(), planes.layout.top_plane, split);
+  decoder.decode(packets, last_cut, only);
+  for (std::size_t j = 0; j < packets.size(); ++j)
+    if (!only || selected[j % split.count()]) stream.decoded += packets[j].size();
+  stream.groups = split.count();
+  stream.groups_decoded = only ? static_cast<std::size_t>(std::count(selected.begin(), selected.end(), 1)) : split.count();
+  result.file_bytes_read += fetched.size();
   stream.planes_decoded = decoder.planes_done();
   result.chunks_decoded = static_cast<std::size_t>(decoder.planes_done());
   result.seconds.chunks = seconds_since(start);

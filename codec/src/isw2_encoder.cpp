@@ -21,6 +21,8 @@
 #include "isw_headers.h"
 #include "isw_models.h"
 #include "local_frames.h"
+#include "plane_groups.h"
+#include "isowave/transform/wavelet_transform.h"
 
 namespace isowave {
 
@@ -110,6 +112,49 @@ std::uint64_t nonzero_wavelets(const SubdivisionHierarchy& hierarchy, const Plan
   return count;
 }
 
+// What the planes from the top down to plane `low` decode to, in world units
+// (base control points first): every component known to that plane.
+void values_at_plane(const PlaneSymbols& s, int low, const V2Scales& scales, const std::vector<Vec3>& frame_base,
+                     const std::vector<Vec3>& normals, std::vector<Vec3>& out) {
+  out.resize(s.negative.size());
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, out.size(), kParallelGrain), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t i = r.begin(); i < r.end(); ++i)
+      for (int c = 0; c < 3; ++c) {
+        const std::uint32_t known = s.magnitude[3 * i + static_cast<std::size_t>(c)] >> low << low;
+        const double v = known_value(known, low);
+        out[i][c] = v != 0 && ((s.negative[i] >> c) & 1) ? -v : v;
+      }
+  });
+  steps_to_world(s.node_class, scales, frame_base, normals, out);
+}
+
+// Version 2.2's groups by space (plane_groups.h): the runs into `index`, and
+// the tree's split.
+TreeGroups spatial_groups(const SubdivisionHierarchy& hierarchy, const CoefficientTree& tree,
+                          const std::vector<QuantizedVector>& base_q, std::size_t group_nodes, GroupIndex& index,
+                          std::vector<std::uint32_t>& face_group) {
+  if (hierarchy.base().face_count() == 0) throw Error(ErrorKind::InvalidArgument, "a base mesh without faces");
+  const FaceOrder order = morton_face_order(hierarchy.base(), base_q);
+  const std::vector<std::uint32_t> owners = root_faces(hierarchy, tree);
+  index.runs = cut_face_runs(tree, owners, order, group_nodes > 0 ? group_nodes : kSpatialGroupNodes);
+  face_group = face_groups(order.faces, index.runs);
+  return split_tree(tree, root_groups(owners, face_group), index.count());
+}
+
+// GIDX of a complete stream: the groups' reaches on the complete decode, and the CRCs.
+void index_stream(const SubdivisionHierarchy& hierarchy, const PlaneSymbols& symbols, const V2Scales& scales,
+                  const std::vector<Vec3>& frame_base, const std::vector<Vec3>& normals,
+                  const std::vector<std::uint32_t>& face_group, const PlaneLayout& layout,
+                  const std::vector<std::string>& packets, GroupIndex& index) {
+  std::vector<Vec3> fine;
+  values_at_plane(symbols, 0, scales, frame_base, normals, fine);
+  synthesize(hierarchy, fine);
+  set_group_reach(hierarchy, frame_base, fine, face_group, index);
+  const std::vector<std::string_view> views(packets.begin(), packets.end());
+  index.table_crc = bytes_crc(plane_table(layout, views, PlaneEnding::Complete));
+  index.group_crc = group_crcs(views, index.count());
+}
+
 }  // namespace
 
 namespace detail {
@@ -130,11 +175,16 @@ std::string encode_isw_v2(const SubdivisionHierarchy& hierarchy, const std::vect
              coarse_base);
   std::vector<Vec3> normals = frame_normals(hierarchy, coarse_base);
   PlaneSymbols symbols = symbols_of(hierarchy, coefficients, coarse_base, normals, scales);
-  const std::size_t groups = plane_groups(hierarchy.fine_vertex_count());
+  const CoefficientTree tree = build_coefficient_tree(hierarchy);
+  const bool by_space = options.minor_version >= 2;
+  GroupIndex index;
+  std::vector<std::uint32_t> face_group;
+  const TreeGroups split = by_space ? spatial_groups(hierarchy, tree, base_q, options.group_nodes, index, face_group)
+                                    : split_tree(tree, plane_groups(hierarchy.fine_vertex_count()));
   IswPlaneBits bits;
-  const PlanePackets planes =
-      encode_planes(build_coefficient_tree(hierarchy), symbols, groups, options.minor_version, 0,
-                    values ? &bits : nullptr);
+  const PlanePackets planes = encode_planes(tree, symbols, split, options.minor_version, 0, values ? &bits : nullptr);
+  const PlaneLayout layout{planes.top_plane, split.count(), planes.segments, options.minor_version >= 1};
+  if (by_space) index_stream(hierarchy, symbols, scales, coarse_base, normals, face_group, layout, planes.packets, index);
 
   std::string out;
   put_file_header(out, 2, options.minor_version);
@@ -142,8 +192,8 @@ std::string encode_isw_v2(const SubdivisionHierarchy& hierarchy, const std::vect
   put_base(out, hierarchy.base(), 2);
   put_quantization_v2(out, scales, hierarchy.levels(), nonzero_wavelets(hierarchy, symbols));
   put_base_points(out, hierarchy.base(), base_q);
-  put_planes(out, {planes.top_plane, groups, planes.segments, options.minor_version >= 1}, planes.packets,
-             PlaneEnding::Complete);
+  if (by_space) put_group_index(out, index);
+  put_planes(out, layout, planes.packets, PlaneEnding::Complete);
   put_section(out, "END ", std::string_view());
   std::uint64_t kept = UINT64_MAX;  // plane stream bytes
   if (values) values->plane_ends = stream_plane_ends(out);
@@ -220,18 +270,8 @@ const IswPlaneBits& IswPlaneValues::plane_bits() const {
 
 void IswPlaneValues::coefficients_at(std::size_t k, std::vector<Vec3>& out) const {
   assert(state_ && k < state_->plane_ends.size());
-  const PlaneSymbols& s = state_->symbols;
-  const int low = state_->top_plane - static_cast<int>(k);
-  out.resize(s.negative.size());
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, out.size(), kParallelGrain), [&](const tbb::blocked_range<std::size_t>& r) {
-    for (std::size_t i = r.begin(); i < r.end(); ++i)
-      for (int c = 0; c < 3; ++c) {
-        const std::uint32_t known = s.magnitude[3 * i + static_cast<std::size_t>(c)] >> low << low;
-        const double v = known_value(known, low);
-        out[i][c] = v != 0 && ((s.negative[i] >> c) & 1) ? -v : v;
-      }
-  });
-  steps_to_world(s.node_class, state_->scales, state_->frame_base, state_->normals, out);
+  values_at_plane(state_->symbols, state_->top_plane - static_cast<int>(k), state_->scales, state_->frame_base,
+                  state_->normals, out);
 }
 
 std::string rewrite_isw(const std::string& file, const IswRewrite& rewrite) {
@@ -240,10 +280,15 @@ std::string rewrite_isw(const std::string& file, const IswRewrite& rewrite) {
   const std::vector<Section> sections = sections_of_v2(file, &minor);
   std::string out;
   put_file_header(out, 2, minor);  // the planes' coding
+  std::string_view index;  // GIDX's payload, rewritten with PLNS (its CRCs)
   for (const Section& section : sections) {
     if (section.tag == "RDTB") continue;  // replaced
     if (section.tag == "META" && rewrite.metadata) {
       put_meta(out, *rewrite.metadata, 2);
+      continue;
+    }
+    if (section.tag == "GIDX") {
+      index = section.payload;
       continue;
     }
     if (section.tag != "PLNS") {
@@ -251,12 +296,17 @@ std::string rewrite_isw(const std::string& file, const IswRewrite& rewrite) {
       continue;
     }
     PayloadReader reader = section.reader();
-    const PlaneStream planes = read_planes(reader, section.payload, false, stream_bytes);
+    const PlaneStream planes = read_planes(reader, section.payload, false, stream_bytes, kMaxStreamGroups);
     std::vector<IswRatePoint> rows;
     for (const IswRatePoint& row : rewrite.rate_table)
       if (row.stream_bytes <= stream_bytes) rows.push_back(row);
     if (!rows.empty()) put_rate_table(out, rows);
-    put_planes(out, planes.layout, planes.packets, planes.last_cut ? PlaneEnding::Cut : PlaneEnding::Complete);
+    const PlaneEnding ending = planes.last_cut ? PlaneEnding::Cut : PlaneEnding::Complete;
+    if (!index.empty())
+      put_section(out, "GIDX",
+                  with_crcs(index, bytes_crc(plane_table(planes.layout, planes.packets, ending)),
+                            group_crcs(planes.packets, planes.layout.groups)));
+    put_planes(out, planes.layout, planes.packets, ending);
   }
   return out;
 }
@@ -272,7 +322,7 @@ std::uint64_t stream_bytes_within(const std::string& file, std::uint64_t max_byt
       continue;
     }
     PayloadReader reader = section.reader();
-    const PlaneStream planes = read_planes(reader, section.payload, false, UINT64_MAX);
+    const PlaneStream planes = read_planes(reader, section.payload, false, UINT64_MAX, kMaxStreamGroups);
     for (std::string_view packet : planes.packets) sizes.push_back(packet.size());
     fixed += section.info.bytes - (section.payload.size() - planes.data_offset) - varint_size(sizes.size());
     for (const std::uint64_t size : sizes) fixed -= varint_size(size);
@@ -302,7 +352,7 @@ std::vector<std::uint64_t> stream_plane_ends(const std::string& file) {
   for (const Section& section : sections_of_v2(file)) {
     if (section.tag != "PLNS") continue;
     PayloadReader reader = section.reader();
-    return read_planes(reader, section.payload, false, UINT64_MAX).plane_ends;
+    return read_planes(reader, section.payload, false, UINT64_MAX, kMaxStreamGroups).plane_ends;
   }
   return {};
 }

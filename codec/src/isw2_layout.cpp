@@ -60,7 +60,7 @@ void steps_to_world(const std::vector<std::uint8_t>& classes, const V2Scales& sc
   });
 }
 
-void put_planes(std::string& out, PlaneLayout layout, const std::vector<std::string_view>& packets, PlaneEnding last) {
+std::string plane_table(PlaneLayout layout, const std::vector<std::string_view>& packets, PlaneEnding last) {
   std::string payload;
   payload.push_back(static_cast<char>(static_cast<std::int8_t>(layout.top_plane)));
   payload.push_back(static_cast<char>((last == PlaneEnding::Cut ? 1 : 0) | (layout.non_normal_flags ? 2 : 0)));
@@ -68,12 +68,17 @@ void put_planes(std::string& out, PlaneLayout layout, const std::vector<std::str
   put_varint(payload, layout.segments);
   put_varint(payload, packets.size());
   for (std::string_view p : packets) put_varint(payload, p.size());
+  return payload;
+}
+
+void put_planes(std::string& out, PlaneLayout layout, const std::vector<std::string_view>& packets, PlaneEnding last) {
+  std::string payload = plane_table(layout, packets, last);
   for (std::string_view p : packets) payload += p;
   put_section(out, "PLNS", payload);
 }
 
 PlaneStream read_planes(PayloadReader& reader, std::string_view payload, bool payload_cut,
-                        std::uint64_t max_stream_bytes) {
+                        std::uint64_t max_stream_bytes, std::uint64_t max_groups) {
   PlaneStream stream;
   if (reader.remaining() < 2) {
     if (payload_cut) return stream;
@@ -87,7 +92,7 @@ PlaneStream read_planes(PayloadReader& reader, std::string_view payload, bool pa
     if (payload_cut) return stream;
     reader.fail("is truncated");
   }
-  if (groups < 1 || groups > kMaxGroups || segments < 1 || segments > kMaxSegments)
+  if (groups < 1 || groups > max_groups || segments < 1 || segments > kMaxSegments)
     reader.fail("has an invalid group or segment count");
   stream.layout = {top_plane, static_cast<std::size_t>(groups), static_cast<std::size_t>(segments), (flags & 2) != 0};
   if (count > static_cast<std::uint64_t>(top_plane + 1) * stream.layout.packets_per_plane())
@@ -102,6 +107,7 @@ PlaneStream read_planes(PayloadReader& reader, std::string_view payload, bool pa
       if (payload_cut) return stream;
       reader.fail("is truncated");
     }
+  stream.table = true;
   stream.packets_total = sizes.size();
   const std::size_t per_plane = stream.layout.packets_per_plane();
   stream.planes_total = (sizes.size() + per_plane - 1) / per_plane;
@@ -115,21 +121,31 @@ PlaneStream read_planes(PayloadReader& reader, std::string_view payload, bool pa
   std::uint64_t total = 0;
   for (std::uint64_t size : sizes) total += std::min<std::uint64_t>(size, payload.size());
   if (!payload_cut && total != data.size()) reader.fail("has an inconsistent packet table");
+  stream.encoder_cut = (flags & 1) != 0;
+  const std::uint64_t available = std::min<std::uint64_t>(data.size(), max_stream_bytes);
+  for (const PacketSpan& span : present_packets(sizes, available, stream.encoder_cut, stream.last_cut))
+    stream.packets.push_back(data.substr(static_cast<std::size_t>(span.offset), static_cast<std::size_t>(span.size)));
+  stream.sizes = std::move(sizes);
+  return stream;
+}
+
+std::vector<PacketSpan> present_packets(const std::vector<std::uint64_t>& sizes, std::uint64_t available,
+                                        bool encoder_cut, bool& last_cut) {
+  std::vector<PacketSpan> spans;
+  last_cut = false;
   std::uint64_t offset = 0;
   for (std::size_t p = 0; p < sizes.size(); ++p) {
-    const std::uint64_t available = std::min<std::uint64_t>(data.size(), max_stream_bytes);
     // An empty packet is complete wherever the bytes end (it needs none).
     if (offset > available || (offset == available && sizes[p] > 0)) break;
     const std::uint64_t size = std::min(sizes[p], available - offset);
-    stream.packets.push_back(data.substr(static_cast<std::size_t>(offset), static_cast<std::size_t>(size)));
-    const bool cut_here = size < sizes[p] || (p + 1 == sizes.size() && (flags & 1));
+    spans.push_back({offset, size});
     offset += size;
-    if (cut_here) {
-      stream.last_cut = true;
+    if (size < sizes[p] || (p + 1 == sizes.size() && encoder_cut)) {
+      last_cut = true;
       break;
     }
   }
-  return stream;
+  return spans;
 }
 
 void put_rate_table(std::string& out, const std::vector<IswRatePoint>& rows) {

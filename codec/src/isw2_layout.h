@@ -3,6 +3,7 @@
 // version 2): the scaling of every entry to step units in its local frame,
 // the context class of every node, and the PLNS and RDTB payloads.
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -14,6 +15,7 @@
 #include "bitplane_coder.h"
 #include "isw_sections.h"
 #include "local_frames.h"
+#include "plane_groups.h"
 
 namespace isowave::detail {
 
@@ -65,6 +67,8 @@ struct PlaneLayout {
   std::size_t packets_per_plane() const { return groups * segments; }
 };
 void put_planes(std::string& out, PlaneLayout layout, const std::vector<std::string_view>& packets, PlaneEnding last);
+// PLNS's payload before its packets (GIDX holds its CRC).
+std::string plane_table(PlaneLayout layout, const std::vector<std::string_view>& packets, PlaneEnding last);
 inline void put_planes(std::string& out, PlaneLayout layout, const std::vector<std::string>& packets,
                        PlaneEnding last) {
   put_planes(out, layout, std::vector<std::string_view>(packets.begin(), packets.end()), last);
@@ -82,16 +86,29 @@ struct PlaneStream {
   std::size_t packets_total = 0;          // as the table says
   std::size_t planes_total = 0;           // planes the packets begin
   std::vector<std::uint64_t> plane_ends;  // cumulative sizes at each plane's end, as the table says
+  bool table = false;                     // the packet table is complete
+  std::vector<std::uint64_t> sizes;       // of every packet, as the table says
+  bool encoder_cut = false;               // flags bit 0: the encoder cut the last packet
   std::vector<std::string_view> packets;  // those present, the last maybe cut
   bool last_cut = false;                // the last of `packets` is cut (by the encoder or the file's end)
   std::uint64_t data_offset = 0;        // of the first packet in the payload
 };
 // Reads a PLNS payload that may itself be cut (`payload_cut`), keeping at
 // most `max_stream_bytes` bytes of packets. Error(Format) through `reader`
-// for impossible tables (more than kMaxGroups groups or kMaxSegments
-// segments, more packets than planes, unknown flags).
+// for impossible tables (more than `max_groups` groups or kMaxSegments
+// segments, more packets than planes, unknown flags). A cut payload whose
+// table is incomplete gives no sizes.
 PlaneStream read_planes(PayloadReader& reader, std::string_view payload, bool payload_cut,
-                        std::uint64_t max_stream_bytes);
+                        std::uint64_t max_stream_bytes, std::uint64_t max_groups = kMaxGroups);
+
+// The packets a stream of `available` bytes holds: each one's offset and
+// size from the table's `sizes` (the last maybe cut short: `last_cut`, also
+// when the encoder cut it).
+struct PacketSpan {
+  std::uint64_t offset = 0, size = 0;
+};
+std::vector<PacketSpan> present_packets(const std::vector<std::uint64_t>& sizes, std::uint64_t available,
+                                        bool encoder_cut, bool& last_cut);
 
 // RDTB: u32 rows, each u64 stream bytes and f64 D (world units).
 void put_rate_table(std::string& out, const std::vector<IswRatePoint>& rows);
@@ -114,13 +131,27 @@ std::string encode_isw_v2(const SubdivisionHierarchy& hierarchy, const std::vect
                           const IswMetadata& metadata, const IswEncodeOptions& options, std::vector<double> weights,
                           PlaneValuesState* values = nullptr);
 
+// What the decoder's PLNS reads besides the section: version 2.2's index
+// and frame-base integers, the region whose groups alone to decode, and,
+// for a file read in part, where its bytes past those in memory come from.
+struct StreamAccess {
+  const GroupIndex* index = nullptr;                      // GIDX (required by 2.2)
+  const std::vector<QuantizedVector>* base_q = nullptr;  // BPTS's integers
+  const RegionOfInterest* region = nullptr;
+  // File bytes [offset, offset + size) (the file's end may come first), and
+  // the file's size; none when the whole file is in memory.
+  std::function<std::string(std::uint64_t offset, std::uint64_t size)> fetch;
+  std::uint64_t file_size = 0;
+};
+
 // The decoder's PLNS (isw2_decoder.cpp): decodes at most `max_stream_bytes`
 // of the section's packets into result.coefficients (world units; base
 // control points included, and result.base.positions) and result.stream.
-// Error(Format) naming the section for a damaged complete packet.
+// Error(Format) naming the section for a damaged complete packet, or (2.2)
+// a packet table or a group's packets that disagree with GIDX's CRCs.
 void decode_plane_stream(const Section& section, const SubdivisionHierarchy& hierarchy,
                          const CoefficientClasses& layout, const V2Scales& scales, std::uint64_t max_stream_bytes,
-                         IswDecoded& result);
+                         const StreamAccess& access, IswDecoded& result);
 
 // result.ranked: the non-zero wavelet coefficients by importance (class
 // weight times magnitude, ties by index), the first `keep` of them; the

@@ -6,7 +6,10 @@
 #include <cassert>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <exception>
+#include <fstream>
+#include <functional>
 #include <optional>
 #include <string>
 
@@ -133,6 +136,10 @@ struct DecodeState {
   bool saw_end = false;
   int major = 1;
   V2Scales scales;  // version 2
+  std::optional<GroupIndex> group_index;  // version 2.2
+  // A file read in part: its bytes past `bytes`, and its size.
+  std::function<std::string(std::uint64_t, std::uint64_t)> fetch;
+  std::uint64_t file_size = 0;
 };
 
 // ------------------------------------------------------------ QUAN
@@ -380,9 +387,20 @@ Next decode_section(const Section& section, DecodeState& state) {
     if (result.ranked.size() >= state.limit && result.chunks_decoded < result.chunks_total) next = Next::Stop;
   } else if (section.tag == "RDTB") {
     result.stream.rate_table = read_rate_table(reader);
+  } else if (section.tag == "GIDX") {
+    state.group_index = read_group_index(reader, result.base.face_count());
   } else if (section.tag == "PLNS") {
     await_hierarchy(state);
-    decode_plane_stream(section, *state.hierarchy, *state.layout, state.scales, stream_limit(state), result);
+    const StreamAccess access{state.group_index ? &*state.group_index : nullptr, &state.base_q,
+                              state.options.region ? &*state.options.region : nullptr, state.fetch, state.file_size};
+    decode_plane_stream(section, *state.hierarchy, *state.layout, state.scales, stream_limit(state), access, result);
+    if (state.fetch && section.cut) {
+      // Read in part: the file holds the rest of PLNS and an END after it
+      // (whose bytes are not read), or it is truncated.
+      const std::uint64_t end = section.info.offset + kSectionOverhead + section.payload_size + kSectionOverhead;
+      state.saw_end = state.file_size >= end;
+      next = Next::Stop;
+    }
   } else {  // END
     if (state.major == 1 && result.chunks_decoded != result.chunks_total)
       throw Error(ErrorKind::Format, section.where + ": chunks are missing");
@@ -464,16 +482,17 @@ void finish_v2(DecodeState& state, bool cut) {
 
 }  // namespace
 
-IswDecoded decode_isw(const std::string& bytes, const std::string& name, const IswDecodeOptions& options) {
-  if (options.max_file_bytes < bytes.size()) {
-    IswDecodeOptions whole = options;
-    whole.max_file_bytes = UINT64_MAX;
-    IswDecoded result = decode_isw(bytes.substr(0, static_cast<std::size_t>(options.max_file_bytes)), name, whole);
-    result.truncated = false;
-    result.truncation_note.clear();
-    return result;
-  }
+namespace {
+
+// decode_isw() of `bytes`, a file's first bytes when `fetch` reads the rest
+// (a file of `file_size` bytes).
+IswDecoded decode_from(const std::string& bytes, const std::string& name, const IswDecodeOptions& options,
+                       std::function<std::string(std::uint64_t, std::uint64_t)> fetch, std::uint64_t file_size) {
   DecodeState state(bytes, name, options);
+  state.fetch = std::move(fetch);
+  state.file_size = file_size;
+  state.result.file_bytes_read = bytes.size();
+  state.result.file_bytes = file_size;
   read_file_header(bytes, name, state.result);
   state.major = state.result.major_version;
   SectionWalker sections(bytes, name, state.major);
@@ -499,9 +518,23 @@ IswDecoded decode_isw(const std::string& bytes, const std::string& name, const I
     note_truncation(state, sections.truncated());
     dequantize_kept(state);
   } else {
-    finish_v2(state, sections.truncated());
+    finish_v2(state, state.fetch ? !state.saw_end : sections.truncated());
   }
   return std::move(state.result);
+}
+
+}  // namespace
+
+IswDecoded decode_isw(const std::string& bytes, const std::string& name, const IswDecodeOptions& options) {
+  if (options.max_file_bytes < bytes.size()) {
+    IswDecodeOptions whole = options;
+    whole.max_file_bytes = UINT64_MAX;
+    IswDecoded result = decode_isw(bytes.substr(0, static_cast<std::size_t>(options.max_file_bytes)), name, whole);
+    result.truncated = false;
+    result.truncation_note.clear();
+    return result;
+  }
+  return decode_from(bytes, name, options, nullptr, bytes.size());
 }
 
 IswDecoded expected_decode(const std::shared_ptr<const SubdivisionHierarchy>& hierarchy, std::vector<Vec3> stored,
@@ -520,8 +553,114 @@ IswDecoded expected_decode(const std::shared_ptr<const SubdivisionHierarchy>& hi
   return result;
 }
 
+namespace {
+
+// A file read by offset (Error(Io) if it cannot be opened or read).
+class FileReader {
+ public:
+  explicit FileReader(const std::string& path) : path_(path), in_(path, std::ios::binary) {
+    if (!in_) throw Error(ErrorKind::Io, path + ": cannot open");
+    in_.seekg(0, std::ios::end);
+    size_ = static_cast<std::uint64_t>(in_.tellg());
+  }
+  std::uint64_t size() const { return size_; }
+  std::uint64_t bytes_read() const { return read_; }
+  // Bytes [offset, offset + n), fewer where the file ends first.
+  std::string read(std::uint64_t offset, std::uint64_t n) {
+    if (offset >= size_) return {};
+    n = std::min(n, size_ - offset);
+    std::string out(static_cast<std::size_t>(n), '\0');
+    in_.clear();
+    in_.seekg(static_cast<std::streamoff>(offset));
+    if (!in_.read(out.data(), static_cast<std::streamsize>(n))) throw Error(ErrorKind::Io, path_ + ": cannot read");
+    read_ += n;
+    return out;
+  }
+
+ private:
+  std::string path_;
+  std::ifstream in_;
+  std::uint64_t size_ = 0, read_ = 0;
+};
+
+// The LEB128 value at `at` in `bytes`, if complete (then `at` moves past it).
+bool next_varint(const std::string& bytes, std::size_t& at, std::uint64_t& value) {
+  value = 0;
+  for (std::size_t k = at, shift = 0; k < bytes.size(); ++k, shift += 7) {
+    if (shift < 64) value |= std::uint64_t{static_cast<unsigned char>(bytes[k]) & 0x7Fu} << shift;
+    if (!(static_cast<unsigned char>(bytes[k]) & 0x80)) {
+      at = k + 1;
+      return true;
+    }
+  }
+  return false;
+}
+
+// PLNS's table from `at` (its top plane, flags and counts, then a size per
+// packet), read into `prefix` as the values show it must continue: each
+// step reads only bytes the table still needs (a LEB128 value takes a byte
+// at least). False when the file ends first.
+bool read_plane_table(FileReader& file, std::string& prefix, std::size_t at, std::uint64_t end) {
+  const auto reach = [&](std::uint64_t bytes) {  // prefix through byte `bytes` (exclusive)
+    if (bytes > end) return false;
+    if (bytes > prefix.size()) prefix += file.read(prefix.size(), bytes - prefix.size());
+    return prefix.size() >= bytes;
+  };
+  if (!reach(at + 5)) return false;
+  at += 2;
+  std::uint64_t values = 3, count = 0;  // the counts, then the sizes
+  for (std::uint64_t read = 0; read < values;) {
+    std::uint64_t value = 0;
+    if (next_varint(prefix, at, value)) {
+      if (++read == 3) values = 3 + (count = value);
+      continue;
+    }
+    // The value at `at` continues past the prefix; the others take a byte each.
+    const std::uint64_t left = values - read;
+    if (!reach(std::max<std::uint64_t>(prefix.size() + 1, at + left))) return false;
+  }
+  return true;
+}
+
+// A file's bytes through PLNS's packet table (every section before it, and
+// the table), or the whole file when it has no PLNS or its table does not
+// fit (the decoder then says what is wrong).
+std::string read_through_plane_table(FileReader& file) {
+  std::string prefix = file.read(0, kFileHeaderBytes);
+  while (prefix.size() + kSectionHeader <= file.size()) {
+    const std::uint64_t position = prefix.size();
+    prefix += file.read(position, kSectionHeader);
+    std::uint64_t size = 0;
+    std::memcpy(&size, prefix.data() + position + 4, 8);
+    const std::uint64_t left = file.size() - prefix.size();
+    if (prefix.compare(position, 4, "PLNS") != 0) {
+      prefix += file.read(prefix.size(), size < left ? std::min(left, size + 4) : left);
+      continue;
+    }
+    if (!read_plane_table(file, prefix, prefix.size(), prefix.size() + std::min(size, left)))
+      prefix += file.read(prefix.size(), file.size() - prefix.size());
+    break;
+  }
+  return prefix;
+}
+
+}  // namespace
+
 IswDecoded read_isw(const std::string& path, const IswDecodeOptions& options) {
   const auto start = Clock::now();
+  if (options.region && options.max_file_bytes == UINT64_MAX) {
+    FileReader file(path);
+    const std::string prefix = read_through_plane_table(file);
+    const double read_seconds = seconds_since(start);
+    IswDecoded result = prefix.size() >= file.size()
+                            ? decode_isw(prefix, path, options)
+                            : decode_from(prefix, path, options,
+                                          [&](std::uint64_t offset, std::uint64_t n) { return file.read(offset, n); },
+                                          file.size());
+    result.file_bytes_read = file.bytes_read();
+    result.seconds.read = read_seconds;
+    return result;
+  }
   const std::string bytes = read_file_bytes(path);
   const double read_seconds = seconds_since(start);
   IswDecoded result = decode_isw(bytes, path, options);

@@ -35,7 +35,8 @@ struct StreamTag {
   bool optional;
 };
 constexpr StreamTag kStream1[] = {{"CHNK", true, true}, {"END ", false, false}};
-constexpr StreamTag kStream2[] = {{"RDTB", false, true}, {"PLNS", false, false}, {"END ", false, false}};
+constexpr StreamTag kStream2[] = {
+    {"RDTB", false, true}, {"GIDX", false, true}, {"PLNS", false, false}, {"END ", false, false}};
 
 struct StreamOrder {
   const StreamTag* tags;
@@ -142,6 +143,7 @@ std::optional<Section> SectionWalker::next() {
   std::memcpy(&stored_header_crc, bytes_.data() + position_ + 12, 4);
   const std::string& tag = section.tag;
   section.where = where(tag);
+  section.payload_size = size;
   if (header_crc(tag.c_str(), size) != stored_header_crc)
     throw Error(ErrorKind::Format, section.where + ": corrupt section header (CRC mismatch)");
   section.known = known_tag(major_, tag);

@@ -74,6 +74,7 @@ class PayloadReader {
 struct Section {
   std::string tag;
   std::string_view payload;
+  std::uint64_t payload_size = 0;  // as its header says (more than `payload` holds when cut)
   IswSectionInfo info;  // offset and whole size; coefficients left to the CHNK decoder
   std::string where;    // "NAME: section TAG (at byte N)", for messages
   bool known = false;   // a tag of this version (others come from later minor versions and are skipped)

@@ -8,6 +8,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "isowave/codec/importance.h"
 #include "isowave/core/error.h"
 #include "isowave/transform/adaptive_mesh.h"
 #include "isowave/transform/wavelet_transform.h"
@@ -36,63 +37,57 @@ double index_weight(std::size_t i, unsigned salt) {
   return 1.0 + double(x >> 11) * (1.0 / 9007199254740992.0);
 }
 
+// Flags the `count` most important coefficients of `decoded` besides those
+// `keep` flags already: in decoded.ranked's order, or with a falloff by
+// importance times the Gaussian of their entries' distance (in `fine`) from
+// the region (ties by index).
+void keep_outside(const IswDecoded& decoded, const std::vector<Vec3>& fine, const RegionOfInterest& region,
+                  std::size_t count, std::vector<std::uint8_t>& keep) {
+  if (region.falloff <= 0) {
+    for (std::size_t r = 0; r < decoded.ranked.size() && count > 0; ++r)
+      if (!keep[decoded.ranked[r]]) {
+        keep[decoded.ranked[r]] = 1;
+        --count;
+      }
+    return;
+  }
+  const CoefficientClasses classes(*decoded.hierarchy);
+  if (decoded.class_weights.size() != static_cast<std::size_t>(classes.count()))
+    throw Error(ErrorKind::InvalidArgument, "region: a decode without its class weights");
+  const double s = 2 * region.falloff * region.falloff;
+  std::vector<std::pair<double, std::uint32_t>> keyed;
+  for (const std::uint32_t k : decoded.ranked) {
+    if (keep[k]) continue;
+    const double d = region.distance(fine[k]);
+    keyed.push_back({-decoded.class_weights[static_cast<std::size_t>(classes.of(k))] * norm(decoded.coefficients[k]) *
+                         std::exp(-d * d / s),
+                     k});
+  }
+  count = std::min(count, keyed.size());
+  std::nth_element(keyed.begin(), keyed.begin() + static_cast<std::ptrdiff_t>(count), keyed.end());  // pairs: ties by index
+  for (std::size_t r = 0; r < count; ++r) keep[keyed[r].second] = 1;
+}
+
 }  // namespace
-
-bool RegionOfInterest::contains(const Vec3& p) const {
-  if (shape == Shape::Sphere) return squared_norm(p - centre) <= radius * radius;
-  return p.x >= low.x && p.x <= high.x && p.y >= low.y && p.y <= high.y && p.z >= low.z && p.z <= high.z;
-}
-
-RegionOfInterest parse_region(const std::string& text, bool sphere, const std::string& option) {
-  const std::size_t expected = sphere ? 4 : 6;
-  std::vector<double> values;
-  std::stringstream in(text);
-  std::string item;
-  while (std::getline(in, item, ',')) {
-    std::size_t used = 0;
-    double v = 0;
-    try {
-      v = std::stod(item, &used);
-    } catch (const std::exception&) {
-      used = 0;
-    }
-    if (used == 0 || used != item.size() || !std::isfinite(v))
-      throw Error(ErrorKind::InvalidArgument, option + " expects " + std::to_string(expected) +
-                                                  " comma-separated finite numbers, got '" + text + "'");
-    values.push_back(v);
-  }
-  return make_region(values, sphere, option);
-}
-
-RegionOfInterest make_region(const std::vector<double>& values, bool sphere, const std::string& option) {
-  const std::size_t expected = sphere ? 4 : 6;
-  if (values.size() != expected)
-    throw Error(ErrorKind::InvalidArgument,
-                option + " expects " + std::to_string(expected) + " numbers, got " + std::to_string(values.size()));
-  for (const double v : values)
-    if (!std::isfinite(v)) throw Error(ErrorKind::InvalidArgument, option + " expects finite numbers");
-  RegionOfInterest region;
-  if (sphere) {
-    region.shape = RegionOfInterest::Shape::Sphere;
-    region.centre = {values[0], values[1], values[2]};
-    region.radius = values[3];
-    if (!(region.radius > 0)) throw Error(ErrorKind::InvalidArgument, option + ": the radius must be positive");
-  } else {
-    region.low = {std::min(values[0], values[3]), std::min(values[1], values[4]), std::min(values[2], values[5])};
-    region.high = {std::max(values[0], values[3]), std::max(values[1], values[4]), std::max(values[2], values[5])};
-  }
-  return region;
-}
 
 std::vector<std::uint8_t> entries_for_region(const SubdivisionHierarchy& hierarchy, const std::vector<Vec3>& fine,
                                              const RegionOfInterest& region) {
   const std::size_t n = hierarchy.fine_vertex_count();
   if (fine.size() < n) throw Error(ErrorKind::InvalidArgument, "region: fewer points than the fine level");
-  // g: distinct positive weights on the region's fine points, then S^T g
-  // level by level down to the base and every level's coefficients.
+  std::vector<std::uint8_t> inside(n);
+  for_each_index(n, [&](std::size_t v) { inside[v] = region.contains(fine[v]); });
+  return entries_for_points(hierarchy, inside);
+}
+
+std::vector<std::uint8_t> entries_for_points(const SubdivisionHierarchy& hierarchy,
+                                             const std::vector<std::uint8_t>& points) {
+  const std::size_t n = hierarchy.fine_vertex_count();
+  if (points.size() < n) throw Error(ErrorKind::InvalidArgument, "region: fewer flags than the fine level");
+  // g: distinct positive weights on the flagged points, then S^T g level by
+  // level down to the base and every level's coefficients.
   std::vector<Vec3> g(n);
   for_each_index(n, [&](std::size_t v) {
-    if (region.contains(fine[v])) g[v] = {index_weight(v, 1), index_weight(v, 2), index_weight(v, 3)};
+    if (points[v]) g[v] = {index_weight(v, 1), index_weight(v, 2), index_weight(v, 3)};
   });
   for (int level = hierarchy.levels(); level >= 1; --level) synthesize_level_transpose(hierarchy, level, g);
   std::vector<std::uint8_t> needed(n);
@@ -116,7 +111,7 @@ RegionReconstruction reconstruct_region(const IswDecoded& decoded, const RegionO
   std::fill(keep.begin(), keep.begin() + static_cast<std::ptrdiff_t>(base), std::uint8_t{1});
   for (std::size_t k = base; k < n; ++k)
     out.region_coefficients += keep[k] && squared_norm(decoded.coefficients[k]) > 0;
-  for (std::size_t r = 0; r < std::min(outside_keep, decoded.ranked.size()); ++r) keep[decoded.ranked[r]] = 1;
+  keep_outside(decoded, data, region, outside_keep, keep);
   // 3. The reconstruction from the kept entries, in the same buffer.
   for (std::size_t k = 0; k < n; ++k) {
     data[k] = keep[k] ? decoded.coefficients[k] : Vec3{};
@@ -149,17 +144,9 @@ std::vector<int> region_face_levels(const SubdivisionHierarchy& hierarchy, const
     std::fill(face_levels.begin(), face_levels.end(), 0);
     return face_levels;
   }
-  // A base face's fine points: the corners, e vertices and f vertices of the
-  // finest refinement of its level L - 1 faces.
-  const RefinementStep& s = hierarchy.step(levels);
   for_each_index(face_levels.size(), [&](std::size_t f) {
-    const auto [first, end] = hierarchy.descendant_faces(f, levels - 1);
-    for (std::size_t p = first; p < end && face_levels[f] != levels; ++p) {
-      bool inside = region.contains(fine[s.first_face_vertex() + p]);
-      for (std::uint32_t k = s.face_offsets[p]; k < s.face_offsets[p + 1] && !inside; ++k)
-        inside = region.contains(fine[s.face_vertices[k]]) || region.contains(fine[s.face_edges[k]]);
-      if (inside) face_levels[f] = levels;
-    }
+    const bool outside = for_each_fine_point(hierarchy, f, [&](std::size_t v) { return !region.contains(fine[v]); });
+    if (!outside) face_levels[f] = levels;
   });
   return face_levels;
 }

@@ -24,7 +24,8 @@ py::tuple extract(const py::array& field, double iso, const py::object& spacing,
 py::dict convert(const py::object& field_or_path, double iso, const std::filesystem::path& path, py::kwargs kwargs);
 py::tuple decode(const std::filesystem::path& path, const py::object& percent, const py::object& coefficients,
                  const py::object& max_error, const py::object& bytes, const py::object& level, bool limit,
-                 bool triangulate, const py::object& roi, const py::object& roi_sphere);
+                 bool triangulate, const py::object& roi, const py::object& roi_sphere, double roi_falloff,
+                 const py::object& view, double pixel_error);
 py::list stats(const std::filesystem::path& path, const std::vector<double>& percents);
 
 }  // namespace isowave::python

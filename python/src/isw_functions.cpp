@@ -13,6 +13,7 @@
 #include "isowave/codec/importance.h"
 #include "isowave/codec/isw_format.h"
 #include "isowave/codec/region.h"
+#include "isowave/codec/view.h"
 #include "isowave/codec/statistics.h"
 #include "isowave/core/error.h"
 #include "isowave/pipeline/convert.h"
@@ -154,26 +155,67 @@ py::dict convert(const py::object& field_or_path, double iso, const fs::path& ou
 namespace {
 
 // roi / roi_sphere: a sequence of 6 or 4 numbers, as the CLI's --roi and --roi-sphere.
-std::optional<RegionOfInterest> region_argument(const py::object& roi, const py::object& roi_sphere) {
+std::optional<RegionOfInterest> region_argument(const py::object& roi, const py::object& roi_sphere, double falloff) {
   if (!roi.is_none() && !roi_sphere.is_none()) throw Error(ErrorKind::InvalidArgument, "give at most one of roi and roi_sphere");
   const bool sphere = !roi_sphere.is_none();
   const py::object& given = sphere ? roi_sphere : roi;
-  if (given.is_none()) return std::nullopt;
-  return make_region(given.cast<std::vector<double>>(), sphere, sphere ? "roi_sphere" : "roi");
+  if (given.is_none()) {
+    if (falloff != 0) throw Error(ErrorKind::InvalidArgument, "roi_falloff needs roi or roi_sphere");
+    return std::nullopt;
+  }
+  if (!(falloff >= 0) || !std::isfinite(falloff))
+    throw Error(ErrorKind::InvalidArgument, "roi_falloff must be a non-negative distance");
+  RegionOfInterest region = make_region(given.cast<std::vector<double>>(), sphere, sphere ? "roi_sphere" : "roi");
+  region.falloff = falloff;
+  return region;
+}
+
+// view: a dict with the camera's keys, or a JSON file's path; nothing for None.
+std::optional<Camera> camera_argument(const py::object& view) {
+  if (view.is_none()) return std::nullopt;
+  if (!py::isinstance<py::dict>(view)) return read_camera(py::str(view).cast<std::string>());
+  const py::dict d = view.cast<py::dict>();
+  for (const auto& item : d) {
+    const std::string key = py::str(item.first);
+    if (key != "position" && key != "target" && key != "up" && key != "fov" && key != "viewport")
+      throw Error(ErrorKind::InvalidArgument, "view: unknown key '" + key + "'");
+  }
+  const auto vec = [&](const char* key) {
+    if (!d.contains(key)) throw Error(ErrorKind::InvalidArgument, std::string("view: no '") + key + "'");
+    const std::vector<double> v = d[key].cast<std::vector<double>>();
+    if (v.size() != 3) throw Error(ErrorKind::InvalidArgument, std::string("view: '") + key + "' needs 3 numbers");
+    return Vec3{v[0], v[1], v[2]};
+  };
+  Camera camera;
+  camera.position = vec("position");
+  camera.target = vec("target");
+  camera.up = vec("up");
+  if (!d.contains("fov") || !d.contains("viewport")) throw Error(ErrorKind::InvalidArgument, "view: needs 'fov' and 'viewport'");
+  camera.fov_degrees = d["fov"].cast<double>();
+  const std::vector<int> viewport = d["viewport"].cast<std::vector<int>>();
+  if (viewport.size() != 2) throw Error(ErrorKind::InvalidArgument, "view: 'viewport' needs 2 numbers");
+  camera.width = viewport[0];
+  camera.height = viewport[1];
+  check_camera(camera);
+  return camera;
 }
 
 }  // namespace
 
 py::tuple decode(const fs::path& file, const py::object& percent, const py::object& coefficients,
                  const py::object& max_error, const py::object& bytes, const py::object& level, bool limit,
-                 bool triangulate, const py::object& roi, const py::object& roi_sphere) {
+                 bool triangulate, const py::object& roi, const py::object& roi_sphere, double roi_falloff,
+                 const py::object& view, double pixel_error) {
   const std::string path = file.string();
   if (!max_error.is_none() && !bytes.is_none())
     throw Error(ErrorKind::InvalidArgument, "give at most one of max_error and bytes");
   if (!percent.is_none() && !coefficients.is_none())
     throw Error(ErrorKind::InvalidArgument, "give at most one of percent and coefficients");
-  const std::optional<RegionOfInterest> region = region_argument(roi, roi_sphere);
+  const std::optional<RegionOfInterest> region = region_argument(roi, roi_sphere, roi_falloff);
   if (region && !level.is_none()) throw Error(ErrorKind::InvalidArgument, "roi gives the finest level: no level");
+  const std::optional<Camera> camera = camera_argument(view);
+  if (camera && (region || !level.is_none() || !percent.is_none() || !coefficients.is_none() || limit))
+    throw Error(ErrorKind::InvalidArgument, "view chooses each face's level: no roi, level, percent, coefficients or limit");
   IswDecodeOptions options;
   // The surface needs no ranking unless a limit asks for it; with a region
   // the limit applies outside it, to a whole decode ranked by importance.
@@ -192,6 +234,8 @@ py::tuple decode(const fs::path& file, const py::object& percent, const py::obje
     if (!(options.max_error_cells > 0) || !std::isfinite(options.max_error_cells))
       throw Error(ErrorKind::InvalidArgument, "max_error must be a positive number of cells");
   }
+  // A region with nothing kept outside reads only the groups it needs (2.2).
+  if (region && !limited) options.region = region;
   const std::size_t outside = coefficients.is_none() ? 0 : coefficients.cast<std::size_t>();
   const int requested_level = level.is_none() ? -1 : level.cast<int>();
   PolygonMesh mesh;
@@ -204,7 +248,9 @@ py::tuple decode(const fs::path& file, const py::object& percent, const py::obje
     if (l < 0 || l > decoded.levels)
       throw Error(ErrorKind::InvalidArgument,
                   "level must be in 0.." + std::to_string(decoded.levels) + ", got " + std::to_string(l));
-    if (region) {
+    if (camera) {
+      mesh = view_mesh(decoded, *camera, pixel_error);
+    } else if (region) {
       const std::size_t keep = percent.is_none() ? outside : coefficients_for_percent(*decoded.hierarchy, percent_value);
       mesh = region_mesh(decoded, *region, keep);
     } else {
@@ -212,7 +258,7 @@ py::tuple decode(const fs::path& file, const py::object& percent, const py::obje
     }
     if (limit) mesh.positions = limit_surface(mesh).positions;
     if (triangulate)  // base faces (level 0, or outside a region) may share two corners
-      mesh = isowave::triangulate(mesh, l == 0 || region ? QuadSplit::ShorterAvoidingEdges : QuadSplit::Shorter);
+      mesh = isowave::triangulate(mesh, l == 0 || region || camera ? QuadSplit::ShorterAvoidingEdges : QuadSplit::Shorter);
   }
   if (!truncation.empty() && PyErr_WarnEx(PyExc_UserWarning, truncation.c_str(), 1) != 0) throw py::error_already_set();
   return mesh_arrays(std::move(mesh));

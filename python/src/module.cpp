@@ -48,7 +48,7 @@ file's metadata, default 'numpy array'). Returns the result `isowave convert --j
 (bytes, vertex counts, levels, seconds per stage, fit quality, the rate-distortion rows with D, the
 quantization error, warnings).)";
 
-constexpr const char* kDecodeDoc = R"(decode(path, *, percent=None, coefficients=None, max_error=None, bytes=None, level=None, limit=False, triangulate=False, roi=None, roi_sphere=None) -> (vertices, faces)
+constexpr const char* kDecodeDoc = R"(decode(path, *, percent=None, coefficients=None, max_error=None, bytes=None, level=None, limit=False, triangulate=False, roi=None, roi_sphere=None, roi_falloff=0, view=None, pixel_error=1.0) -> (vertices, faces)
 
 Rebuilds the surface of an .isw file as `isowave decode`: the base mesh and the most important
 wavelet coefficients, at most one of percent (0..100 of full resolution, counted as the paper does;
@@ -59,7 +59,12 @@ triangulate=True splits quads. vertices (n, 3) float64 and faces (m, k) uint32 (
 version 2 stream decodes); max_error (cells) reads the shortest prefix whose error the file records
 within it. roi=(x0, y0, z0, x1, y1, z1) or roi_sphere=(cx, cy, cz, r), world units: the finest level
 with every point inside the region equal to the full decode's, percent or coefficients applying
-outside it (none: the base mesh's surface there), as `isowave decode --roi`. A file cut inside its
+outside it (none: the base mesh's surface there: then only the bytes the region needs are read from
+a version 2.2 file), as `isowave decode --roi`; roi_falloff (world units) weights importance outside
+by a Gaussian of the distance from the region (`--roi-falloff`). view: a camera, a dict {"position": (x, y, z),
+"target": (x, y, z), "up": (x, y, z), "fov": degrees, "viewport": (width, height)} or the path of
+such a JSON file: each base face refined until the detail left out projects to at most pixel_error
+pixels, faces outside the view frustum kept whole, as `isowave decode --view`. A file cut inside its
 coefficients decodes what it holds, with a UserWarning.)";
 
 constexpr const char* kStatsDoc = R"(stats(path, percents=(100, 20, 10, 5)) -> list of dict
@@ -104,7 +109,9 @@ PYBIND11_MODULE(isowave, m) {
   m.def("decode", &decode, py::arg("path"), py::kw_only(), py::arg("percent") = py::none(),
         py::arg("coefficients") = py::none(), py::arg("max_error") = py::none(), py::arg("bytes") = py::none(),
         py::arg("level") = py::none(), py::arg("limit") = false, py::arg("triangulate") = false,
-        py::arg("roi") = py::none(), py::arg("roi_sphere") = py::none(), kDecodeDoc);
+        py::arg("roi") = py::none(), py::arg("roi_sphere") = py::none(), py::arg("roi_falloff") = 0.0,
+        py::arg("view") = py::none(),
+        py::arg("pixel_error") = 1.0, kDecodeDoc);
   m.def("stats", &stats, py::arg("path"), py::arg("percents") = std::vector<double>{100, 20, 10, 5}, kStatsDoc);
   m.def("keep_freed_memory_for_reuse", &isowave::keep_freed_memory_for_reuse, kKeepMemoryDoc);
   m.def("release_freed_memory", &isowave::release_freed_memory, kReleaseMemoryDoc);

@@ -146,3 +146,26 @@ def test_decode_of_a_region_gives_the_cli_mesh_and_the_full_decode_inside(cli, s
     assert len(vertices) < len(full)
     with pytest.raises(isowave.Error, match="roi expects 6 numbers"):
         isowave.decode(cli_path, roi=(1, 2, 3))
+
+
+def test_decode_of_a_view_gives_the_cli_mesh_from_a_dict_or_a_file(cli, sphere_isw, tmp_path):
+    cli_path, _ = sphere_isw
+    full, _ = isowave.decode(cli_path)
+    low, high = full.min(axis=0), full.max(axis=0)
+    centre = 0.5 * (low + high)
+    camera = {"position": [float(centre[0]), float(centre[1]), float(low[2] - 2 * (high[2] - low[2]))],
+              "target": [float(v) for v in centre], "up": [0, 1, 0], "fov": 20, "viewport": [640, 480]}
+    path = tmp_path / "camera.json"
+    path.write_text(json.dumps(camera))
+    obj = tmp_path / "view.obj"
+    cli("decode", cli_path, "--view", path, "--pixel-error", 2, "--triangulate", "-o", obj, "--quiet")
+    cli_vertices, cli_faces = read_obj(obj)
+    for view in (camera, str(path)):
+        vertices, faces = isowave.decode(cli_path, view=view, pixel_error=2, triangulate=True)
+        np.testing.assert_allclose(vertices, cli_vertices, rtol=1e-7, atol=1e-7)
+        np.testing.assert_array_equal(faces, cli_faces)
+    assert len(vertices) < len(full)
+    with pytest.raises(isowave.Error, match="unknown key"):
+        isowave.decode(cli_path, view=dict(camera, zoom=2))
+    with pytest.raises(isowave.Error, match="view chooses"):
+        isowave.decode(cli_path, view=camera, percent=5)

@@ -14,6 +14,7 @@
 #include <tbb/parallel_sort.h>
 
 #include "collapse_mesh_internal.h"
+#include "isowave/core/morton.h"
 #include "isowave/core/error.h"
 #include "isowave/core/mesh_topology.h"
 #include "simplify_steps.h"
@@ -29,20 +30,6 @@ constexpr double kHuge = 1e300;
 
 [[noreturn]] void not_manifold(const std::string& what) {
   throw Error(ErrorKind::Topology, "not a consistently oriented 2-manifold: " + what);
-}
-
-// Interleaves the low 21 bits of x, y, z (Morton / Z-order code).
-std::uint64_t morton_code(std::uint32_t x, std::uint32_t y, std::uint32_t z) {
-  const auto spread = [](std::uint64_t v) {
-    v &= 0x1FFFFF;
-    v = (v | v << 32) & 0x1F00000000FFFFull;
-    v = (v | v << 16) & 0x1F0000FF0000FFull;
-    v = (v | v << 8) & 0x100F00F00F00F00Full;
-    v = (v | v << 4) & 0x10C30C30C30C30C3ull;
-    v = (v | v << 2) & 0x1249249249249249ull;
-    return v;
-  };
-  return spread(x) | spread(y) << 1 | spread(z) << 2;
 }
 
 // Vertex order for the corner table: Morton order of the positions (the

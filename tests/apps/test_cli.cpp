@@ -359,6 +359,27 @@ TEST_F(CliTest, ExistingFilesAreKeptWithoutForce) {
   EXPECT_NO_THROW(read_mesh(path("mine.ply")));
 }
 
+// decode --view: a camera file refines what it sees; a bad camera is one line
+// and no output.
+TEST_F(CliTest, DecodeViewRefinesWhatTheCameraSeesAndRefusesBadCameras) {
+  ASSERT_EQ(run({"convert", "builtin:sphere:24", "-o", path("s.isw"), "--levels", "2", "--quiet"}, dir_).exit_code, 0);
+  std::ofstream(path("cam.json")) << R"({"position":[12,12,-30],"target":[12,12,12],"up":[0,1,0],"fov":30,)"
+                                  << R"("viewport":[1920,1080]})";
+  const RunResult r = run({"decode", path("s.isw"), "--view", path("cam.json"), "--pixel-error", "0.5", "-o",
+                           path("view.ply"), "--triangulate"},
+                          dir_);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("view at 0.5 pixels"), std::string::npos) << r.out;
+  EXPECT_GT(read_mesh(path("view.ply")).face_count(), 0u);
+  std::ofstream(path("bad.json")) << R"({"position":[0,0,0],"target":[0,0,0],"up":[0,1,0],"fov":30,"viewport":[9,9]})";
+  for (const std::string& camera : {path("bad.json"), path("missing.json")}) {
+    const RunResult bad = run({"decode", path("s.isw"), "--view", camera, "-o", path("bad.ply")}, dir_);
+    EXPECT_NE(bad.exit_code, 0);
+    EXPECT_EQ(std::count(bad.err.begin(), bad.err.end(), '\n'), 1) << bad.err;
+    EXPECT_FALSE(fs::exists(path("bad.ply")));
+  }
+}
+
 TEST_F(CliTest, BadInputGivesOneLineAndANonZeroExitCode) {
   std::ofstream(path("garbage.isw")) << "not an isw file";
   std::ofstream(path("garbage.ply")) << "ply\nformat ascii 1.0\nelement vertex 99\n";
@@ -368,6 +389,8 @@ TEST_F(CliTest, BadInputGivesOneLineAndANonZeroExitCode) {
       {"decode", path("garbage.isw"), "-o", path("x.ply")},
       {"decode", path("missing.isw"), "--roi", "1,2,3", "-o", path("x.ply")},
       {"decode", path("missing.isw"), "--roi-sphere", "1,2,3,0", "-o", path("x.ply")},
+      {"decode", path("missing.isw"), "--pixel-error", "1", "-o", path("x.ply")},
+      {"decode", path("missing.isw"), "--view", path("missing.json"), "--roi", "0,0,0,1,1,1", "-o", path("x.ply")},
       {"stats", path("garbage.isw")},
       {"info", path("garbage.isw")},
       {"subdivide", path("garbage.ply"), "--levels", "2", "-o", path("x.ply")},

@@ -29,10 +29,12 @@ struct Encoded {
   std::string bytes;
 };
 
-Encoded encode_sample(PolygonMesh base, int levels, double step, double tangential_factor = 4) {
+Encoded encode_sample(PolygonMesh base, int levels, double step, double tangential_factor = 4,
+                      int minor_version = kIswMinorVersion) {
   Encoded e{test::make_coded_surface(std::move(base), levels, 0.05, 9), {}, {}};
   e.options.step = step;
   e.options.tangential_factor = tangential_factor;
+  e.options.minor_version = minor_version;
   e.bytes = encode_isw(*e.surface.hierarchy, e.surface.coefficients, sample_metadata(), e.options);
   return e;
 }
@@ -272,34 +274,42 @@ void expect_format_error(const std::string& bytes, const std::string& section, c
   }
 }
 
-// docs/FORMAT.md: after BPTS, optionally RDTB, then PLNS and END, each once.
-// Any other order or repetition is an error, and costs no second decode.
+// docs/FORMAT.md: after BPTS, optionally RDTB, then GIDX (2.2), PLNS and
+// END, each once. Any other order or repetition is an error, and costs no
+// second decode; a 2.2 stream without its GIDX is one too.
 TEST(IswFormat2, RepeatedOrMisplacedStreamSectionsAreFormatErrors) {
   const Encoded e = encode_sample(test::cube(), 2, 1e-3);
   IswRewrite rewrite;
   rewrite.rate_table = {{0, 0.5}};
   const std::vector<std::string> parts = test::split_sections(rewrite_isw(e.bytes, rewrite));
-  ASSERT_EQ(parts.size(), 8u);  // the file header, META, BASE, QUAN, BPTS, RDTB, PLNS, END
+  ASSERT_EQ(parts.size(), 9u);  // the file header, META, BASE, QUAN, BPTS, RDTB, GIDX, PLNS, END
   const std::string head = parts[0] + parts[1] + parts[2] + parts[3] + parts[4];
-  const std::string &rdtb = parts[5], &planes = parts[6], &end = parts[7];
-  ASSERT_EQ(test::section_tag(rdtb) + test::section_tag(planes) + test::section_tag(end), "RDTBPLNSEND ");
-  // Complete and empty: top plane -1, no flags, 1 group, 3 segments, no packets.
-  const std::string no_packets = test::make_section("PLNS", std::string("\xff\x00\x01\x03\x00", 5));
+  const std::string &rdtb = parts[5], &index = parts[6], &planes = parts[7], &end = parts[8];
+  ASSERT_EQ(test::section_tag(rdtb) + test::section_tag(index) + test::section_tag(planes) + test::section_tag(end),
+            "RDTBGIDXPLNSEND ");
+  // Complete and empty: top plane -1, 2.1's coding, 1 group, 3 segments, no packets.
+  const std::string no_packets = test::make_section("PLNS", std::string("\xff\x02\x01\x03\x00", 5));
   const std::string unknown = test::make_section("NEWS", "a later minor version's");
 
-  const IswDecoded full = decode_isw(head + planes + end, "full.isw");
-  for (const std::string& valid : {head + rdtb + planes + end, head + unknown + planes + unknown + end})
+  const IswDecoded full = decode_isw(head + index + planes + end, "full.isw");
+  for (const std::string& valid :
+       {head + rdtb + index + planes + end, head + unknown + index + unknown + planes + unknown + end})
     EXPECT_EQ(decode_isw(valid, "valid.isw").coefficients, full.coefficients);
 
-  expect_format_error(head + planes + planes + end, "PLNS", "PLNS twice");
-  expect_format_error(head + rdtb + planes + planes + planes + end, "PLNS", "PLNS three times");
-  expect_format_error(head + planes + no_packets + end, "PLNS", "an empty PLNS after the stream");
-  expect_format_error(head + planes + unknown + planes.substr(0, planes.size() / 2), "PLNS", "a second PLNS, cut");
-  expect_format_error(head + planes + rdtb + end, "RDTB", "RDTB after PLNS");
-  expect_format_error(head + rdtb + rdtb + planes + end, "RDTB", "RDTB twice");
-  expect_format_error(head + rdtb + end, "END", "no PLNS");
+  expect_format_error(head + index + planes + planes + end, "PLNS", "PLNS twice");
+  expect_format_error(head + rdtb + index + planes + planes + planes + end, "PLNS", "PLNS three times");
+  expect_format_error(head + index + planes + no_packets + end, "PLNS", "an empty PLNS after the stream");
+  expect_format_error(head + index + planes + unknown + planes.substr(0, planes.size() / 2), "PLNS",
+                      "a second PLNS, cut");
+  expect_format_error(head + index + planes + rdtb + end, "RDTB", "RDTB after PLNS");
+  expect_format_error(head + index + rdtb + planes + end, "RDTB", "RDTB after GIDX");
+  expect_format_error(head + rdtb + rdtb + index + planes + end, "RDTB", "RDTB twice");
+  expect_format_error(head + index + index + planes + end, "GIDX", "GIDX twice");
+  expect_format_error(head + planes + index + end, "PLNS", "GIDX after PLNS (PLNS lacks it)", false);
+  expect_format_error(head + planes + end, "PLNS", "a 2.2 PLNS without GIDX", false);
+  expect_format_error(head + rdtb + index + end, "END", "no PLNS");
   expect_format_error(head + end + planes, "END", "END before PLNS");
-  expect_format_error(head + planes + parts[4] + end, "BPTS", "BPTS in the stream");
+  expect_format_error(head + index + planes + parts[4] + end, "BPTS", "BPTS in the stream");
 }
 
 // docs/FORMAT.md, PLNS: LEB128 values of at most 64 bits. The group count
@@ -323,7 +333,7 @@ TEST(IswFormat2, PacketTableValuesOf64BitsOrMoreAreFormatErrors) {
 // the counts allow (32 planes, 32 segments, 64 groups: 65,536 sizes) in 100
 // bytes is an error; cut by the file's end, the stream holds no packet.
 TEST(IswFormat2, PacketCountBeyondTheBytesLeftIsRejectedBeforeTheTable) {
-  const Encoded e = encode_sample(test::cube(), 2, 1e-3);
+  const Encoded e = encode_sample(test::cube(), 2, 1e-3, 4, 1);
   const std::string header("\x1f\x02\x40\x20\x80\x80\x04", 7);  // top plane 31, 2.1's coding, G 64, S 32, P 2^16
   const std::string file = test::with_section_payload(e.bytes, "PLNS", header + std::string(100, '\x01'));
   expect_format_error(file, "PLNS", "65,536 packets in 100 bytes", false);

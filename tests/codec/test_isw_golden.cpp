@@ -1,5 +1,6 @@
-// The golden .isw files: tests/codec/data/golden_1_0.isw, golden_2_0.isw and
-// golden_2_1.isw were written by the format 1.0, 2.0 and 2.1 encoders from the surface that
+// The golden .isw files: tests/codec/data/golden_1_0.isw, golden_2_0.isw,
+// golden_2_1.isw and golden_2_2.isw were written by the format 1.0, 2.0, 2.1
+// and 2.2 encoders from the surface that
 // golden_surface() defines, and every later reader must decode them to that surface. Its expected values
 // come from the generator below, not from a decode: base topology, sharp
 // flags and metadata exactly, base control points and coefficients within
@@ -7,7 +8,7 @@
 // and decimal constants, so it gives the same values on every platform.
 //
 // Regenerate only with a new format version (and keep the old files, whose
-// tests must keep passing): ISOWAVE_WRITE_GOLDEN_1_0=PATH (or _2_0, _2_1) codec_tests
+// tests must keep passing): ISOWAVE_WRITE_GOLDEN_1_0=PATH (or _2_0, _2_1, _2_2) codec_tests
 // --gtest_filter='IswGolden.*' writes that version's file to PATH.
 #include <algorithm>
 #include <cmath>
@@ -22,6 +23,7 @@
 
 #include "isowave/codec/importance.h"
 #include "isowave/codec/isw_format.h"
+#include "isowave/transform/wavelet_transform.h"
 
 namespace isowave {
 namespace {
@@ -158,7 +160,8 @@ constexpr double kTangentialFactor = 4;
 // Writes a version 2 golden file to the path in environment variable `env`
 // when it is set (returns true: the test then skips); `frame_step` 0 is the
 // encoder's automatic one.
-bool write_golden_2(const char* env, const GoldenSurface& expected, int minor, double frame_step) {
+bool write_golden_2(const char* env, const GoldenSurface& expected, int minor, double frame_step,
+                    std::size_t group_nodes = 0) {
   const char* out = std::getenv(env);
   if (!out) return false;
   IswEncodeOptions options;
@@ -167,6 +170,7 @@ bool write_golden_2(const char* env, const GoldenSurface& expected, int minor, d
   options.step = kStep;
   options.tangential_factor = kTangentialFactor;
   options.frame_step = frame_step;
+  options.group_nodes = group_nodes;
   std::ofstream(out, std::ios::binary)
       << encode_isw(expected.base, kLevels, expected.coefficients, expected.metadata, options);
   return true;
@@ -246,6 +250,36 @@ TEST(IswGolden, Format21FileDecodesToItsGenerator) {
 }
 
 TEST(IswGolden, Format21FileDecodesAtEveryByteOfItsStream) { expect_every_byte_decodes("golden_2_1.isw"); }
+
+// Version 2.2 (groups by space, GIDX): 2.1's surface in groups of at most 48
+// tree nodes where the Morton order's cells allow. A region decode of the
+// file equals the whole decode at every fine control point the box holds
+// (on a surface of seven base faces every group is in reach of any region:
+// tests/codec/test_random_access.cpp shows regions that read fewer).
+TEST(IswGolden, Format22FileDecodesToItsGeneratorAndByRegion) {
+  const GoldenSurface expected = golden_surface_21();
+  if (write_golden_2("ISOWAVE_WRITE_GOLDEN_2_2", expected, 2, kFrameStep21, 48))
+    GTEST_SKIP() << "wrote the 2.2 golden file";
+  const IswDecoded d = expect_golden_2("golden_2_2.isw", expected, 2);
+  if (HasFailure()) return;
+  EXPECT_GE(d.stream.groups, 3u);
+  IswDecodeOptions options;
+  options.region = make_region({-10, -10, -10, 10, 10, 0.2}, false, "region");
+  const IswDecoded part = read_isw(golden_path("golden_2_2.isw"), options);
+  EXPECT_EQ(part.file_bytes_read, part.stream.offset + part.stream.decoded);
+  std::vector<Vec3> whole = d.coefficients, region = part.coefficients;
+  synthesize(*d.hierarchy, whole);
+  synthesize(*part.hierarchy, region);
+  std::size_t inside = 0;
+  for (std::size_t v = 0; v < d.hierarchy->fine_vertex_count(); ++v)
+    if (options.region->contains(whole[v])) {
+      ++inside;
+      EXPECT_LT(norm(region[v] - whole[v]), 1e-12) << v;
+    }
+  EXPECT_GT(inside, 0u);
+}
+
+TEST(IswGolden, Format22FileDecodesAtEveryByteOfItsStream) { expect_every_byte_decodes("golden_2_2.isw"); }
 
 }  // namespace
 }  // namespace isowave

@@ -30,6 +30,7 @@ RegionCase make_case() {
   c.decoded.hierarchy = std::make_shared<const SubdivisionHierarchy>(c.surface.base, 3);
   c.decoded.levels = 3;
   c.decoded.coefficients = c.surface.coefficients;
+  c.decoded.class_weights.assign(7, 1.0);
   const std::size_t base = h.vertex_count(0), n = h.fine_vertex_count();
   c.decoded.ranked.resize(n - base);
   std::iota(c.decoded.ranked.begin(), c.decoded.ranked.end(), std::uint32_t(base));
@@ -112,6 +113,35 @@ TEST(Region, TheOutsideKeepsTheRankedCoefficientsAskedFor) {
   const RegionReconstruction none = reconstruct_region(c.decoded, c.region, 0);
   EXPECT_GT(some.kept_coefficients, none.kept_coefficients);
   EXPECT_LE(some.kept_coefficients, none.kept_coefficients + 100);
+}
+
+// The magnifying glass: with a falloff the coefficients kept outside lie
+// nearer the region than by importance alone; a falloff far wider than the
+// surface keeps what importance alone keeps.
+TEST(Region, AFalloffKeepsTheOutsideDetailNearTheRegion) {
+  RegionCase c = make_case();
+  const SubdivisionHierarchy& h = *c.decoded.hierarchy;
+  const std::vector<Vec3> full = synthesized(h, c.decoded.coefficients);
+  const auto kept_distance = [&](double falloff) {
+    c.region.falloff = falloff;
+    const RegionReconstruction none = reconstruct_region(c.decoded, c.region, 0);
+    const RegionReconstruction some = reconstruct_region(c.decoded, c.region, 300);
+    EXPECT_EQ(some.kept_coefficients, none.kept_coefficients + 300) << falloff;
+    double sum = 0;
+    std::size_t count = 0;
+    // The moved fine points outside: where the kept outside detail acts.
+    for (std::size_t v = 0; v < h.fine_vertex_count(); ++v)
+      if (norm(some.fine[v] - none.fine[v]) > 1e-12) {
+        sum += c.region.distance(full[v]);
+        ++count;
+      }
+    return std::make_pair(sum / static_cast<double>(std::max<std::size_t>(count, 1)), some.fine);
+  };
+  const auto [plain, plain_fine] = kept_distance(0);
+  const auto [near, near_fine] = kept_distance(1.5);
+  const auto [wide, wide_fine] = kept_distance(1e6);
+  EXPECT_LT(near, 0.6 * plain);
+  EXPECT_EQ(wide_fine, plain_fine);
 }
 
 // The decode's mesh with nothing kept outside: the region's base faces at the

@@ -32,9 +32,11 @@
 #include <cstdint>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "isowave/codec/region_of_interest.h"
 #include "isowave/core/mesh.h"
 #include "isowave/transform/hierarchy.h"
 
@@ -42,10 +44,11 @@ namespace isowave {
 
 // A reader decodes every minor version of major 1 (it skips the sections it
 // does not know) and versions 2.0 to 2.kIswMinorVersion of major 2 (2.1 codes
-// a non-normal flag per wavelet coefficient in the planes); it refuses other
+// a non-normal flag per wavelet coefficient in the planes; 2.2 groups the
+// planes' tree by space and indexes the groups, GIDX); it refuses other
 // versions (Error(Unsupported)).
 constexpr std::uint16_t kIswMajorVersion = 2;
-constexpr std::uint16_t kIswMinorVersion = 1;
+constexpr std::uint16_t kIswMinorVersion = 2;
 
 struct IswMetadata {
   // Free-form but conventional keys (docs/FORMAT.md, META): source, isovalue,
@@ -67,9 +70,11 @@ struct IswRatePoint {
 struct IswEncodeOptions {
   // The major version written: 2 (embedded planes in local frames) or 1.
   int major_version = kIswMajorVersion;
-  // Version 2: the minor version written, 0 or 1 (1 codes, at a wavelet
+  // Version 2: the minor version written, 0 to 2 (1 codes, at a wavelet
   // coefficient's first significance, whether it is non-normal, and no
-  // tangential decision for the others; docs/FORMAT.md, version 2.1).
+  // tangential decision for the others; 2 also groups the tree by space and
+  // writes the groups' index, so that a region reads only its groups;
+  // docs/FORMAT.md, versions 2.1 and 2.2).
   int minor_version = kIswMinorVersion;
   // Quantization step for importance-weighted coefficients, in world units,
   // finite and > 0: a coefficient of class c is quantized with step / weight_c,
@@ -93,6 +98,12 @@ struct IswEncodeOptions {
   // frames of another base than its final one (fit/normal_fit.h) passes it,
   // with the frame_step (> 0) it took isw_frame_normals() at.
   const std::vector<Vec3>* frame_base = nullptr;
+  // Version 2.2: tree nodes per group of the plane stream (a run of base
+  // faces holds at most this many where the Morton order's cells allow; 0:
+  // the default, 16,384). Smaller groups let a region read fewer bytes
+  // beyond itself, at some 60 bytes per group of context learning, flushes
+  // and index (docs/MEASUREMENTS.md, "Random access").
+  std::size_t group_nodes = 0;
   // Version 2: cut the plane stream so that the file holds at most this many
   // bytes (0: the whole stream). Error(InvalidArgument) when the headers alone exceed it.
   std::uint64_t max_bytes = 0;
@@ -239,6 +250,8 @@ struct IswStreamInfo {
   double tangential_factor = 1;
   double frame_step = 0;      // world units
   std::vector<IswRatePoint> rate_table;  // RDTB, if the file has one
+  std::size_t groups = 0;           // the planes' independent groups
+  std::size_t groups_decoded = 0;   // those decoded (all, but with a region of a 2.2 file)
 };
 
 // Wall-clock seconds of the decoder's phases (for benchmarks; not part of the
@@ -268,6 +281,11 @@ struct IswDecoded {
   // or ascending with IswOrder::Index.
   std::vector<std::uint32_t> ranked;
   std::vector<IswSectionInfo> sections;  // in file order, unknown tags included
+  // Bytes read from the file: all of them, but with options.region (a 2.2
+  // file read by read_isw) the sections before the packets and the packets
+  // of the groups the region needs.
+  std::uint64_t file_bytes_read = 0;
+  std::uint64_t file_bytes = 0;  // the file's size
   IswStreamInfo stream;                  // version 2
   // The subdivision hierarchy of `base` and `levels` (options.hierarchy when
   // that one matches the file).
@@ -312,6 +330,13 @@ struct IswDecodeOptions {
   IswOrder order = IswOrder::Importance;
   // Read only the metadata, base mesh and section table (for `info`).
   bool headers_only = false;
+  // Version 2.2: decode only the plane-stream groups whose coefficients the
+  // fine control points near `region` depend on (those of every group whose
+  // box in GIDX meets it): inside the region the points equal the complete
+  // decode's; elsewhere coefficients of other groups are zero and their base
+  // control points at the frame precision (BPTS). read_isw() then reads only
+  // those groups' packets. Earlier versions decode every group.
+  std::optional<RegionOfInterest> region;
   // A hierarchy the caller already has (convert checking its own output):
   // used when its base topology, sharp flags and level count equal the
   // file's, which saves building one (the hierarchy is the decode's largest
@@ -337,7 +362,8 @@ IswDecoded expected_decode(const std::shared_ptr<const SubdivisionHierarchy>& hi
 // thread meanwhile.
 IswDecoded decode_isw(const std::string& bytes, const std::string& name, const IswDecodeOptions& options = {});
 
-// Reads a whole file (Error(Io) if it cannot) and decodes it.
+// Reads a file (Error(Io) if it cannot) and decodes it: the whole file, or
+// with options.region only the bytes that region needs (a 2.2 file).
 IswDecoded read_isw(const std::string& path, const IswDecodeOptions& options = {});
 
 // Writes bytes atomically; refuses to replace an existing file unless

@@ -13,28 +13,12 @@
 #include <vector>
 
 #include "isowave/codec/isw_format.h"
+#include "isowave/codec/region_of_interest.h"
 #include "isowave/core/mesh.h"
 #include "isowave/core/vec3.h"
 #include "isowave/transform/hierarchy.h"
 
 namespace isowave {
-
-// A box or a ball in world units (the volume's coordinates).
-struct RegionOfInterest {
-  enum class Shape : std::uint8_t { Box, Sphere };
-  Shape shape = Shape::Box;
-  Vec3 low, high;    // Box: corners, low <= high componentwise
-  Vec3 centre;       // Sphere
-  double radius = 0;  // Sphere: > 0
-  bool contains(const Vec3& p) const;
-};
-
-// Parses "x0,y0,z0,x1,y1,z1" (a box, the corners in any order) or
-// "cx,cy,cz,r" (sphere = true; r > 0). Throws Error(InvalidArgument) naming
-// `option` for anything else, including non-finite numbers.
-RegionOfInterest parse_region(const std::string& text, bool sphere, const std::string& option);
-// The same from the numbers themselves (6 for a box, 4 for a sphere).
-RegionOfInterest make_region(const std::vector<double>& values, bool sphere, const std::string& option);
 
 // Per entry of the coarse-to-fine array (fine_vertex_count() entries): 1 if
 // some fine control point of `fine` (the level-L control points, at least
@@ -43,6 +27,10 @@ RegionOfInterest make_region(const std::vector<double>& values, bool sphere, con
 // control points), parallel; deterministic.
 std::vector<std::uint8_t> entries_for_region(const SubdivisionHierarchy& hierarchy, const std::vector<Vec3>& fine,
                                              const RegionOfInterest& region);
+// The same for the fine control points flagged in `points` (one flag per
+// fine control point).
+std::vector<std::uint8_t> entries_for_points(const SubdivisionHierarchy& hierarchy,
+                                             const std::vector<std::uint8_t>& points);
 
 struct RegionReconstruction {
   std::vector<Vec3> fine;             // level-L control points
@@ -53,8 +41,10 @@ struct RegionReconstruction {
 
 // The level-L control points of `decoded` (a complete decode ranked by
 // importance, IswOrder::Importance) with every coefficient the region needs
-// and, outside it, the `outside_keep` most important others (the ranked
-// order); base control points always. Inside the region the points equal the
+// and the `outside_keep` most important others (the ranked order, or with
+// region.falloff > 0 importance weighted by the Gaussian of the entry's
+// distance from the region: Gross, Staadt and Gatti's magnifying glass);
+// base control points always. Inside the region the points equal the
 // full decode's up to rounding. Throws Error(InvalidArgument) for a decode
 // without a hierarchy. Cost: two syntheses and one transposed synthesis.
 RegionReconstruction reconstruct_region(const IswDecoded& decoded, const RegionOfInterest& region,

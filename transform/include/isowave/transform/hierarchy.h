@@ -133,4 +133,27 @@ class SubdivisionHierarchy {
   std::vector<RefinementStep> steps_;
 };
 
+// Visits the fine (level-L) control points of base face `base_face`: the
+// corners, e vertices and f vertices of its level-(L-1) descendants' finest
+// refinement (shared points more than once), or its corners when L = 0.
+// Stops when `visit(index)` returns false; returns whether it went through.
+template <class Visit>
+bool for_each_fine_point(const SubdivisionHierarchy& hierarchy, std::size_t base_face, Visit&& visit) {
+  const int levels = hierarchy.levels();
+  const PolygonMesh& base = hierarchy.base();
+  if (levels == 0) {
+    for (std::uint32_t k = base.face_offsets[base_face]; k < base.face_offsets[base_face + 1]; ++k)
+      if (!visit(std::size_t{base.face_vertices[k]})) return false;
+    return true;
+  }
+  const RefinementStep& s = hierarchy.step(levels);
+  const auto [first, end] = hierarchy.descendant_faces(base_face, levels - 1);
+  for (std::size_t p = first; p < end; ++p) {
+    if (!visit(std::size_t{s.first_face_vertex()} + p)) return false;
+    for (std::uint32_t k = s.face_offsets[p]; k < s.face_offsets[p + 1]; ++k)
+      if (!visit(std::size_t{s.face_vertices[k]}) || !visit(std::size_t{s.face_edges[k]})) return false;
+  }
+  return true;
+}
+
 }  // namespace isowave

@@ -1,0 +1,66 @@
+#pragma once
+// View-dependent refinement (issue #48, item 2; Linsen et al.'s
+// distance-scaled criterion): each base face is refined to the coarsest level
+// whose omitted detail projects to at most a given number of pixels from the
+// camera, faces outside the view frustum stay base faces, and the faces meet
+// crack-free (transform/adaptive_mesh.h). The camera is ParaView's and
+// three.js's: position, target, up, vertical field of view, viewport.
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "isowave/codec/isw_format.h"
+#include "isowave/core/mesh.h"
+#include "isowave/core/vec3.h"
+
+namespace isowave {
+
+struct Camera {
+  Vec3 position, target, up;  // world units; target != position, up not along the view
+  double fov_degrees = 0;     // vertical field of view, in (0, 180)
+  int width = 0, height = 0;  // viewport, pixels, > 0
+
+  // Pixels per world unit at distance `depth` (> 0) along the view:
+  // (height / 2) / tan(fov / 2) / depth.
+  double pixels_per_unit(double depth) const;
+  // Whether the box [lo, hi] lies wholly outside the view frustum (behind
+  // the camera, or beyond a side plane).
+  bool box_outside(const Vec3& lo, const Vec3& hi) const;
+};
+
+// A camera from the JSON object
+// {"position":[x,y,z],"target":[x,y,z],"up":[x,y,z],"fov":DEGREES,"viewport":[WIDTH,HEIGHT]}
+// (keys in any order, each once; nothing else). Throws Error(Format)
+// headed by `name` for other text, Error(InvalidArgument) for a camera
+// that is not one (see Camera).
+Camera parse_camera(const std::string& json, const std::string& name);
+// parse_camera() of a file's text (Error(Io) if it cannot be read).
+Camera read_camera(const std::string& path);
+// Error(InvalidArgument) unless `camera` is one (see Camera).
+void check_camera(const Camera& camera);
+
+struct ViewLevels {
+  std::vector<int> levels;    // per base face, 0..L
+  std::size_t culled = 0;     // base faces outside the frustum (level 0)
+};
+
+// Per base face of `decoded` (a complete decode: hierarchy and coefficients;
+// `fine` its level-L control points): the coarsest level l such that the
+// detail above it, sum over levels m > l of the largest class weight times
+// coefficient magnitude among the level-m coefficients of the face (a level-m
+// edge's coefficient counts for both faces along it), projects to at most
+// `pixel_error` (> 0) pixels at the distance from the camera to the box of
+// the face's fine points (a box holding the camera: the finest level); level
+// 0 outside the frustum. A nearer camera never gives a coarser level to a
+// face inside the frustum. Error(InvalidArgument) for a decode without a
+// hierarchy or a pixel error that is not positive. Cost: O(fine vertices).
+ViewLevels view_face_levels(const IswDecoded& decoded, const std::vector<Vec3>& fine, const Camera& camera,
+                            double pixel_error);
+
+// What a view decode writes (decode --view, Python's decode(view=...)): the
+// crack-free mesh of view_face_levels() (adaptive_control_mesh, the vertices
+// it uses only); `report` (optional) receives the levels. Cost: one synthesis.
+PolygonMesh view_mesh(const IswDecoded& decoded, const Camera& camera, double pixel_error,
+                      ViewLevels* report = nullptr);
+
+}  // namespace isowave

@@ -1,0 +1,160 @@
+// View-dependent refinement (codec/view.h, issue #48 item 2): the camera's
+// JSON read strictly; a nearer camera refines every face in view at least as
+// much; faces outside the frustum (checked against a pinhole projection
+// written here) stay base faces and faces with a point in the image are never
+// culled; the mesh is crack-free (no directed edge twice, no boundary edge
+// beyond the full decode's).
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <numeric>
+
+#include "codec_test_data.h"
+#include "isowave/codec/view.h"
+#include "isowave/core/error.h"
+#include "isowave/transform/wavelet_transform.h"
+
+namespace isowave {
+namespace {
+
+struct ViewCase {
+  test::CodedSurface surface;
+  IswDecoded decoded;
+  std::vector<Vec3> fine;
+};
+
+// A jittered 20 x 20 grid (unit edges, near z = 0) at 3 levels.
+const ViewCase& view_case() {
+  static const ViewCase c = [] {
+    ViewCase out{test::make_coded_surface(test::quad_grid(20, 20), 3, 0.2, 5), {}, {}};
+    out.decoded.hierarchy = std::make_shared<const SubdivisionHierarchy>(out.surface.base, 3);
+    out.decoded.levels = 3;
+    out.decoded.coefficients = out.surface.coefficients;
+    out.decoded.class_weights = std::vector<double>(7, 1.0);
+    out.fine = out.surface.fine;
+    return out;
+  }();
+  return c;
+}
+
+Camera camera_at(const Vec3& position, const Vec3& target, double fov = 60) {
+  Camera c;
+  c.position = position;
+  c.target = target;
+  c.up = {0, 1, 0};
+  c.fov_degrees = fov;
+  c.width = 800;
+  c.height = 600;
+  return c;
+}
+
+TEST(View, ReadsTheCameraStrictly) {
+  const Camera c = parse_camera(
+      R"({"position": [1, 2, 3], "target":[0,0,0], "up":[0,0,1], "fov": 45, "viewport": [1920, 1080]})", "cam.json");
+  EXPECT_EQ(c.position, (Vec3{1, 2, 3}));
+  EXPECT_EQ(c.up, (Vec3{0, 0, 1}));
+  EXPECT_EQ(c.fov_degrees, 45);
+  EXPECT_EQ(c.width, 1920);
+  EXPECT_EQ(c.height, 1080);
+  const std::string good = R"("target":[0,0,0],"up":[0,0,1],"fov":45,"viewport":[640,480])";
+  for (const std::string bad : {
+           std::string("{") + good + "}",                                       // no position
+           std::string(R"({"position":[1,2,3],)") + good + R"(,"zoom":2})",     // an unknown key
+           std::string(R"({"position":[1,2],)") + good + "}",                   // two numbers
+           std::string(R"({"position":[1,2,"a"],)") + good + "}",              // not a number
+           std::string(R"({"position":[1,2,3],)") + good + "} x",               // text after it
+           std::string(R"({"position":[1,2,3],"position":[1,2,3],)") + good + "}",  // twice
+           std::string(R"({"position":[0,0,0],)") + good + "}",                 // at its target
+           std::string(R"({"position":[0,0,5],)") + good + "}",                 // up along the view
+           std::string(R"({"position":[1,2,3],"target":[0,0,0],"up":[0,0,1],"fov":180,"viewport":[640,480]})"),
+           std::string(R"({"position":[1,2,3],"target":[0,0,0],"up":[0,0,1],"fov":45,"viewport":[640.5,480]})"),
+           std::string(R"({"position":[1,2,3],"target":[0,0,0],"up":[0,0,1],"fov":45,"viewport":[0,480]})"),
+           std::string(""), std::string("[1,2,3]")}) {
+    try {
+      parse_camera(bad, "cam.json");
+      ADD_FAILURE() << "accepted " << bad;
+    } catch (const Error& error) {
+      EXPECT_EQ(std::string(error.what()).find('\n'), std::string::npos) << error.what();
+    }
+  }
+}
+
+// Looking straight down from above the grid's middle (90 degrees): every face in view.
+TEST(View, ANearerCameraRefinesEveryFaceAtLeastAsMuch) {
+  const ViewCase& c = view_case();
+  const ViewLevels far = view_face_levels(c.decoded, c.fine, camera_at({10, 10, 40}, {10, 10, 0}, 90), 1.0);
+  const ViewLevels near = view_face_levels(c.decoded, c.fine, camera_at({10, 10, 15}, {10, 10, 0}, 90), 1.0);
+  EXPECT_EQ(far.culled, 0u);
+  EXPECT_EQ(near.culled, 0u);
+  for (std::size_t f = 0; f < far.levels.size(); ++f) EXPECT_GE(near.levels[f], far.levels[f]) << f;
+  const auto sum = [](const ViewLevels& v) { return std::accumulate(v.levels.begin(), v.levels.end(), 0); };
+  EXPECT_GT(sum(near), sum(far));
+  // Coarser as the pixel error grows: everything at the base for a huge one.
+  const ViewLevels coarse = view_face_levels(c.decoded, c.fine, camera_at({10, 10, 15}, {10, 10, 0}, 90), 1e9);
+  EXPECT_EQ(sum(coarse), 0);
+  const ViewLevels fine = view_face_levels(c.decoded, c.fine, camera_at({10, 10, 15}, {10, 10, 0}, 90), 1e-9);
+  EXPECT_EQ(sum(fine), 3 * static_cast<int>(fine.levels.size()));
+}
+
+// Whether p projects into the image of a look-at pinhole camera.
+bool in_image(const Camera& c, const Vec3& p) {
+  const Vec3 d = normalized(c.target - c.position), r = normalized(cross(d, c.up)), u = cross(r, d);
+  const Vec3 v = p - c.position;
+  const double z = dot(v, d);
+  if (z <= 0) return false;
+  const double f = 0.5 * c.height / std::tan(c.fov_degrees * 3.14159265358979323846 / 360);
+  const double x = f * dot(v, r) / z, y = f * dot(v, u) / z;
+  return std::abs(x) <= 0.5 * c.width && std::abs(y) <= 0.5 * c.height;
+}
+
+TEST(View, FacesOutsideTheFrustumStayBaseFacesAndFacesInViewAreKept) {
+  const ViewCase& c = view_case();
+  const SubdivisionHierarchy& h = *c.decoded.hierarchy;
+  for (const Camera& camera : {camera_at({4, 4, 6}, {4, 4, 0}, 30), camera_at({-5, 10, 2}, {0, 10, 1}, 40)}) {
+    const ViewLevels v = view_face_levels(c.decoded, c.fine, camera, 0.01);
+    EXPECT_GT(v.culled, v.levels.size() / 4);
+    EXPECT_LT(v.culled, v.levels.size());
+    std::size_t culled = 0;
+    for (std::size_t f = 0; f < v.levels.size(); ++f) {
+      bool seen = false;
+      for_each_fine_point(h, f, [&](std::size_t p) { return !(seen = in_image(camera, c.fine[p])); });
+      if (seen) EXPECT_EQ(v.levels[f], 3) << "face " << f << " is in view";
+      culled += !seen && v.levels[f] == 0;
+    }
+    EXPECT_GE(culled, v.culled);
+  }
+  // Looking away: everything culled.
+  const ViewLevels away = view_face_levels(c.decoded, c.fine, camera_at({10, 10, 5}, {10, 10, 50}), 1.0);
+  EXPECT_EQ(away.culled, away.levels.size());
+}
+
+TEST(View, TheMeshIsCrackFree) {
+  const ViewCase& c = view_case();
+  ViewLevels levels;
+  const PolygonMesh mesh = view_mesh(c.decoded, camera_at({3, 3, 4}, {8, 8, 0}), 0.5, &levels);
+  ASSERT_GT(std::count(levels.levels.begin(), levels.levels.end(), 0), 0);
+  ASSERT_GT(std::count(levels.levels.begin(), levels.levels.end(), 3), 0);
+  std::map<std::pair<std::uint32_t, std::uint32_t>, int> directed;
+  for (std::size_t f = 0; f < mesh.face_count(); ++f) {
+    const std::uint32_t* v = mesh.face_begin(f);
+    const std::size_t n = mesh.face_size(f);
+    for (std::size_t k = 0; k < n; ++k) ++directed[{v[k], v[(k + 1) % n]}];
+  }
+  // Every directed edge once; a boundary edge (no reverse) only on the grid's border.
+  std::size_t boundary = 0;
+  for (const auto& [edge, count] : directed) {
+    EXPECT_EQ(count, 1);
+    if (!directed.count({edge.second, edge.first})) {
+      ++boundary;
+      const Vec3 &a = mesh.positions[edge.first], &b = mesh.positions[edge.second];
+      const auto on_border = [](const Vec3& p) { return p.x < 0.5 || p.y < 0.5 || p.x > 19.5 || p.y > 19.5; };
+      EXPECT_TRUE(on_border(a) && on_border(b)) << edge.first << " " << edge.second;
+    }
+  }
+  EXPECT_GT(boundary, 0u);
+}
+
+}  // namespace
+}  // namespace isowave
