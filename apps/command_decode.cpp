@@ -91,8 +91,8 @@ IswDecodeOptions decode_options(const cli::Arguments& args, const std::optional<
 }
 
 // --view and --pixel-error: view_mesh(); prints the faces per level unless quiet.
-PolygonMesh decode_view(const cli::Arguments& args, const IswDecoded& decoded, const std::string& input) {
-  const Camera camera = read_camera(args.get("view"));
+PolygonMesh decode_view(const cli::Arguments& args, const IswDecoded& decoded, const Camera& camera,
+                        const std::string& input) {
   const double pixel_error = args.get_double("pixel-error", 1);
   ViewLevels levels;
   PolygonMesh mesh = view_mesh(decoded, camera, pixel_error, &levels);
@@ -158,7 +158,9 @@ int decode(const Args& raw) {
   if (view && (region || args.has("level") || args.has("percent") || args.has("coefficients") || args.has("limit")))
     throw Error(ErrorKind::InvalidArgument,
                 "--view chooses each face's level: no --roi, --level, --percent, --coefficients or --limit");
-  const IswDecodeOptions options = decode_options(args, region);
+  IswDecodeOptions options = decode_options(args, region);
+  // A view reads only the groups its frustum needs (2.2).
+  if (view) options.frustum = read_camera(args.get("view"));
   const std::string& input = args.positional()[0];
   IswDecoded decoded = read_isw(input, options);
   if (args.has("max-error") && decoded.stream.rate_table.empty())
@@ -168,7 +170,7 @@ int decode(const Args& raw) {
 
   // Synthesis in the decoded array and the mesh around it: no copies of the
   // fine-level arrays.
-  PolygonMesh mesh = view     ? decode_view(args, decoded, input)
+  PolygonMesh mesh = view     ? decode_view(args, decoded, *options.frustum, input)
                      : region ? decode_region(args, decoded, *region, input)
                               : decoded.hierarchy->control_mesh(level, take_reconstruction(decoded, decoded.ranked.size(), level));
   if (args.has("limit")) mesh.positions = limit_surface(mesh).positions;

@@ -51,18 +51,18 @@ TreeGroups stream_groups(const SubdivisionHierarchy& hierarchy, const Coefficien
   return split_tree(tree, root_groups(owners, face_group), access.index->count());
 }
 
-// The groups a region needs: those holding an entry that some fine control
-// point of a base face that may meet the region (its corners' box grown by
-// its group's reach) depends on.
+// The groups a region (or a view frustum) needs: those holding an entry that
+// some fine control point of a base face that may meet it (its corners' box
+// grown by its group's reach) depends on.
 std::vector<std::uint8_t> groups_for_region(const SubdivisionHierarchy& hierarchy, const std::vector<Vec3>& frame_base,
                                             const TreeGroups& split, const GroupIndex& index,
-                                            const std::vector<std::uint32_t>& face_group,
-                                            const RegionOfInterest& region) {
+                                            const std::vector<std::uint32_t>& face_group, const StreamAccess& access) {
   std::vector<std::uint8_t> points(hierarchy.fine_vertex_count(), 0);
   for (std::size_t f = 0; f < face_group.size(); ++f) {
     Vec3 lo, hi;
     face_box(hierarchy.base(), frame_base, f, index.reach[face_group[f]], lo, hi);
-    if (region.meets_box(lo, hi)) for_each_fine_point(hierarchy, f, [&](std::size_t v) { return points[v] = 1; });
+    const bool meets = access.region ? access.region->meets_box(lo, hi) : !access.frustum->box_outside(lo, hi);
+    if (meets) for_each_fine_point(hierarchy, f, [&](std::size_t v) { return points[v] = 1; });
   }
   const std::vector<std::uint8_t> needed = entries_for_points(hierarchy, points);
   std::vector<std::uint8_t> selected(index.count(), 0);
@@ -163,8 +163,8 @@ void decode_plane_stream(const Section& section, const SubdivisionHierarchy& hie
   std::vector<std::uint32_t> face_group;
   const TreeGroups split = stream_groups(hierarchy, tree, planes, by_space ? access : StreamAccess{}, face_group);
   std::vector<std::uint8_t> selected;
-  if (by_space && access.region)
-    selected = groups_for_region(hierarchy, frame_base, split, *access.index, face_group, *access.region);
+  if (by_space && (access.region || access.frustum))
+    selected = groups_for_region(hierarchy, frame_base, split, *access.index, face_group, access);
   const std::vector<std::uint8_t>* only = selected.empty() ? nullptr : &selected;
   std::string fetched;
   bool last_cut = planes.last_cut;

@@ -132,12 +132,14 @@ std::string encode_isw_v2(const SubdivisionHierarchy& hierarchy, const std::vect
                           PlaneValuesState* values = nullptr);
 
 // What the decoder's PLNS reads besides the section: version 2.2's index
-// and frame-base integers, the region whose groups alone to decode, and,
+// and frame-base integers, the region (or view frustum) whose groups alone
+// to decode, and,
 // for a file read in part, where its bytes past those in memory come from.
 struct StreamAccess {
   const GroupIndex* index = nullptr;                      // GIDX (required by 2.2)
   const std::vector<QuantizedVector>* base_q = nullptr;  // BPTS's integers
   const RegionOfInterest* region = nullptr;
+  const Camera* frustum = nullptr;  // as `region`, the faces that may lie in its view
   // File bytes [offset, offset + size) (the file's end may come first), and
   // the file's size; none when the whole file is in memory.
   std::function<std::string(std::uint64_t offset, std::uint64_t size)> fetch;

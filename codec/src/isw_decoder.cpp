@@ -391,8 +391,10 @@ Next decode_section(const Section& section, DecodeState& state) {
     state.group_index = read_group_index(reader, result.base.face_count());
   } else if (section.tag == "PLNS") {
     await_hierarchy(state);
+    const IswDecodeOptions& o = state.options;
     const StreamAccess access{state.group_index ? &*state.group_index : nullptr, &state.base_q,
-                              state.options.region ? &*state.options.region : nullptr, state.fetch, state.file_size};
+                              o.region ? &*o.region : nullptr, o.frustum && !o.region ? &*o.frustum : nullptr,
+                              state.fetch, state.file_size};
     decode_plane_stream(section, *state.hierarchy, *state.layout, state.scales, stream_limit(state), access, result);
     if (state.fetch && section.cut) {
       // Read in part: the file holds the rest of PLNS and an END after it
@@ -648,7 +650,7 @@ std::string read_through_plane_table(FileReader& file) {
 
 IswDecoded read_isw(const std::string& path, const IswDecodeOptions& options) {
   const auto start = Clock::now();
-  if (options.region && options.max_file_bytes == UINT64_MAX) {
+  if ((options.region || options.frustum) && options.max_file_bytes == UINT64_MAX) {
     FileReader file(path);
     const std::string prefix = read_through_plane_table(file);
     const double read_seconds = seconds_since(start);

@@ -234,8 +234,9 @@ py::tuple decode(const fs::path& file, const py::object& percent, const py::obje
     if (!(options.max_error_cells > 0) || !std::isfinite(options.max_error_cells))
       throw Error(ErrorKind::InvalidArgument, "max_error must be a positive number of cells");
   }
-  // A region with nothing kept outside reads only the groups it needs (2.2).
+  // A region with nothing kept outside, or a view, reads only the groups it needs (2.2).
   if (region && !limited) options.region = region;
+  options.frustum = camera;
   const std::size_t outside = coefficients.is_none() ? 0 : coefficients.cast<std::size_t>();
   const int requested_level = level.is_none() ? -1 : level.cast<int>();
   PolygonMesh mesh;

@@ -130,6 +130,44 @@ TEST(View, FacesOutsideTheFrustumStayBaseFacesAndFacesInViewAreKept) {
   EXPECT_EQ(away.culled, away.levels.size());
 }
 
+// A view decode of a 2.2 file reads the groups its frustum needs: every face
+// with a point in the image gets the level and the points of the whole
+// file's decode, from fewer bytes.
+TEST(View, AViewReadsTheGroupsItsFrustumNeedsAndMatchesTheWholeFileInView) {
+  const ViewCase& c = view_case();
+  IswEncodeOptions encode;
+  encode.step = 1e-4;
+  encode.group_nodes = 2048;
+  const std::string path = ::testing::TempDir() + "view.isw";
+  write_isw(path, encode_isw(*c.surface.hierarchy, c.surface.coefficients, test::sample_metadata(), encode), true);
+  const Camera camera = camera_at({5, 5, 5}, {5, 5, 0}, 40);
+  IswDecodeOptions options;
+  options.frustum = camera;
+  const IswDecoded whole = read_isw(path), part = read_isw(path, options);
+  EXPECT_LT(part.stream.groups_decoded, part.stream.groups / 2);
+  EXPECT_LT(part.file_bytes_read, whole.file_bytes_read * 2 / 3);
+  const auto fine_of = [](const IswDecoded& d) {
+    std::vector<Vec3> fine = d.coefficients;
+    synthesize(*d.hierarchy, fine);
+    return fine;
+  };
+  const std::vector<Vec3> whole_fine = fine_of(whole), part_fine = fine_of(part);
+  const ViewLevels a = view_face_levels(whole, whole_fine, camera, 0.5), b = view_face_levels(part, part_fine, camera, 0.5);
+  std::size_t in_view = 0;
+  for (std::size_t f = 0; f < a.levels.size(); ++f) {
+    bool seen = false;
+    for_each_fine_point(*whole.hierarchy, f, [&](std::size_t p) { return !(seen = in_image(camera, whole_fine[p])); });
+    if (!seen) continue;
+    ++in_view;
+    EXPECT_EQ(b.levels[f], a.levels[f]) << f;
+    for_each_fine_point(*whole.hierarchy, f, [&](std::size_t p) {
+      EXPECT_LT(norm(part_fine[p] - whole_fine[p]), 1e-9) << p;
+      return true;
+    });
+  }
+  EXPECT_GT(in_view, 10u);
+}
+
 TEST(View, TheMeshIsCrackFree) {
   const ViewCase& c = view_case();
   ViewLevels levels;

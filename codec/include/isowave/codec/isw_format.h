@@ -36,6 +36,7 @@
 #include <string>
 #include <vector>
 
+#include "isowave/codec/camera.h"
 #include "isowave/codec/region_of_interest.h"
 #include "isowave/core/mesh.h"
 #include "isowave/transform/hierarchy.h"
@@ -337,6 +338,9 @@ struct IswDecodeOptions {
   // control points at the frame precision (BPTS). read_isw() then reads only
   // those groups' packets. Earlier versions decode every group.
   std::optional<RegionOfInterest> region;
+  // Version 2.2, as `region` for the faces that may lie in this camera's
+  // view frustum (a view decode); ignored with `region`.
+  std::optional<Camera> frustum;
   // A hierarchy the caller already has (convert checking its own output):
   // used when its base topology, sharp flags and level count equal the
   // file's, which saves building one (the hierarchy is the decode's largest
