@@ -35,10 +35,6 @@ void to_world(const PlaneDecoder& decoder, const CoefficientClasses& layout, con
             result.base.positions.begin());
 }
 
-}  // namespace
-
-namespace {
-
 // The tree's groups: runs of roots in index order (2.0, 2.1) or GIDX's runs
 // of base faces in Morton order (2.2); `face_group` receives each base
 // face's group in the latter case.

@@ -585,12 +585,14 @@ class FileReader {
   std::uint64_t size_ = 0, read_ = 0;
 };
 
-// The LEB128 value at `at` in `bytes`, if complete (then `at` moves past it).
+// The LEB128 value at `at` in `bytes`, if complete (then `at` moves past
+// it). A value of more than ten bytes is complete as far as this reader
+// goes (the decoder proper rejects it): every scan reads ten bytes at most.
 bool next_varint(const std::string& bytes, std::size_t& at, std::uint64_t& value) {
   value = 0;
   for (std::size_t k = at, shift = 0; k < bytes.size(); ++k, shift += 7) {
     if (shift < 64) value |= std::uint64_t{static_cast<unsigned char>(bytes[k]) & 0x7Fu} << shift;
-    if (!(static_cast<unsigned char>(bytes[k]) & 0x80)) {
+    if (!(static_cast<unsigned char>(bytes[k]) & 0x80) || k - at == 9) {
       at = k + 1;
       return true;
     }
@@ -619,7 +621,7 @@ bool read_plane_table(FileReader& file, std::string& prefix, std::size_t at, std
     }
     // The value at `at` continues past the prefix; the others take a byte each.
     const std::uint64_t left = values - read;
-    if (!reach(std::max<std::uint64_t>(prefix.size() + 1, at + left))) return false;
+    if (left > end || !reach(std::max<std::uint64_t>(prefix.size() + 1, at + left))) return false;
   }
   return true;
 }

@@ -35,7 +35,7 @@ namespace isowave::detail {
 // The encoder's target of tree nodes per group (a run ends once it holds
 // this many): small enough that a region reads little beyond itself, large
 // enough that each group's contexts learn (docs/MEASUREMENTS.md).
-constexpr std::size_t kSpatialGroupNodes = std::size_t{1} << 14;
+constexpr std::size_t kSpatialGroupNodes = std::size_t{1} << 15;
 // No bound on the groups of a file this library wrote (rewrite_isw()).
 constexpr std::uint64_t kMaxStreamGroups = std::uint64_t{1} << 32;
 

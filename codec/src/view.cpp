@@ -4,12 +4,14 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <memory>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include "isowave/core/error.h"
 #include "isowave/transform/adaptive_mesh.h"
+#include "isowave/transform/hierarchy.h"
 #include "isowave/transform/wavelet_transform.h"
 
 namespace isowave {
@@ -53,22 +55,24 @@ double distance_to_box(const Vec3& p, const Vec3& lo, const Vec3& hi) {
   return norm(p - nearest);
 }
 
-}  // namespace
 
-ViewLevels view_face_levels(const IswDecoded& decoded, const std::vector<Vec3>& fine, const Camera& camera,
-                            double pixel_error) {
-  if (!decoded.hierarchy) throw Error(ErrorKind::InvalidArgument, "a view decode needs a decoded file");
-  if (!(pixel_error > 0) || !std::isfinite(pixel_error))
-    throw Error(ErrorKind::InvalidArgument, "the pixel error must be a positive number");
-  check_camera(camera);
+// Per base face: the box of its fine points and, per level l, the detail a
+// face at level l leaves out (the sum over finer levels of face_details()).
+struct FaceViewData {
+  int levels = 0;
+  std::vector<Vec3> lo, hi;
+  std::vector<double> omitted;  // f (L + 1) + l
+};
+
+FaceViewData face_view_data(const IswDecoded& decoded, const std::vector<Vec3>& fine) {
   const SubdivisionHierarchy& h = *decoded.hierarchy;
-  const int levels = h.levels();
-  const std::size_t stride = static_cast<std::size_t>(levels) + 1;
-  const std::vector<double> detail = face_details(decoded);
-  ViewLevels out;
-  out.levels.assign(h.base().face_count(), 0);
-  std::vector<std::uint8_t> culled(out.levels.size(), 0);
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, out.levels.size(), 1024), [&](const tbb::blocked_range<std::size_t>& r) {
+  FaceViewData data;
+  data.levels = h.levels();
+  const std::size_t faces = h.base().face_count(), stride = static_cast<std::size_t>(data.levels) + 1;
+  data.omitted = face_details(decoded);
+  data.lo.resize(faces);
+  data.hi.resize(faces);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, faces, 1024), [&](const tbb::blocked_range<std::size_t>& r) {
     for (std::size_t f = r.begin(); f < r.end(); ++f) {
       constexpr double inf = std::numeric_limits<double>::infinity();
       Vec3 lo{inf, inf, inf}, hi{-inf, -inf, -inf};
@@ -79,35 +83,133 @@ ViewLevels view_face_levels(const IswDecoded& decoded, const std::vector<Vec3>& 
         }
         return true;
       });
-      if (camera.box_outside(lo, hi)) {
-        culled[f] = 1;
-        continue;
+      data.lo[f] = lo;
+      data.hi[f] = hi;
+      // Detail per level into what each level leaves out: omitted[l] = sum over m > l.
+      double* row = data.omitted.data() + f * stride;
+      double sum = 0;
+      for (int l = data.levels; l >= 0; --l) {
+        const double here = row[l];
+        row[l] = sum;
+        sum += here;
       }
-      const double distance = distance_to_box(camera.position, lo, hi);
-      const double scale = distance > 0 ? camera.pixels_per_unit(distance) : inf;
-      // The coarsest level whose omitted detail stays within the pixel error.
-      double omitted = 0;
-      int level = levels;
-      for (int l = levels; l >= 1; --l) {
-        omitted += detail[f * stride + static_cast<std::size_t>(l)];
-        if (!(omitted * scale <= pixel_error)) break;
-        level = l - 1;
-      }
-      out.levels[f] = level;
+    }
+  });
+  return data;
+}
+
+// Face f's level for the camera (-1: outside the frustum, level 0).
+int face_level(const FaceViewData& data, std::size_t f, const Camera& camera, double pixel_error) {
+  if (camera.box_outside(data.lo[f], data.hi[f])) return -1;
+  const double distance = distance_to_box(camera.position, data.lo[f], data.hi[f]);
+  const double scale = distance > 0 ? camera.pixels_per_unit(distance) : std::numeric_limits<double>::infinity();
+  // The coarsest level whose omitted detail stays within the pixel error.
+  const double* omitted = data.omitted.data() + f * (static_cast<std::size_t>(data.levels) + 1);
+  int level = 0;
+  while (level < data.levels && !(omitted[level] * scale <= pixel_error)) ++level;
+  return level;
+}
+
+void check_view(const IswDecoded& decoded, const Camera& camera, double pixel_error) {
+  if (!decoded.hierarchy) throw Error(ErrorKind::InvalidArgument, "a view decode needs a decoded file");
+  if (!(pixel_error > 0) || !std::isfinite(pixel_error))
+    throw Error(ErrorKind::InvalidArgument, "the pixel error must be a positive number");
+  check_camera(camera);
+}
+
+// Every base face's level into `out` (culled faces at 0, counted).
+void levels_for(const FaceViewData& data, const Camera& camera, double pixel_error, ViewLevels& out) {
+  out.levels.assign(data.lo.size(), 0);
+  std::vector<std::uint8_t> culled(out.levels.size(), 0);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, out.levels.size(), 4096), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t f = r.begin(); f < r.end(); ++f) {
+      const int level = face_level(data, f, camera, pixel_error);
+      culled[f] = level < 0;
+      out.levels[f] = std::max(level, 0);
     }
   });
   out.culled = static_cast<std::size_t>(std::count(culled.begin(), culled.end(), 1));
+}
+
+}  // namespace
+
+ViewLevels view_face_levels(const IswDecoded& decoded, const std::vector<Vec3>& fine, const Camera& camera,
+                            double pixel_error) {
+  check_view(decoded, camera, pixel_error);
+  if (fine.size() < decoded.hierarchy->fine_vertex_count())
+    throw Error(ErrorKind::InvalidArgument, "a view decode needs the fine control points");
+  ViewLevels out;
+  levels_for(face_view_data(decoded, fine), camera, pixel_error, out);
   return out;
 }
 
-PolygonMesh view_mesh(const IswDecoded& decoded, const Camera& camera, double pixel_error, ViewLevels* report) {
+struct ViewRefiner::Data {
+  std::shared_ptr<const SubdivisionHierarchy> hierarchy;
+  std::vector<Vec3> points;
+  FaceViewData faces;
+  ViewLevels current;
+};
+
+ViewRefiner::ViewRefiner(const IswDecoded& decoded) : data_(std::make_unique<Data>()) {
   if (!decoded.hierarchy) throw Error(ErrorKind::InvalidArgument, "a view decode needs a decoded file");
-  std::vector<Vec3> fine = decoded.coefficients;
-  synthesize(*decoded.hierarchy, fine);
-  fine.resize(decoded.hierarchy->fine_vertex_count());
-  ViewLevels levels = view_face_levels(decoded, fine, camera, pixel_error);
-  PolygonMesh mesh = adaptive_control_mesh(*decoded.hierarchy, levels.levels, fine);
-  if (report) *report = std::move(levels);
+  data_->hierarchy = decoded.hierarchy;
+  data_->points = decoded.coefficients;
+  synthesize(*decoded.hierarchy, data_->points);
+  data_->points.resize(decoded.hierarchy->fine_vertex_count());
+  data_->faces = face_view_data(decoded, data_->points);
+  data_->current.levels.assign(decoded.hierarchy->base().face_count(), 0);
+}
+
+ViewRefiner::~ViewRefiner() = default;
+ViewRefiner::ViewRefiner(ViewRefiner&&) noexcept = default;
+ViewRefiner& ViewRefiner::operator=(ViewRefiner&&) noexcept = default;
+
+std::vector<std::uint32_t> ViewRefiner::set_view(const Camera& camera, double pixel_error) {
+  if (!(pixel_error > 0) || !std::isfinite(pixel_error))
+    throw Error(ErrorKind::InvalidArgument, "the pixel error must be a positive number");
+  check_camera(camera);
+  ViewLevels next;
+  levels_for(data_->faces, camera, pixel_error, next);
+  // The faces whose level changed, and their neighbours across base edges
+  // (their transitions change).
+  const SubdivisionHierarchy& h = *data_->hierarchy;
+  std::vector<std::uint8_t> dirty(next.levels.size(), 0);
+  for (std::size_t f = 0; f < next.levels.size(); ++f) {
+    if (next.levels[f] == data_->current.levels[f]) continue;
+    dirty[f] = 1;
+    if (h.levels() == 0) continue;
+    const RefinementStep& s = h.step(1);
+    for (std::uint32_t k = s.face_offsets[f]; k < s.face_offsets[f + 1]; ++k) {
+      const std::uint32_t edge = s.face_edges[k] - s.first_edge_vertex();
+      for (int side = 0; side < 2; ++side) dirty[s.edge_faces[2 * std::size_t{edge} + side] - s.first_face_vertex()] = 1;
+    }
+  }
+  data_->current = std::move(next);
+  std::vector<std::uint32_t> changed;
+  for (std::size_t f = 0; f < dirty.size(); ++f)
+    if (dirty[f]) changed.push_back(static_cast<std::uint32_t>(f));
+  return changed;
+}
+
+const ViewLevels& ViewRefiner::levels() const { return data_->current; }
+
+const std::vector<Vec3>& ViewRefiner::points() const { return data_->points; }
+
+void ViewRefiner::patch(std::size_t base_face, std::vector<std::uint32_t>& offsets,
+                        std::vector<std::uint32_t>& corners) const {
+  adaptive_patch(*data_->hierarchy, data_->current.levels, base_face, offsets, corners);
+}
+
+PolygonMesh ViewRefiner::mesh() const {
+  return adaptive_control_mesh(*data_->hierarchy, data_->current.levels, data_->points);
+}
+
+PolygonMesh view_mesh(const IswDecoded& decoded, const Camera& camera, double pixel_error, ViewLevels* report) {
+  check_view(decoded, camera, pixel_error);
+  ViewRefiner refiner(decoded);
+  refiner.set_view(camera, pixel_error);
+  PolygonMesh mesh = refiner.mesh();
+  if (report) *report = refiner.levels();
   return mesh;
 }
 

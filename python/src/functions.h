@@ -27,5 +27,7 @@ py::tuple decode(const std::filesystem::path& path, const py::object& percent, c
                  bool triangulate, const py::object& roi, const py::object& roi_sphere, double roi_falloff,
                  const py::object& view, double pixel_error);
 py::list stats(const std::filesystem::path& path, const std::vector<double>& percents);
+// isowave.ViewRefiner (view_refiner.cpp).
+void define_view_refiner(py::module_& m);
 
 }  // namespace isowave::python

@@ -170,36 +170,6 @@ std::optional<RegionOfInterest> region_argument(const py::object& roi, const py:
   return region;
 }
 
-// view: a dict with the camera's keys, or a JSON file's path; nothing for None.
-std::optional<Camera> camera_argument(const py::object& view) {
-  if (view.is_none()) return std::nullopt;
-  if (!py::isinstance<py::dict>(view)) return read_camera(py::str(view).cast<std::string>());
-  const py::dict d = view.cast<py::dict>();
-  for (const auto& item : d) {
-    const std::string key = py::str(item.first);
-    if (key != "position" && key != "target" && key != "up" && key != "fov" && key != "viewport")
-      throw Error(ErrorKind::InvalidArgument, "view: unknown key '" + key + "'");
-  }
-  const auto vec = [&](const char* key) {
-    if (!d.contains(key)) throw Error(ErrorKind::InvalidArgument, std::string("view: no '") + key + "'");
-    const std::vector<double> v = d[key].cast<std::vector<double>>();
-    if (v.size() != 3) throw Error(ErrorKind::InvalidArgument, std::string("view: '") + key + "' needs 3 numbers");
-    return Vec3{v[0], v[1], v[2]};
-  };
-  Camera camera;
-  camera.position = vec("position");
-  camera.target = vec("target");
-  camera.up = vec("up");
-  if (!d.contains("fov") || !d.contains("viewport")) throw Error(ErrorKind::InvalidArgument, "view: needs 'fov' and 'viewport'");
-  camera.fov_degrees = d["fov"].cast<double>();
-  const std::vector<int> viewport = d["viewport"].cast<std::vector<int>>();
-  if (viewport.size() != 2) throw Error(ErrorKind::InvalidArgument, "view: 'viewport' needs 2 numbers");
-  camera.width = viewport[0];
-  camera.height = viewport[1];
-  check_camera(camera);
-  return camera;
-}
-
 }  // namespace
 
 py::tuple decode(const fs::path& file, const py::object& percent, const py::object& coefficients,

@@ -112,6 +112,7 @@ PYBIND11_MODULE(isowave, m) {
         py::arg("roi") = py::none(), py::arg("roi_sphere") = py::none(), py::arg("roi_falloff") = 0.0,
         py::arg("view") = py::none(),
         py::arg("pixel_error") = 1.0, kDecodeDoc);
+  define_view_refiner(m);
   m.def("stats", &stats, py::arg("path"), py::arg("percents") = std::vector<double>{100, 20, 10, 5}, kStatsDoc);
   m.def("keep_freed_memory_for_reuse", &isowave::keep_freed_memory_for_reuse, kKeepMemoryDoc);
   m.def("release_freed_memory", &isowave::release_freed_memory, kReleaseMemoryDoc);

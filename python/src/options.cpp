@@ -3,6 +3,7 @@
 #include <string>
 
 #include "arrays.h"
+#include "isowave/codec/camera.h"
 #include "isowave/core/error.h"
 
 namespace isowave::python {
@@ -98,6 +99,35 @@ void reject_unknown_keywords(const py::dict& kwargs, const char* function) {
   for (const auto& item : kwargs)
     throw py::type_error(std::string(function) + "() got an unexpected keyword argument '" +
                          py::str(item.first).cast<std::string>() + "'");
+}
+
+std::optional<Camera> camera_argument(const py::object& view) {
+  if (view.is_none()) return std::nullopt;
+  if (!py::isinstance<py::dict>(view)) return read_camera(py::str(view).cast<std::string>());
+  const py::dict d = view.cast<py::dict>();
+  for (const auto& item : d) {
+    const std::string key = py::str(item.first);
+    if (key != "position" && key != "target" && key != "up" && key != "fov" && key != "viewport")
+      throw Error(ErrorKind::InvalidArgument, "view: unknown key '" + key + "'");
+  }
+  const auto vec = [&](const char* key) {
+    if (!d.contains(key)) throw Error(ErrorKind::InvalidArgument, std::string("view: no '") + key + "'");
+    const std::vector<double> v = d[key].cast<std::vector<double>>();
+    if (v.size() != 3) throw Error(ErrorKind::InvalidArgument, std::string("view: '") + key + "' needs 3 numbers");
+    return Vec3{v[0], v[1], v[2]};
+  };
+  Camera camera;
+  camera.position = vec("position");
+  camera.target = vec("target");
+  camera.up = vec("up");
+  if (!d.contains("fov") || !d.contains("viewport")) throw Error(ErrorKind::InvalidArgument, "view: needs 'fov' and 'viewport'");
+  camera.fov_degrees = d["fov"].cast<double>();
+  const std::vector<int> viewport = d["viewport"].cast<std::vector<int>>();
+  if (viewport.size() != 2) throw Error(ErrorKind::InvalidArgument, "view: 'viewport' needs 2 numbers");
+  camera.width = viewport[0];
+  camera.height = viewport[1];
+  check_camera(camera);
+  return camera;
 }
 
 }  // namespace isowave::python

@@ -7,6 +7,9 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <optional>
+
+#include "isowave/codec/camera.h"
 #include "isowave/extract/volume_io.h"
 #include "isowave/pipeline/convert.h"
 
@@ -23,6 +26,10 @@ VolumeReadOptions take_read_options(py::dict& kwargs);
 // base_ratio, step, smooth, min_component_vertices, flip, size, bits_per_vertex,
 // allow_folded.
 ConvertOptions take_convert_options(py::dict& kwargs);
+
+// view=: a camera as a dict (position, target, up, fov, viewport) or a JSON
+// file's path; nothing for None. isowave::Error for a camera that is not one.
+std::optional<Camera> camera_argument(const py::object& view);
 
 // Raises TypeError, as Python does, when `kwargs` still holds a keyword
 // (unknown to `function`).

@@ -148,13 +148,19 @@ def test_decode_of_a_region_gives_the_cli_mesh_and_the_full_decode_inside(cli, s
         isowave.decode(cli_path, roi=(1, 2, 3))
 
 
-def test_decode_of_a_view_gives_the_cli_mesh_from_a_dict_or_a_file(cli, sphere_isw, tmp_path):
-    cli_path, _ = sphere_isw
-    full, _ = isowave.decode(cli_path)
+def camera_below(path, distance, fov):
+    """A camera `distance` surface heights below the surface of `path`, looking up at its centre; the surface."""
+    full, _ = isowave.decode(path)
     low, high = full.min(axis=0), full.max(axis=0)
     centre = 0.5 * (low + high)
-    camera = {"position": [float(centre[0]), float(centre[1]), float(low[2] - 2 * (high[2] - low[2]))],
-              "target": [float(v) for v in centre], "up": [0, 1, 0], "fov": 20, "viewport": [640, 480]}
+    camera = {"position": [float(centre[0]), float(centre[1]), float(low[2] - distance * (high[2] - low[2]))],
+              "target": [float(v) for v in centre], "up": [0, 1, 0], "fov": fov, "viewport": [640, 480]}
+    return camera, full
+
+
+def test_decode_of_a_view_gives_the_cli_mesh_from_a_dict_or_a_file(cli, sphere_isw, tmp_path):
+    cli_path, _ = sphere_isw
+    camera, full = camera_below(cli_path, 2, 20)
     path = tmp_path / "camera.json"
     path.write_text(json.dumps(camera))
     obj = tmp_path / "view.obj"
@@ -169,3 +175,36 @@ def test_decode_of_a_view_gives_the_cli_mesh_from_a_dict_or_a_file(cli, sphere_i
         isowave.decode(cli_path, view=dict(camera, zoom=2))
     with pytest.raises(isowave.Error, match="view chooses"):
         isowave.decode(cli_path, view=camera, percent=5)
+
+
+def test_view_refiner_patches_make_the_view_mesh_and_a_move_names_what_changed(sphere_isw):
+    cli_path, _ = sphere_isw
+    camera, full = camera_below(cli_path, 1.5, 30)
+    low, high = full.min(axis=0), full.max(axis=0)
+    refiner = isowave.ViewRefiner(cli_path)
+    assert not refiner.levels.any()
+    changed = refiner.set_view(camera, pixel_error=0.5)
+    assert len(changed) > 0 and refiner.levels.max() > 0
+    vertices, faces = refiner.mesh(triangulate=True)
+    expected_vertices, expected_faces = isowave.decode(cli_path, view=camera, pixel_error=0.5, triangulate=True)
+    np.testing.assert_array_equal(vertices, expected_vertices)
+    np.testing.assert_array_equal(faces, expected_faces)
+    everything = np.arange(len(refiner.levels), dtype=np.uint32)
+
+    def by_face():
+        owners, ends, corners = refiner.patches(everything)
+        starts = np.concatenate([[0], ends[:-1]])
+        patches = {}
+        for owner, start, end in zip(owners, starts, ends):
+            patches.setdefault(int(owner), []).append(tuple(corners[start:end]))
+        return patches
+
+    before = by_face()
+    moved = dict(camera, position=[camera["position"][0] + 0.3 * float(high[0] - low[0]), *camera["position"][1:]])
+    changed = set(refiner.set_view(moved, pixel_error=0.5).tolist())
+    after = by_face()
+    differ = {f for f in after if after[f] != before.get(f)}
+    assert differ and differ <= changed
+    assert len(refiner.set_view(moved, pixel_error=0.5)) == 0
+    points = refiner.points
+    assert points.shape[1] == 3 and not points.flags.writeable

@@ -205,6 +205,20 @@ TEST(RandomAccess, DamagedTruncatedOrInconsistentIndexesFailCleanly) {
   table[0] = static_cast<char>(table[0] - 1);
   const std::string retabled = test::with_section_payload(s.bytes, "PLNS", table);
   EXPECT_THROW(read_region(write_temp("retabled.isw", retabled), corner_box()), Error);
+  // Tables a reader in part must not loop on: a size that never ends, and
+  // more sizes than bytes (the same errors as a whole read).
+  const std::string plane_header = table.substr(0, 2) + std::string(1, static_cast<char>(groups)) + "\x04";
+  for (const std::string& bad : {plane_header + "\x10" + std::string(100000, '\x80'),
+                                 plane_header + "\xff\xff\x03" + std::string(50, '\x01')}) {
+    const std::string file = test::with_section_payload(s.bytes, "PLNS", bad);
+    EXPECT_THROW(decode_isw(file, "bad_table.isw"), Error);
+    try {
+      read_region(write_temp("bad_table.isw", file), corner_box());
+      ADD_FAILURE() << "decoded";
+    } catch (const Error& error) {
+      EXPECT_EQ(error.kind(), ErrorKind::Format) << error.what();
+    }
+  }
 }
 
 // A file cut inside its plane stream, or rewritten to a prefix of it, reads

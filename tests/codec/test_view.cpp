@@ -168,6 +168,63 @@ TEST(View, AViewReadsTheGroupsItsFrustumNeedsAndMatchesTheWholeFileInView) {
   EXPECT_GT(in_view, 10u);
 }
 
+// The interactive refiner: its patches make up the mesh, and after a camera
+// move the faces it does not name keep their patches.
+TEST(View, TheRefinerNamesEveryPatchAMoveChanges) {
+  const ViewCase& c = view_case();
+  ViewRefiner refiner(c.decoded);
+  const auto patches = [&] {
+    std::vector<std::vector<std::uint32_t>> out(refiner.levels().levels.size());
+    for (std::size_t f = 0; f < out.size(); ++f) {
+      std::vector<std::uint32_t> offsets;
+      refiner.patch(f, offsets, out[f]);
+      out[f].insert(out[f].end(), offsets.begin(), offsets.end());  // the corners, then the ends
+    }
+    return out;
+  };
+  const Camera first = camera_at({3, 3, 4}, {8, 8, 0}), second = camera_at({4, 3, 4}, {9, 9, 0});
+  const std::vector<std::uint32_t> initial = refiner.set_view(first, 0.5);
+  EXPECT_FALSE(initial.empty());
+  // The patches, renumbered to the vertices they use, are mesh().
+  const PolygonMesh mesh = refiner.mesh();
+  PolygonMesh joined;
+  joined.face_offsets = {0};
+  for (std::size_t f = 0; f < refiner.levels().levels.size(); ++f) {
+    std::vector<std::uint32_t> offsets, corners;
+    refiner.patch(f, offsets, corners);
+    std::uint32_t begin = 0;
+    for (const std::uint32_t end : offsets) {
+      joined.add_face(corners.data() + begin, end - begin);
+      begin = end;
+    }
+  }
+  std::vector<std::uint32_t> used(refiner.points().size(), UINT32_MAX);
+  for (const std::uint32_t v : joined.face_vertices) used[v] = 0;
+  for (std::uint32_t v = 0, next = 0; v < used.size(); ++v)
+    if (used[v] == 0) {
+      used[v] = next++;
+      joined.positions.push_back(refiner.points()[v]);
+    }
+  for (std::uint32_t& v : joined.face_vertices) v = used[v];
+  EXPECT_EQ(joined.face_offsets, mesh.face_offsets);
+  EXPECT_EQ(joined.face_vertices, mesh.face_vertices);
+  EXPECT_EQ(joined.positions, mesh.positions);
+  // A move: the levels of view_face_levels(), and only the named patches differ.
+  const auto before = patches();
+  const std::vector<std::uint32_t> changed = refiner.set_view(second, 0.5);
+  EXPECT_EQ(refiner.levels().levels, view_face_levels(c.decoded, c.fine, second, 0.5).levels);
+  const auto after = patches();
+  std::size_t differ = 0;
+  for (std::size_t f = 0; f < after.size(); ++f) {
+    const bool named = std::binary_search(changed.begin(), changed.end(), static_cast<std::uint32_t>(f));
+    differ += after[f] != before[f];
+    if (!named) EXPECT_EQ(after[f], before[f]) << "face " << f << " changed unnamed";
+  }
+  EXPECT_GT(differ, 0u);
+  EXPECT_LT(changed.size(), after.size());
+  EXPECT_TRUE(refiner.set_view(second, 0.5).empty());
+}
+
 TEST(View, TheMeshIsCrackFree) {
   const ViewCase& c = view_case();
   ViewLevels levels;

@@ -63,53 +63,37 @@ void for_each_patch_face(const SubdivisionHierarchy& h, std::size_t f, int level
   }
 }
 
-// Per coarse-side edge along a base edge between two levels: the finer side's
-// vertices strictly between its ends, ordered from the smaller index to the larger.
-std::unordered_map<std::uint64_t, Chain> transitions(const SubdivisionHierarchy& h, const std::vector<int>& levels) {
-  std::unordered_map<std::uint64_t, Chain> inserted;
-  if (h.levels() == 0) return inserted;
+using Insertions = std::unordered_map<std::uint64_t, Chain>;
+
+// Base edge `edge` (a step-1 parent edge) between faces at two levels: per
+// coarse-side edge along it, the finer side's vertices strictly between its
+// ends, ordered from the smaller index to the larger, into `inserted`.
+void add_transition(const SubdivisionHierarchy& h, const std::vector<int>& levels, std::uint32_t edge,
+                    Insertions& inserted) {
   const RefinementStep& s = h.step(1);
-  for (std::uint32_t edge = 0; edge < s.parent_edge_count; ++edge) {
-    const std::uint32_t f = s.edge_faces[2 * std::size_t{edge}] - s.first_face_vertex();
-    const std::uint32_t g = s.edge_faces[2 * std::size_t{edge} + 1] - s.first_face_vertex();
-    const int coarse = std::min(levels[f], levels[g]), fine = std::max(levels[f], levels[g]);
-    if (f == g || coarse == fine) continue;
-    const std::uint32_t a = s.edge_vertices[2 * std::size_t{edge}], b = s.edge_vertices[2 * std::size_t{edge} + 1];
-    Chain coarse_chain, fine_chain;
-    edge_chain(h, 0, coarse, a, b, coarse_chain);
-    edge_chain(h, 0, fine, a, b, fine_chain);
-    // The coarse chain's vertices recur in the fine chain every 2^(fine - coarse) steps.
-    const std::size_t stride = std::size_t{1} << (fine - coarse);
-    for (std::size_t k = 0; k + 1 < coarse_chain.size(); ++k) {
-      Chain between(fine_chain.begin() + std::ptrdiff_t(k * stride + 1), fine_chain.begin() + std::ptrdiff_t((k + 1) * stride));
-      if (coarse_chain[k] > coarse_chain[k + 1]) std::reverse(between.begin(), between.end());
-      inserted.emplace(edge_key(coarse_chain[k], coarse_chain[k + 1]), std::move(between));
-    }
+  const std::uint32_t f = s.edge_faces[2 * std::size_t{edge}] - s.first_face_vertex();
+  const std::uint32_t g = s.edge_faces[2 * std::size_t{edge} + 1] - s.first_face_vertex();
+  const int coarse = std::min(levels[f], levels[g]), fine = std::max(levels[f], levels[g]);
+  if (f == g || coarse == fine) return;
+  const std::uint32_t a = s.edge_vertices[2 * std::size_t{edge}], b = s.edge_vertices[2 * std::size_t{edge} + 1];
+  Chain coarse_chain, fine_chain;
+  edge_chain(h, 0, coarse, a, b, coarse_chain);
+  edge_chain(h, 0, fine, a, b, fine_chain);
+  // The coarse chain's vertices recur in the fine chain every 2^(fine - coarse) steps.
+  const std::size_t stride = std::size_t{1} << (fine - coarse);
+  for (std::size_t k = 0; k + 1 < coarse_chain.size(); ++k) {
+    Chain between(fine_chain.begin() + std::ptrdiff_t(k * stride + 1), fine_chain.begin() + std::ptrdiff_t((k + 1) * stride));
+    if (coarse_chain[k] > coarse_chain[k + 1]) std::reverse(between.begin(), between.end());
+    inserted.emplace(edge_key(coarse_chain[k], coarse_chain[k + 1]), std::move(between));
   }
-  return inserted;
 }
 
-}  // namespace
-
-PolygonMesh adaptive_control_mesh(const SubdivisionHierarchy& hierarchy, const std::vector<int>& levels,
-                                  const std::vector<Vec3>& fine) {
-  const std::size_t base_faces = hierarchy.base().face_count();
-  if (levels.size() != base_faces)
-    throw Error(ErrorKind::InvalidArgument, "adaptive mesh: " + std::to_string(levels.size()) + " levels for " +
-                                                std::to_string(base_faces) + " base faces");
-  for (const int l : levels)
-    if (l < 0 || l > hierarchy.levels())
-      throw Error(ErrorKind::InvalidArgument, "adaptive mesh: a level outside 0.." + std::to_string(hierarchy.levels()));
-  if (fine.size() < hierarchy.fine_vertex_count())
-    throw Error(ErrorKind::InvalidArgument, "adaptive mesh: fewer points than the fine level");
-  // Each base face's faces at its level; a coarse face's edge along a finer
-  // neighbour gets that neighbour's vertices on it.
-  const std::unordered_map<std::uint64_t, Chain> inserted = transitions(hierarchy, levels);
-  PolygonMesh out;
-  out.face_offsets = {0};
-  Chain corners;
-  const auto emit = [&](const std::uint32_t* c, std::uint32_t n) {
-    corners.clear();
+// Base face f's faces at its level, a coarse face's edge along a finer
+// neighbour taking that neighbour's vertices on it (`inserted`), appended
+// to `offsets` (each polygon's end) and `corners` (fine vertex indices).
+void emit_patch(const SubdivisionHierarchy& h, std::size_t f, int level, const Insertions& inserted,
+                std::vector<std::uint32_t>& offsets, std::vector<std::uint32_t>& corners) {
+  for_each_patch_face(h, f, level, [&](const std::uint32_t* c, std::uint32_t n) {
     for (std::uint32_t k = 0; k < n; ++k) {
       const std::uint32_t u = c[k], w = c[(k + 1) % n];
       corners.push_back(u);
@@ -118,9 +102,60 @@ PolygonMesh adaptive_control_mesh(const SubdivisionHierarchy& hierarchy, const s
       if (u < w) corners.insert(corners.end(), it->second.begin(), it->second.end());
       else corners.insert(corners.end(), it->second.rbegin(), it->second.rend());
     }
-    out.add_face(corners.data(), corners.size());
-  };
-  for (std::size_t f = 0; f < base_faces; ++f) for_each_patch_face(hierarchy, f, levels[f], emit);
+    offsets.push_back(static_cast<std::uint32_t>(corners.size()));
+  });
+}
+
+void check_levels(const SubdivisionHierarchy& hierarchy, const std::vector<int>& levels) {
+  const std::size_t base_faces = hierarchy.base().face_count();
+  if (levels.size() != base_faces)
+    throw Error(ErrorKind::InvalidArgument, "adaptive mesh: " + std::to_string(levels.size()) + " levels for " +
+                                                std::to_string(base_faces) + " base faces");
+  for (const int l : levels)
+    if (l < 0 || l > hierarchy.levels())
+      throw Error(ErrorKind::InvalidArgument, "adaptive mesh: a level outside 0.." + std::to_string(hierarchy.levels()));
+}
+
+}  // namespace
+
+void adaptive_patch(const SubdivisionHierarchy& hierarchy, const std::vector<int>& levels, std::size_t base_face,
+                    std::vector<std::uint32_t>& offsets, std::vector<std::uint32_t>& corners) {
+  // The face's and its neighbours' levels only: O(1) per call.
+  const auto in_range = [&](std::size_t f) { return f < levels.size() && levels[f] >= 0 && levels[f] <= hierarchy.levels(); };
+  if (levels.size() != hierarchy.base().face_count() || !in_range(base_face))
+    throw Error(ErrorKind::InvalidArgument, "adaptive mesh: no such base face, or its level out of range");
+  if (hierarchy.levels() > 0) {
+    const RefinementStep& s = hierarchy.step(1);
+    for (std::uint32_t k = s.face_offsets[base_face]; k < s.face_offsets[base_face + 1]; ++k) {
+      const std::uint32_t edge = s.face_edges[k] - s.first_edge_vertex();
+      for (int side = 0; side < 2; ++side)
+        if (!in_range(s.edge_faces[2 * std::size_t{edge} + side] - s.first_face_vertex()))
+          throw Error(ErrorKind::InvalidArgument, "adaptive mesh: a neighbour's level out of range");
+    }
+  }
+  Insertions inserted;
+  if (hierarchy.levels() > 0) {
+    // The transitions along this face's own base edges only.
+    const RefinementStep& s = hierarchy.step(1);
+    for (std::uint32_t k = s.face_offsets[base_face]; k < s.face_offsets[base_face + 1]; ++k)
+      add_transition(hierarchy, levels, s.face_edges[k] - s.first_edge_vertex(), inserted);
+  }
+  emit_patch(hierarchy, base_face, levels[base_face], inserted, offsets, corners);
+}
+
+PolygonMesh adaptive_control_mesh(const SubdivisionHierarchy& hierarchy, const std::vector<int>& levels,
+                                  const std::vector<Vec3>& fine) {
+  check_levels(hierarchy, levels);
+  if (fine.size() < hierarchy.fine_vertex_count())
+    throw Error(ErrorKind::InvalidArgument, "adaptive mesh: fewer points than the fine level");
+  Insertions inserted;
+  if (hierarchy.levels() > 0)
+    for (std::uint32_t edge = 0; edge < hierarchy.step(1).parent_edge_count; ++edge)
+      add_transition(hierarchy, levels, edge, inserted);
+  PolygonMesh out;
+  out.face_offsets = {0};
+  for (std::size_t f = 0; f < levels.size(); ++f)
+    emit_patch(hierarchy, f, levels[f], inserted, out.face_offsets, out.face_vertices);
   // Only the vertices the faces use, in ascending index order.
   std::vector<std::uint32_t> new_index(hierarchy.fine_vertex_count(), UINT32_MAX);
   for (const std::uint32_t v : out.face_vertices) new_index[v] = 0;

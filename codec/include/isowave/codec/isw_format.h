@@ -101,7 +101,7 @@ struct IswEncodeOptions {
   const std::vector<Vec3>* frame_base = nullptr;
   // Version 2.2: tree nodes per group of the plane stream (a run of base
   // faces holds at most this many where the Morton order's cells allow; 0:
-  // the default, 16,384). Smaller groups let a region read fewer bytes
+  // the default, 32,768). Smaller groups let a region read fewer bytes
   // beyond itself, at some 60 bytes per group of context learning, flushes
   // and index (docs/MEASUREMENTS.md, "Random access").
   std::size_t group_nodes = 0;

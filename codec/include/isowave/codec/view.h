@@ -6,6 +6,8 @@
 // crack-free (transform/adaptive_mesh.h). The camera is ParaView's and
 // three.js's: position, target, up, vertical field of view, viewport.
 #include <cstddef>
+#include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -34,6 +36,42 @@ struct ViewLevels {
 // hierarchy or a pixel error that is not positive. Cost: O(fine vertices).
 ViewLevels view_face_levels(const IswDecoded& decoded, const std::vector<Vec3>& fine, const Camera& camera,
                             double pixel_error);
+
+// For interactive use (issue #48, item 6): a decode synthesized once, then
+// refined or coarsened as the camera moves. Each set_view() costs O(base
+// faces) of arithmetic on what the constructor kept (each face's box and the
+// detail each level leaves out) and returns the base faces whose polygons
+// changed, so a viewer holding points() as one vertex buffer re-emits only
+// those patches. Not thread-safe; the decode may be dropped afterwards.
+class ViewRefiner {
+ public:
+  // `decoded`: a decode (all of it, or read with options.frustum for a first
+  // camera near those it will move to). Error(InvalidArgument) without a
+  // hierarchy. Cost: one synthesis and O(fine vertices); keeps the fine
+  // control points and 7 + L doubles per base face. Every face starts at 0.
+  explicit ViewRefiner(const IswDecoded& decoded);
+  ~ViewRefiner();
+  ViewRefiner(ViewRefiner&&) noexcept;
+  ViewRefiner& operator=(ViewRefiner&&) noexcept;
+
+  // The levels of view_face_levels() for this camera; returns, ascending,
+  // the base faces whose patch changed: those whose level changed and their
+  // neighbours across base edges (their transition polygons). Errors as
+  // view_face_levels().
+  std::vector<std::uint32_t> set_view(const Camera& camera, double pixel_error);
+  const ViewLevels& levels() const;
+  // The fine control points: patch() indices refer to them.
+  const std::vector<Vec3>& points() const;
+  // Base face f's polygons at its level (adaptive_patch()): corners appended
+  // to `corners`, each polygon's end to `offsets`.
+  void patch(std::size_t base_face, std::vector<std::uint32_t>& offsets, std::vector<std::uint32_t>& corners) const;
+  // The whole crack-free mesh (adaptive_control_mesh(): the vertices used only).
+  PolygonMesh mesh() const;
+
+ private:
+  struct Data;
+  std::unique_ptr<Data> data_;
+};
 
 // What a view decode writes (decode --view, Python's decode(view=...)): the
 // crack-free mesh of view_face_levels() (adaptive_control_mesh, the vertices

@@ -25,4 +25,15 @@ namespace isowave {
 PolygonMesh adaptive_control_mesh(const SubdivisionHierarchy& hierarchy, const std::vector<int>& levels,
                                   const std::vector<Vec3>& fine);
 
+// The polygons adaptive_control_mesh() gives base face `base_face`, in fine
+// vertex indices (the hierarchy's, not renumbered), appended: each polygon's
+// corners to `corners` and its end (an index into `corners`) to `offsets`.
+// They depend on the face's level and its edge neighbours' only, so a
+// viewer that changes some levels re-emits those faces and their
+// neighbours. Error(InvalidArgument) for a face out of range, or its or its
+// neighbours' level. Cost: the face's faces and the walks down its base
+// edges (independent of the mesh's size).
+void adaptive_patch(const SubdivisionHierarchy& hierarchy, const std::vector<int>& levels, std::size_t base_face,
+                    std::vector<std::uint32_t>& offsets, std::vector<std::uint32_t>& corners);
+
 }  // namespace isowave
