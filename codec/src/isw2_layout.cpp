@@ -12,33 +12,6 @@
 
 namespace isowave::detail {
 
-namespace {
-
-void put_varint(std::string& out, std::uint64_t v) {
-  while (v >= 0x80) {
-    out.push_back(static_cast<char>((v & 0x7F) | 0x80));
-    v >>= 7;
-  }
-  out.push_back(static_cast<char>(v));
-}
-
-// False when the bytes end first (a cut table); Error(Format) for a value
-// of 2^64 or more.
-bool read_varint(PayloadReader& reader, std::uint64_t& v) {
-  v = 0;
-  for (int shift = 0; shift < 64; shift += 7) {
-    if (reader.remaining() == 0) return false;
-    const auto byte = reader.read<std::uint8_t>();
-    // The tenth byte holds bit 63 only.
-    if (shift == 63 && byte > 1) break;
-    v |= std::uint64_t{byte & 0x7Fu} << shift;
-    if (!(byte & 0x80)) return true;
-  }
-  reader.fail("holds an invalid packet table");
-}
-
-}  // namespace
-
 std::vector<std::uint8_t> node_classes(const CoefficientClasses& classes) {
   std::vector<std::uint8_t> result(classes.fine());
   for (int c = 0; c < classes.count(); ++c) {

@@ -86,6 +86,19 @@ bool fits(const std::string& bytes, std::size_t position, std::uint64_t size) {
 
 }  // namespace
 
+bool read_varint(PayloadReader& reader, std::uint64_t& v) {
+  v = 0;
+  for (int shift = 0; shift < 64; shift += 7) {
+    if (reader.remaining() == 0) return false;
+    const auto byte = reader.read<std::uint8_t>();
+    // The tenth byte holds bit 63 only.
+    if (shift == 63 && byte > 1) break;
+    v |= std::uint64_t{byte & 0x7Fu} << shift;
+    if (!(byte & 0x80)) return true;
+  }
+  reader.fail("holds an invalid number");
+}
+
 void put_file_header(std::string& out, int major, int minor) {
   out.append(kIswMagic, kIswMagic + 8);
   put_u16(out, static_cast<std::uint16_t>(major));

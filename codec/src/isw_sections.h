@@ -30,7 +30,13 @@ inline void put_u32(std::string& out, std::uint32_t v) { out.append(reinterpret_
 inline void put_u64(std::string& out, std::uint64_t v) { out.append(reinterpret_cast<const char*>(&v), 8); }
 inline void put_f64(std::string& out, double v) { out.append(reinterpret_cast<const char*>(&v), 8); }
 
-// The 16-byte file header of version `major`.`minor` (1.0, 2.0 or 2.1).
+// LEB128: 7 bits a byte, low bits first, the top bit set on all but the last.
+inline void put_varint(std::string& out, std::uint64_t v) {
+  for (; v >= 0x80; v >>= 7) out.push_back(static_cast<char>((v & 0x7F) | 0x80));
+  out.push_back(static_cast<char>(v));
+}
+
+// The 16-byte file header of version `major`.`minor` (1.0, 2.0, 2.1 or 2.2).
 void put_file_header(std::string& out, int major, int minor = 0);
 // Appends one section: header, payload, CRC. `tag` is 4 characters.
 void put_section(std::string& out, const char* tag, std::string_view payload);
@@ -69,6 +75,10 @@ class PayloadReader {
   std::size_t position_ = 0;
   std::string context_;
 };
+
+// A LEB128 value from `reader`: false when the bytes end first (a cut
+// table); Error(Format) through `reader` for a value of 2^64 or more.
+bool read_varint(PayloadReader& reader, std::uint64_t& v);
 
 // One framed section, both CRCs checked.
 struct Section {

@@ -27,19 +27,11 @@ int bit_length(unsigned __int128 v) {
   return bits;
 }
 
-void put_varint(std::string& out, std::uint64_t v) {
-  for (; v >= 0x80; v >>= 7) out.push_back(static_cast<char>((v & 0x7F) | 0x80));
-  out.push_back(static_cast<char>(v));
-}
-
+// A LEB128 value; Error(Format) through `reader` where the payload ends first.
 std::uint64_t get_varint(PayloadReader& reader) {
   std::uint64_t v = 0;
-  for (int shift = 0; shift < 64; shift += 7) {
-    const auto byte = reader.read<std::uint8_t>();
-    v |= std::uint64_t{byte & 0x7Fu} << shift;
-    if (!(byte & 0x80)) return v;
-  }
-  reader.fail("holds an invalid number");
+  if (!read_varint(reader, v)) reader.fail("is truncated");
+  return v;
 }
 
 }  // namespace
