@@ -1,7 +1,6 @@
 #include "isowave/codec/view.h"
 
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <limits>
 #include <memory>
@@ -54,7 +53,6 @@ double distance_to_box(const Vec3& p, const Vec3& lo, const Vec3& hi) {
   const Vec3 nearest{std::clamp(p.x, lo.x, hi.x), std::clamp(p.y, lo.y, hi.y), std::clamp(p.z, lo.z, hi.z)};
   return norm(p - nearest);
 }
-
 
 // Per base face: the box of its fine points and, per level l, the detail a
 // face at level l leaves out (the sum over finer levels of face_details()).
@@ -110,8 +108,15 @@ int face_level(const FaceViewData& data, std::size_t f, const Camera& camera, do
   return level;
 }
 
-void check_view(const IswDecoded& decoded, const Camera& camera, double pixel_error) {
+void check_decode(const IswDecoded& decoded) {
   if (!decoded.hierarchy) throw Error(ErrorKind::InvalidArgument, "a view decode needs a decoded file");
+  if (decoded.class_weights.size() != static_cast<std::size_t>(1 + 2 * decoded.hierarchy->levels()) ||
+      decoded.coefficients.size() < decoded.hierarchy->fine_vertex_count())
+    throw Error(ErrorKind::InvalidArgument, "a view decode needs the file's coefficients and class weights");
+}
+
+void check_view(const IswDecoded& decoded, const Camera& camera, double pixel_error) {
+  check_decode(decoded);
   if (!(pixel_error > 0) || !std::isfinite(pixel_error))
     throw Error(ErrorKind::InvalidArgument, "the pixel error must be a positive number");
   check_camera(camera);
@@ -151,7 +156,7 @@ struct ViewRefiner::Data {
 };
 
 ViewRefiner::ViewRefiner(const IswDecoded& decoded) : data_(std::make_unique<Data>()) {
-  if (!decoded.hierarchy) throw Error(ErrorKind::InvalidArgument, "a view decode needs a decoded file");
+  check_decode(decoded);
   data_->hierarchy = decoded.hierarchy;
   data_->points = decoded.coefficients;
   synthesize(*decoded.hierarchy, data_->points);
