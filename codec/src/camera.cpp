@@ -149,7 +149,11 @@ Camera parse_camera(const std::string& json, const std::string& name) {
     throw Error(ErrorKind::InvalidArgument, name + ": the camera's viewport must be two whole numbers of pixels, 1 to 100000");
   camera.width = static_cast<int>(v[0]);
   camera.height = static_cast<int>(v[1]);
-  check_camera(camera);
+  try {
+    check_camera(camera);
+  } catch (const Error& error) {
+    throw Error(error.kind(), name + ": " + error.what());
+  }
   return camera;
 }
 
