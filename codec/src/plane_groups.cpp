@@ -212,11 +212,10 @@ void face_box(const PolygonMesh& base, const std::vector<Vec3>& frame_base, std:
   constexpr double inf = std::numeric_limits<double>::infinity();
   lo = {inf, inf, inf};
   hi = {-inf, -inf, -inf};
-  for (std::uint32_t k = base.face_offsets[f]; k < base.face_offsets[f + 1]; ++k)
-    for (int a = 0; a < 3; ++a) {
-      lo[a] = std::min(lo[a], frame_base[base.face_vertices[k]][a]);
-      hi[a] = std::max(hi[a], frame_base[base.face_vertices[k]][a]);
-    }
+  for (std::uint32_t k = base.face_offsets[f]; k < base.face_offsets[f + 1]; ++k) {
+    lo = component_min(lo, frame_base[base.face_vertices[k]]);
+    hi = component_max(hi, frame_base[base.face_vertices[k]]);
+  }
   lo -= Vec3{reach, reach, reach};
   hi += Vec3{reach, reach, reach};
 }

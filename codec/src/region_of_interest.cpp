@@ -15,16 +15,12 @@ bool RegionOfInterest::contains(const Vec3& p) const {
 
 double RegionOfInterest::distance(const Vec3& p) const {
   if (shape == Shape::Sphere) return std::max(0.0, norm(p - centre) - radius);
-  const Vec3 nearest{std::clamp(p.x, low.x, high.x), std::clamp(p.y, low.y, high.y), std::clamp(p.z, low.z, high.z)};
-  return norm(p - nearest);
+  return norm(p - clamp_to_box(p, low, high));
 }
 
 bool RegionOfInterest::meets_box(const Vec3& lo, const Vec3& hi) const {
   if (shape == Shape::Sphere) {
-    // The box's point nearest the centre.
-    const Vec3 nearest{std::clamp(centre.x, lo.x, hi.x), std::clamp(centre.y, lo.y, hi.y),
-                       std::clamp(centre.z, lo.z, hi.z)};
-    return squared_norm(nearest - centre) <= radius * radius;
+    return squared_norm(clamp_to_box(centre, lo, hi) - centre) <= radius * radius;
   }
   return lo.x <= high.x && hi.x >= low.x && lo.y <= high.y && hi.y >= low.y && lo.z <= high.z && hi.z >= low.z;
 }

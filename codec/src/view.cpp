@@ -48,12 +48,6 @@ std::vector<double> face_details(const IswDecoded& decoded) {
   return detail;
 }
 
-// Distance from p to the box [lo, hi] (0 inside).
-double distance_to_box(const Vec3& p, const Vec3& lo, const Vec3& hi) {
-  const Vec3 nearest{std::clamp(p.x, lo.x, hi.x), std::clamp(p.y, lo.y, hi.y), std::clamp(p.z, lo.z, hi.z)};
-  return norm(p - nearest);
-}
-
 // Per base face: the box of its fine points and, per level l, the detail a
 // face at level l leaves out (the sum over finer levels of face_details()).
 struct FaceViewData {
@@ -75,10 +69,8 @@ FaceViewData face_view_data(const IswDecoded& decoded, const std::vector<Vec3>& 
       constexpr double inf = std::numeric_limits<double>::infinity();
       Vec3 lo{inf, inf, inf}, hi{-inf, -inf, -inf};
       for_each_fine_point(h, f, [&](std::size_t v) {
-        for (int a = 0; a < 3; ++a) {
-          lo[a] = std::min(lo[a], fine[v][a]);
-          hi[a] = std::max(hi[a], fine[v][a]);
-        }
+        lo = component_min(lo, fine[v]);
+        hi = component_max(hi, fine[v]);
         return true;
       });
       data.lo[f] = lo;
@@ -99,7 +91,7 @@ FaceViewData face_view_data(const IswDecoded& decoded, const std::vector<Vec3>& 
 // Face f's level for the camera (-1: outside the frustum, level 0).
 int face_level(const FaceViewData& data, std::size_t f, const Camera& camera, double pixel_error) {
   if (camera.box_outside(data.lo[f], data.hi[f])) return -1;
-  const double distance = distance_to_box(camera.position, data.lo[f], data.hi[f]);
+  const double distance = norm(camera.position - clamp_to_box(camera.position, data.lo[f], data.hi[f]));
   const double scale = distance > 0 ? camera.pixels_per_unit(distance) : std::numeric_limits<double>::infinity();
   // The coarsest level whose omitted detail stays within the pixel error.
   const double* omitted = data.omitted.data() + f * (static_cast<std::size_t>(data.levels) + 1);

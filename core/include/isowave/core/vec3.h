@@ -38,6 +38,10 @@ constexpr Vec3 component_min(const Vec3& a, const Vec3& b) {
 constexpr Vec3 component_max(const Vec3& a, const Vec3& b) {
   return {a.x < b.x ? b.x : a.x, a.y < b.y ? b.y : a.y, a.z < b.z ? b.z : a.z};
 }
+// The point of the box [lo, hi] nearest p (p itself inside).
+constexpr Vec3 clamp_to_box(const Vec3& p, const Vec3& lo, const Vec3& hi) {
+  return component_min(component_max(p, lo), hi);
+}
 inline bool is_finite(const Vec3& a) { return std::isfinite(a.x) && std::isfinite(a.y) && std::isfinite(a.z); }
 inline Vec3 normalized(const Vec3& a) {
   const double n = norm(a);
