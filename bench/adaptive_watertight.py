@@ -7,8 +7,10 @@ For each file: the whole decode, a region decode (a box of 5% of the surface's b
 view decodes at 1 pixel on 1920 x 1080 (a camera at that centre looking along +x, fov 60; one outside the box
 looking at it, fov 40), all triangulated. Per output: boundary edges (a directed edge without its reverse),
 non-manifold edges (an undirected edge of more than two triangles) and directed edges used twice. A view's
-boundary edges must end on the whole decode's boundary (matched by position: a view keeps every coefficient);
-a region's points outside the box are the base surface's, so only its counts are checked. FAIL marks an output
+boundary edges whose ends project into its image must end on the whole decode's boundary (matched by position:
+in view, a view decode's points are the whole decode's; outside it, a 2.2 file read for the frustum leaves them
+at the base's precision); a region's points outside the box are the base surface's, so only its counts are
+checked. FAIL marks an output
 with a non-manifold or repeated edge, or with a boundary where the whole decode has none.
 """
 import sys
@@ -26,6 +28,21 @@ def edge_stats(vertices, faces):
     undirected, uses = np.unique(np.minimum(a, b) * n + np.maximum(a, b), return_counts=True)
     boundary = directed[~np.isin(directed, b * n + a)]
     return int((counts > 1).sum()), int((uses > 2).sum()), boundary // n, boundary % n
+
+
+def in_image(camera, points):
+    """Which points project into the camera's image (a look-at pinhole camera)."""
+    position, target, up = (np.asarray(camera[k], float) for k in ("position", "target", "up"))
+    d = (target - position) / np.linalg.norm(target - position)
+    r = np.cross(d, up)
+    r /= np.linalg.norm(r)
+    u = np.cross(r, d)
+    v = points - position
+    z = v @ d
+    f = 0.5 * camera["viewport"][1] / np.tan(np.radians(camera["fov"]) / 2)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        x, y = f * (v @ r) / z, f * (v @ u) / z
+    return (z > 0) & (np.abs(x) <= camera["viewport"][0] / 2) & (np.abs(y) <= camera["viewport"][1] / 2)
 
 
 def check(path):
@@ -47,8 +64,10 @@ def check(path):
         rep, nm, a2, b2 = edge_stats(v, f)
         note = ""
         if name != "region":
-            off = sum(1 for p in map(tuple, np.round(v[np.concatenate([a2, b2])], 9)) if p not in ends)
-            note = f", {off} ends off the whole boundary"
+            points = v[np.concatenate([a2, b2])]
+            seen = points[in_image(options["view"], points)]
+            off = sum(1 for p in map(tuple, np.round(seen, 9)) if p not in ends)
+            note = f", {off} of {len(seen)} ends in view off the whole boundary"
         ok = rep == 0 and nm == 0 and (len(a) > 0 or len(a2) == 0) and (name == "region" or off == 0)
         line.append(f"{name}: {len(a2)} boundary, {nm} non-manifold, {rep} repeated{note}{'' if ok else ' FAIL'}")
     print(" | ".join(line), flush=True)

@@ -102,8 +102,8 @@ struct IswEncodeOptions {
   // Version 2.2: tree nodes per group of the plane stream (a run of base
   // faces holds at most this many where the Morton order's cells allow; 0:
   // the default, 32,768). Smaller groups let a region read fewer bytes
-  // beyond itself, at some 60 bytes per group of context learning, flushes
-  // and index (docs/MEASUREMENTS.md, "Random access").
+  // beyond itself, at the cost per group of context learning, flushes and
+  // index (docs/MEASUREMENTS.md, "Random access").
   std::size_t group_nodes = 0;
   // Version 2: cut the plane stream so that the file holds at most this many
   // bytes (0: the whole stream). Error(InvalidArgument) when the headers alone exceed it.
