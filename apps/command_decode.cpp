@@ -74,6 +74,11 @@ IswDecodeOptions decode_options(const cli::Arguments& args, const std::optional<
       throw Error(ErrorKind::InvalidArgument, "--coefficients must be a non-negative integer");
     if (!region) options.max_coefficients = static_cast<std::uint64_t>(n);
   }
+  if (args.has("oracle")) {
+    if (!limited || region)
+      throw Error(ErrorKind::InvalidArgument, "--oracle chooses what --percent or --coefficients keep (not with --roi)");
+    options.oracle = oracle_from_name(args.get("oracle"));
+  }
   if (args.has("bytes")) {
     const double n = args.get_double("bytes", 0);
     if (!(n >= 1 && n <= 1e18) || n != std::floor(n))
@@ -113,7 +118,7 @@ PolygonMesh decode_view(const cli::Arguments& args, const IswDecoded& decoded, c
 int decode(const Args& raw) {
   const cli::CommandSpec spec{
       "decode",
-      "IN.isw [--bytes N | --max-error E] [--percent P | --coefficients N | --roi BOX | --view CAMERA.json]\n"
+      "IN.isw [--bytes N | --max-error E] [--percent P | --coefficients N [--oracle NAME] | --roi BOX | --view CAMERA.json]\n"
       "                [--level L] [--limit] [--triangulate] [--ascii] [--force] -o OUT.ply|OUT.obj|OUT.off",
       "Rebuilds the surface from the base mesh and the wavelet coefficients of IN.isw (all of them by default).\n"
       "--bytes reads only the first N bytes of the file: any prefix of a version 2 file's stream decodes to the\n"
@@ -125,6 +130,7 @@ int decode(const Args& raw) {
        {"max-error", true, "read the shortest prefix whose recorded error D is within E cells (version 2 files)", "E"},
        {"percent", true, "keep this percentage of full resolution (0..100)", "P"},
        {"coefficients", true, "keep this many wavelet coefficients (besides the base mesh)", "N"},
+       {"oracle", true, "what --percent or --coefficients keep: weighted (default: class weight x magnitude), magnitude, or greedy (least error added, several syntheses)", "NAME"},
        {"roi", true, "full detail inside this box (world units), --percent or --coefficients outside (default none: the base mesh's surface); the finest level", "X0,Y0,Z0,X1,Y1,Z1"},
        {"roi-sphere", true, "the same inside this ball", "CX,CY,CZ,R"},
        {"roi-falloff", true, "with --percent or --coefficients: weight importance outside the region by a Gaussian of this width (world units)", "W"},

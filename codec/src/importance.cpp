@@ -115,6 +115,13 @@ void keep_most_important(const SubdivisionHierarchy& hierarchy, std::vector<Vec3
   for (std::size_t k = keep; k < total; ++k) coefficients[order[k]] = Vec3{};
 }
 
+Oracle oracle_from_name(const std::string& name) {
+  if (name == "weighted") return Oracle::Weighted;
+  if (name == "magnitude") return Oracle::Magnitude;
+  if (name == "greedy") return Oracle::Greedy;
+  throw Error(ErrorKind::InvalidArgument, "the oracle must be weighted, magnitude or greedy, got '" + name + "'");
+}
+
 std::size_t coefficients_for_percent(const SubdivisionHierarchy& hierarchy, double percent) {
   return coefficients_for_percent(hierarchy.fine_vertex_count(), hierarchy.vertex_count(0), percent);
 }

@@ -188,11 +188,17 @@ void decode_plane_stream(const Section& section, const SubdivisionHierarchy& hie
   result.seconds.dequantize = seconds_since(world_start);
 }
 
-void rank_and_keep(IswDecoded& result, const CoefficientClasses& layout, std::uint64_t keep, IswOrder order) {
+void rank_and_keep(IswDecoded& result, const CoefficientClasses& layout, std::uint64_t keep, IswOrder order,
+                   Oracle oracle) {
   if (order == IswOrder::Index) {
     result.ranked.clear();
     for (std::size_t i = layout.base(); i < result.coefficients.size(); ++i)
       if (!(result.coefficients[i] == Vec3{})) result.ranked.push_back(static_cast<std::uint32_t>(i));
+    return;
+  }
+  if (oracle == Oracle::Greedy) {
+    result.ranked = keep_greedy(*result.hierarchy, result.coefficients, result.class_weights,
+                                static_cast<std::size_t>(std::min<std::uint64_t>(keep, result.coefficients.size())));
     return;
   }
   std::vector<RankedEntry> keyed;
@@ -200,8 +206,8 @@ void rank_and_keep(IswDecoded& result, const CoefficientClasses& layout, std::ui
   for (std::size_t i = layout.base(); i < result.coefficients.size(); ++i) {
     const Vec3& c = result.coefficients[i];
     if (c == Vec3{}) continue;
-    keyed.push_back({result.class_weights[static_cast<std::size_t>(layout.of(i))] * norm(c),
-                     static_cast<std::uint32_t>(i), 0});
+    const double weight = oracle == Oracle::Magnitude ? 1.0 : result.class_weights[static_cast<std::size_t>(layout.of(i))];
+    keyed.push_back({weight * norm(c), static_cast<std::uint32_t>(i), 0});
   }
   sort_by_importance(keyed);
   result.ranked.resize(keyed.size());

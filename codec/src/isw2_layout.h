@@ -158,7 +158,9 @@ void decode_plane_stream(const Section& section, const SubdivisionHierarchy& hie
 // result.ranked: the non-zero wavelet coefficients by importance (class
 // weight times magnitude, ties by index), the first `keep` of them; the
 // others are zeroed in result.coefficients. IswOrder::Index: all of them in
-// index order (`keep` is then ignored).
-void rank_and_keep(IswDecoded& result, const CoefficientClasses& layout, std::uint64_t keep, IswOrder order);
+// index order (`keep` is then ignored). With fewer kept than decoded,
+// `oracle` chooses them (Greedy synthesizes with result.hierarchy).
+void rank_and_keep(IswDecoded& result, const CoefficientClasses& layout, std::uint64_t keep, IswOrder order,
+                   Oracle oracle);
 
 }  // namespace isowave::detail

@@ -478,7 +478,8 @@ void finish_v2(DecodeState& state, bool cut) {
   const auto rank_start = Clock::now();
   const bool unlimited = state.limit >= state.layout->fine() - state.layout->base();
   rank_and_keep(result, *state.layout, state.limit,
-                unlimited && state.options.order == IswOrder::Index ? IswOrder::Index : IswOrder::Importance);
+                unlimited && state.options.order == IswOrder::Index ? IswOrder::Index : IswOrder::Importance,
+                state.options.oracle);
   result.seconds.rank = seconds_since(rank_start);
 }
 
@@ -516,6 +517,8 @@ IswDecoded decode_from(const std::string& bytes, const std::string& name, const 
   await_hierarchy(state);
   if (state.major == 1 && options.max_error_cells > 0)
     throw Error(ErrorKind::InvalidArgument, name + ": a maximum error needs a version 2 file, which records its errors");
+  if (state.major == 1 && options.oracle != Oracle::Weighted)
+    throw Error(ErrorKind::InvalidArgument, name + ": another oracle needs a version 2 file (version 1 stores its ranking)");
   if (state.major == 1) {
     note_truncation(state, sections.truncated());
     dequantize_kept(state);

@@ -13,7 +13,9 @@ namespace isowave::detail {
 
 namespace {
 
-using Wide = __int128;
+// Sums of centroid integers need more than 64 bits (GCC and Clang's extension).
+__extension__ typedef __int128 Wide;
+__extension__ typedef unsigned __int128 UnsignedWide;
 
 // floor(a / b) for b > 0.
 Wide floor_divide(Wide a, Wide b) {
@@ -21,7 +23,7 @@ Wide floor_divide(Wide a, Wide b) {
   return q * b > a ? q - 1 : q;
 }
 
-int bit_length(unsigned __int128 v) {
+int bit_length(UnsignedWide v) {
   int bits = 0;
   for (; v != 0; v >>= 1) ++bits;
   return bits;
@@ -55,7 +57,7 @@ FaceOrder morton_face_order(const PolygonMesh& base, const std::vector<Quantized
   // One shift for all axes keeps the cells cubes (in the integers' units).
   int bits = 0;
   for (int a = 0; a < 3; ++a)
-    bits = std::max(bits, bit_length(static_cast<unsigned __int128>(high[static_cast<std::size_t>(a)] -
+    bits = std::max(bits, bit_length(static_cast<UnsignedWide>(high[static_cast<std::size_t>(a)] -
                                                                      low[static_cast<std::size_t>(a)])));
   const int shift = std::max(0, bits - 21);
   std::vector<std::pair<std::uint64_t, std::uint32_t>> keyed(faces);

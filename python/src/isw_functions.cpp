@@ -175,7 +175,7 @@ std::optional<RegionOfInterest> region_argument(const py::object& roi, const py:
 py::tuple decode(const fs::path& file, const py::object& percent, const py::object& coefficients,
                  const py::object& max_error, const py::object& bytes, const py::object& level, bool limit,
                  bool triangulate, const py::object& roi, const py::object& roi_sphere, double roi_falloff,
-                 const py::object& view, double pixel_error) {
+                 const py::object& view, double pixel_error, const std::string& oracle) {
   const std::string path = file.string();
   if (!max_error.is_none() && !bytes.is_none())
     throw Error(ErrorKind::InvalidArgument, "give at most one of max_error and bytes");
@@ -198,6 +198,9 @@ py::tuple decode(const fs::path& file, const py::object& percent, const py::obje
     if (!region) options.max_percent = percent_value;
   }
   if (!coefficients.is_none() && !region) options.max_coefficients = coefficients.cast<std::uint64_t>();
+  options.oracle = oracle_from_name(oracle);
+  if (options.oracle != Oracle::Weighted && (!limited || region))
+    throw Error(ErrorKind::InvalidArgument, "oracle chooses what percent or coefficients keep (not with roi)");
   if (!bytes.is_none()) options.max_file_bytes = bytes.cast<std::uint64_t>();
   if (!max_error.is_none()) {
     options.max_error_cells = max_error.cast<double>();

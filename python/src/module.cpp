@@ -48,11 +48,12 @@ file's metadata, default 'numpy array'). Returns the result `isowave convert --j
 (bytes, vertex counts, levels, seconds per stage, fit quality, the rate-distortion rows with D, the
 quantization error, warnings).)";
 
-constexpr const char* kDecodeDoc = R"(decode(path, *, percent=None, coefficients=None, max_error=None, bytes=None, level=None, limit=False, triangulate=False, roi=None, roi_sphere=None, roi_falloff=0, view=None, pixel_error=1.0) -> (vertices, faces)
+constexpr const char* kDecodeDoc = R"(decode(path, *, percent=None, coefficients=None, max_error=None, bytes=None, level=None, limit=False, triangulate=False, roi=None, roi_sphere=None, roi_falloff=0, view=None, pixel_error=1.0, oracle="weighted") -> (vertices, faces)
 
 Rebuilds the surface of an .isw file as `isowave decode`: the base mesh and the most important
 wavelet coefficients, at most one of percent (0..100 of full resolution, counted as the paper does;
-the default is 100) or coefficients (a count besides the base mesh). level: the control mesh of this
+the default is 100) or coefficients (a count besides the base mesh), chosen by oracle ("weighted":
+class weight x magnitude; "magnitude"; "greedy": least error added, as `--oracle`). level: the control mesh of this
 level (default the finest; 0 is the base mesh); limit=True moves the vertices to the limit surface;
 triangulate=True splits quads. vertices (n, 3) float64 and faces (m, k) uint32 (k = 4 above level
 0) own the decoder's buffers (no copy). bytes reads only the file's first bytes (any prefix of a
@@ -111,7 +112,7 @@ PYBIND11_MODULE(isowave, m) {
         py::arg("level") = py::none(), py::arg("limit") = false, py::arg("triangulate") = false,
         py::arg("roi") = py::none(), py::arg("roi_sphere") = py::none(), py::arg("roi_falloff") = 0.0,
         py::arg("view") = py::none(),
-        py::arg("pixel_error") = 1.0, kDecodeDoc);
+        py::arg("pixel_error") = 1.0, py::arg("oracle") = "weighted", kDecodeDoc);
   define_view_refiner(m);
   m.def("stats", &stats, py::arg("path"), py::arg("percents") = std::vector<double>{100, 20, 10, 5}, kStatsDoc);
   m.def("keep_freed_memory_for_reuse", &isowave::keep_freed_memory_for_reuse, kKeepMemoryDoc);

@@ -84,6 +84,19 @@ def test_decode_by_coefficients_limit_and_triangulate_match_the_cli(cli, sphere_
     np.testing.assert_array_equal(faces, cli_faces)
 
 
+@pytest.mark.parametrize("oracle", ["magnitude", "greedy"])
+def test_decode_by_oracle_matches_the_cli(cli, sphere_isw, tmp_path, oracle):
+    cli_path, _ = sphere_isw
+    obj = tmp_path / "decoded.obj"
+    cli("decode", cli_path, "--percent", 5, "--oracle", oracle, "-o", obj, "--quiet")
+    cli_vertices, _ = read_obj(obj)
+    vertices, _ = isowave.decode(cli_path, percent=5, oracle=oracle)
+    np.testing.assert_allclose(vertices, cli_vertices, rtol=1e-7, atol=1e-7)
+    # Another oracle keeps other coefficients: another surface.
+    weighted, _ = isowave.decode(cli_path, percent=5)
+    assert np.abs(weighted - vertices).max() > 1e-6
+
+
 def test_stats_rows_are_the_cli_json_rows(cli, sphere_isw):
     cli_path, _ = sphere_isw
     theirs = json.loads(cli("stats", cli_path, "--json", "--percents", "100,20,10,5,2").stdout)["rows"]

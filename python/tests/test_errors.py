@@ -96,6 +96,10 @@ def test_bad_arguments(sphere_isw, tmp_path):
         isowave.decode(path, percent=150)
     with pytest.raises(isowave.Error, match="at most one of percent and coefficients"):
         isowave.decode(path, percent=5, coefficients=10)
+    with pytest.raises(isowave.Error, match="oracle must be weighted, magnitude or greedy"):
+        isowave.decode(path, percent=5, oracle="best")
+    with pytest.raises(isowave.Error, match="oracle chooses what percent or coefficients keep"):
+        isowave.decode(path, oracle="greedy")
     with pytest.raises(isowave.Error, match=r"level must be in 0\.\.3"):
         isowave.decode(path, level=4)
     with pytest.raises(TypeError, match="unexpected keyword argument 'colour'"):

@@ -194,6 +194,29 @@ TEST(IswFormat2, PercentKeepsTheMostImportantOfTheDecodedCoefficients) {
     }
 }
 
+TEST(IswFormat2, PercentKeepsWhatTheChosenOracleKeeps) {
+  const Encoded e = encode_sample(test::genus_slab(2), 3, 1e-4);
+  const IswDecoded full = decode_isw(e.bytes, "test.isw");
+  const std::size_t keep = coefficients_for_percent(*full.hierarchy, 10);
+  IswDecodeOptions options;
+  options.max_percent = 10;
+  // Magnitude: no kept coefficient smaller than one left out.
+  options.oracle = Oracle::Magnitude;
+  const IswDecoded by_magnitude = decode_isw(e.bytes, "test.isw", options);
+  ASSERT_EQ(by_magnitude.ranked.size(), keep);
+  double least_kept = INFINITY, most_dropped = 0;
+  for (std::size_t i = full.hierarchy->vertex_count(0); i < full.coefficients.size(); ++i)
+    if (by_magnitude.coefficients[i] == Vec3{}) most_dropped = std::max(most_dropped, norm(full.coefficients[i]));
+    else least_kept = std::min(least_kept, norm(full.coefficients[i]));
+  EXPECT_LE(most_dropped, least_kept);
+  // Greedy: keep_greedy's choice over the whole decode.
+  options.oracle = Oracle::Greedy;
+  const IswDecoded by_greedy = decode_isw(e.bytes, "test.isw", options);
+  std::vector<Vec3> expected = full.coefficients;
+  EXPECT_EQ(by_greedy.ranked, keep_greedy(*full.hierarchy, expected, full.class_weights, keep));
+  EXPECT_EQ(by_greedy.coefficients, expected);
+}
+
 // Whatever its packets hold, a decode keeps every component below 2^(top + 1)
 // steps, as the plane decoder alone does (test_bitplane_coder.cpp): from the
 // frame base for base control points, from zero for the others.

@@ -59,7 +59,7 @@ TEST(View, ReadsTheCameraStrictly) {
   EXPECT_EQ(c.width, 1920);
   EXPECT_EQ(c.height, 1080);
   const std::string good = R"("target":[0,0,0],"up":[0,0,1],"fov":45,"viewport":[640,480])";
-  for (const std::string bad : {
+  for (const std::string& bad : {
            std::string("{") + good + "}",                                       // no position
            std::string(R"({"position":[1,2,3],)") + good + R"(,"zoom":2})",     // an unknown key
            std::string(R"({"position":[1,2],)") + good + "}",                   // two numbers
@@ -120,7 +120,9 @@ TEST(View, FacesOutsideTheFrustumStayBaseFacesAndFacesInViewAreKept) {
     for (std::size_t f = 0; f < v.levels.size(); ++f) {
       bool seen = false;
       for_each_fine_point(h, f, [&](std::size_t p) { return !(seen = in_image(camera, c.fine[p])); });
-      if (seen) EXPECT_EQ(v.levels[f], 3) << "face " << f << " is in view";
+      if (seen) {
+        EXPECT_EQ(v.levels[f], 3) << "face " << f << " is in view";
+      }
       culled += !seen && v.levels[f] == 0;
     }
     EXPECT_GE(culled, v.culled);
@@ -218,7 +220,9 @@ TEST(View, TheRefinerNamesEveryPatchAMoveChanges) {
   for (std::size_t f = 0; f < after.size(); ++f) {
     const bool named = std::binary_search(changed.begin(), changed.end(), static_cast<std::uint32_t>(f));
     differ += after[f] != before[f];
-    if (!named) EXPECT_EQ(after[f], before[f]) << "face " << f << " changed unnamed";
+    if (!named) {
+      EXPECT_EQ(after[f], before[f]) << "face " << f << " changed unnamed";
+    }
   }
   EXPECT_GT(differ, 0u);
   EXPECT_LT(changed.size(), after.size());

@@ -10,6 +10,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -67,6 +68,37 @@ std::vector<double> importance(const SubdivisionHierarchy& hierarchy, const std:
 // selection by raw magnitude. Cost: O(entries) (a selection, not a sort).
 void keep_most_important(const SubdivisionHierarchy& hierarchy, std::vector<Vec3>& coefficients,
                          const std::vector<double>& class_weights, std::size_t keep);
+
+// The importance measures a coefficient limit can keep by (Staadt, Gross and
+// Weber, Sec. 2.2, "global oracles"), all over the same decoded coefficients.
+enum class Oracle {
+  Weighted,   // class weight x magnitude (the file's own ranking; the default)
+  Magnitude,  // magnitude alone: the L2-optimal choice for an orthogonal basis only
+  Greedy,     // rejection by conditional approximation error (keep_greedy)
+};
+
+// The oracle called `name` ("weighted", "magnitude" or "greedy"); else
+// Error(InvalidArgument) naming the choices.
+Oracle oracle_from_name(const std::string& name);
+
+// Staadt, Gross and Weber's greedy oracle (Sec. 2.2, Eq. 7): starting from
+// every non-zero wavelet coefficient, rejects those whose rejection adds the
+// least error over the fine control points given what was rejected before,
+// until `keep` remain, and zeroes the others in `coefficients` (base control
+// points are never rejected). The error of rejecting c_k after the set R is
+// |c_k|^2 ||psi_k||^2 + 2 c_k . (S^T S c_R)_k, S the synthesis to the fine
+// control points: exact for the cross terms (a synthesis and its transpose),
+// with ||psi_k||^2 the class's mean, class_weights[c]^2 (wavelet_norms()).
+// The paper rejects one coefficient per update, O(n^2); this rejects in
+// batches, each half of what is left to reject but at least
+// smallest_batch x keep (> 0; at least one), re-scoring after each: a batch's
+// own cross terms are not seen. Returns the kept coefficients, largest
+// rejection error (in the last round) first. Cost: about
+// log2(rejected / (smallest_batch x keep)) + 2 syntheses and transposed
+// syntheses, O(entries) each.
+std::vector<std::uint32_t> keep_greedy(const SubdivisionHierarchy& hierarchy, std::vector<Vec3>& coefficients,
+                                       const std::vector<double>& class_weights, std::size_t keep,
+                                       double smallest_batch = 1.0 / 64);
 
 // Number of wavelet coefficients kept at `percent` of full resolution, counted
 // as the paper does: the total is the fine control point count (base vertices

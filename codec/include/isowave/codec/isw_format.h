@@ -37,6 +37,7 @@
 #include <vector>
 
 #include "isowave/codec/camera.h"
+#include "isowave/codec/importance.h"
 #include "isowave/codec/region_of_interest.h"
 #include "isowave/core/mesh.h"
 #include "isowave/transform/hierarchy.h"
@@ -329,6 +330,10 @@ struct IswDecodeOptions {
   // (a sort of every non-zero coefficient) when the caller needs only the
   // surface. A limit always ranks by importance.
   IswOrder order = IswOrder::Importance;
+  // Version 2: what a coefficient limit keeps by (importance.h); `ranked`
+  // then lists the kept ones by that oracle. Oracle::Greedy costs
+  // keep_greedy()'s syntheses on top of the decode.
+  Oracle oracle = Oracle::Weighted;
   // Read only the metadata, base mesh and section table (for `info`).
   bool headers_only = false;
   // Version 2.2: decode only the plane-stream groups whose coefficients the
