@@ -100,15 +100,16 @@ PolygonMesh decode_view(const cli::Arguments& args, const IswDecoded& decoded, c
                         const std::string& input) {
   const double pixel_error = args.get_double("pixel-error", 1);
   ViewLevels levels;
-  PolygonMesh mesh = view_mesh(decoded, camera, pixel_error, &levels);
+  PolygonMesh mesh = view_mesh(decoded, camera, pixel_error, &levels,
+                               args.has("cull-back-faces") ? BackFaces::Cull : BackFaces::Refine);
   if (!args.has("quiet")) {
     std::vector<std::size_t> count(static_cast<std::size_t>(decoded.levels) + 1, 0);
     for (const int l : levels.levels) ++count[static_cast<std::size_t>(l)];
     std::string per_level;
     for (std::size_t l = 0; l < count.size(); ++l)
       per_level += (l ? ", " : "") + std::to_string(count[l]) + " at level " + std::to_string(l);
-    std::printf("%s: view at %g pixels: base faces %s; %zu outside the frustum\n", input.c_str(), pixel_error,
-                per_level.c_str(), levels.culled);
+    std::printf("%s: view at %g pixels: base faces %s; %zu outside the frustum, %zu facing away\n", input.c_str(),
+                pixel_error, per_level.c_str(), levels.culled, levels.back_facing);
   }
   return mesh;
 }
@@ -136,6 +137,7 @@ int decode(const Args& raw) {
        {"roi-falloff", true, "with --percent or --coefficients: weight importance outside the region by a Gaussian of this width (world units)", "W"},
        {"view", true, "refine each base face as far as this camera sees it (JSON: position, target, up, fov, viewport)", "CAMERA.json"},
        {"pixel-error", true, "with --view: the detail left out may project to this many pixels (default 1)", "P"},
+       {"cull-back-faces", false, "with --view: keep base faces facing away from the camera whole (a closed surface seen from outside)", ""},
        {"level", true, "write the control mesh of this level (default: the finest)", "L"},
        {"limit", false, "move the vertices to the limit surface (OpenSubdiv)", ""},
        {"triangulate", false, "split quads into triangles", ""},
@@ -160,7 +162,8 @@ int decode(const Args& raw) {
   const std::optional<RegionOfInterest> region = region_option(args);
   if (region && args.has("level")) throw Error(ErrorKind::InvalidArgument, "--roi gives the finest level: no --level");
   const bool view = args.has("view");
-  if (args.has("pixel-error") && !view) throw Error(ErrorKind::InvalidArgument, "--pixel-error needs --view");
+  if ((args.has("pixel-error") || args.has("cull-back-faces")) && !view)
+    throw Error(ErrorKind::InvalidArgument, "--pixel-error and --cull-back-faces need --view");
   if (view && (region || args.has("level") || args.has("percent") || args.has("coefficients") || args.has("limit")))
     throw Error(ErrorKind::InvalidArgument,
                 "--view chooses each face's level: no --roi, --level, --percent, --coefficients or --limit");
@@ -216,7 +219,9 @@ int decode(const Args& raw) {
                   static_cast<unsigned long long>(decoded.stream.decoded),
                   static_cast<unsigned long long>(decoded.stream.bytes));
     else if (decoded.major_version >= 2)
-      std::printf("%s: read %llu of %llu stream bytes (%d of %d bit planes complete)\n", input.c_str(),
+      std::printf("%s: read %llu of %llu file bytes (%llu of %llu stream bytes, %d of %d bit planes complete)\n",
+                  input.c_str(), static_cast<unsigned long long>(decoded.file_bytes_read),
+                  static_cast<unsigned long long>(decoded.file_bytes),
                   static_cast<unsigned long long>(decoded.stream.decoded),
                   static_cast<unsigned long long>(decoded.stream.bytes), decoded.stream.planes_decoded,
                   decoded.stream.planes);

@@ -14,6 +14,7 @@
 #include "isowave/codec/statistics.h"
 #include "isowave/core/atomic_file.h"
 #include "isowave/core/error.h"
+#include "isowave/core/mesh_io.h"
 #include "rate_distortion_plot.h"
 
 namespace isowave::commands {
@@ -248,9 +249,10 @@ int stats(const Args& raw) {
   if (args.has("csv") && args.has("json")) throw Error(ErrorKind::InvalidArgument, "give at most one of --csv and --json");
   const std::vector<double> percents = args.get_double_list("percents", "100,20,10,5", 0, 100);
   const std::string& input = args.positional()[0];
-  const IswDecoded decoded = read_isw(input);
+  const std::string bytes = read_file_bytes(input);
+  const IswDecoded decoded = decode_isw(bytes, input);
   if (decoded.truncated) throw Error(ErrorKind::Format, input + ": " + decoded.truncation_note + "; stats need the whole file");
-  const ErrorTable errors = error_table(decoded, percents);
+  const ErrorTable errors = error_table(decoded, percents, nullptr, nullptr, decode_prefixes(bytes));
   const Scale scale = scale_of(decoded);
   const std::vector<StreamRow> stream = stream_rows(decoded);
 

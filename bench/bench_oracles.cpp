@@ -82,7 +82,8 @@ int run(const Options& o) {
     extract.iso = o.iso;
     reference.emplace(extract_isosurface(volume, extract).mesh);
   }
-  std::vector<Choice> choices{{"magnitude", Oracle::Magnitude, 0}, {"weighted", Oracle::Weighted, 0}};
+  std::vector<Choice> choices{
+      {"magnitude", Oracle::Magnitude, 0}, {"weighted", Oracle::Weighted, 0}, {"prefix", Oracle::Weighted, 0}};
   for (double b : o.batches) {
     char name[32];
     std::snprintf(name, sizeof name, "greedy/%g", b);
@@ -98,7 +99,22 @@ int run(const Options& o) {
       const auto start = Clock::now();
       if (choice.oracle == Oracle::Greedy) keep_greedy(h, kept, decoded.class_weights, keep, choice.smallest_batch);
       else keep_most_important(h, kept, choice.oracle == Oracle::Magnitude ? unit : decoded.class_weights, keep);
-      const double seconds = seconds_since(start);
+      double seconds = seconds_since(start);
+      if (choice.name == "prefix") {  // what decode --percent reads and keeps (the PCNT prefix of a 2.2 file)
+        IswDecodeOptions limit;
+        limit.max_percent = percent;
+        const auto read_start = Clock::now();
+        IswDecoded part = read_isw(o.file, limit);
+        seconds = seconds_since(read_start);
+        kept = std::move(part.coefficients);
+        const IswDecodeTimings& t = part.seconds;
+        std::printf("%8.2f %12s read %llu of %llu file bytes (%.1f%%); seconds: read %.3f, headers %.3f, hierarchy %.3f "
+                    "(waited %.3f), planes %.3f, rank %.3f, to world %.3f\n",
+                    percent, "prefix", static_cast<unsigned long long>(part.file_bytes_read),
+                    static_cast<unsigned long long>(part.file_bytes),
+                    100.0 * static_cast<double>(part.file_bytes_read) / static_cast<double>(part.file_bytes), t.read,
+                    t.headers, t.hierarchy, t.hierarchy_wait, t.chunks, t.rank, t.dequantize);
+      }
       synthesize(h, kept);
       const double rms = point_errors(kept, full, h.fine_vertex_count()).rms;
       double d = -1;

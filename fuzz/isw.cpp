@@ -51,5 +51,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   isowave::IswDecodeOptions region;
   region.region = isowave::make_region({-1, -1, -1, 1, 1, 1}, false, "region");
   isowave::fuzz::expect_clean([&] { isowave::decode_isw(bytes, "fuzz.isw", region); });
+  // A coefficient limit (2.2): the prefix PCNT's counts choose.
+  isowave::IswDecodeOptions percent;
+  percent.max_percent = 5;
+  isowave::fuzz::expect_clean([&] { isowave::decode_isw(bytes, "fuzz.isw", percent); });
   return 0;
 }

@@ -119,17 +119,41 @@ void check_group_crcs(PayloadReader& reader, const Section& section, const Plane
       reader.fail("is corrupt (group " + std::to_string(g) + "'s packets do not match GIDX's CRC)");
 }
 
+// The stream bytes `prefix` allows: with a coefficient limit and PCNT, the
+// planes limit_planes() names. Error(Format) where PCNT does not fit the
+// packet table (checked with or without a limit).
+std::uint64_t prefix_bytes(PayloadReader& reader, const PlaneStream& planes, const StreamPrefix& prefix,
+                           const CoefficientClasses& layout) {
+  if (!prefix.nonzero || !planes.table) return prefix.bytes;
+  const std::vector<std::uint64_t>& nonzero = *prefix.nonzero;
+  if (nonzero.size() != static_cast<std::size_t>(planes.layout.top_plane + 1) ||
+      (!nonzero.empty() && nonzero.back() > layout.fine() - layout.base()))
+    reader.fail("does not match PCNT's plane counts");
+  if (prefix.keep == UINT64_MAX) return prefix.bytes;
+  const std::size_t packets =
+      limit_planes(nonzero, planes.layout.top_plane, prefix.keep, layout.base()) * planes.layout.packets_per_plane();
+  if (packets >= planes.sizes.size()) return prefix.bytes;
+  std::uint64_t end = 0;
+  for (std::size_t p = 0; p < packets; ++p) end += std::min(planes.sizes[p], UINT64_MAX - end);
+  return std::min(prefix.bytes, end);
+}
+
 }  // namespace
 
 void decode_plane_stream(const Section& section, const SubdivisionHierarchy& hierarchy,
-                         const CoefficientClasses& layout, const V2Scales& scales, std::uint64_t max_stream_bytes,
+                         const CoefficientClasses& layout, const V2Scales& scales, const StreamPrefix& prefix,
                          const StreamAccess& access, IswDecoded& result) {
   const auto start = Clock::now();
   PayloadReader reader = section.reader();
   const bool by_space = result.minor_version >= 2;
   if (by_space && !access.index) reader.fail("comes without its group index (GIDX)");
-  const PlaneStream planes = read_planes(reader, section.payload, section.cut, max_stream_bytes,
-                                         by_space ? access.index->count() : kMaxGroups);
+  const std::uint64_t max_groups = by_space ? access.index->count() : kMaxGroups;
+  PlaneStream planes = read_planes(reader, section.payload, section.cut, prefix.bytes, max_groups);
+  const std::uint64_t max_stream_bytes = prefix_bytes(reader, planes, prefix, layout);
+  if (max_stream_bytes < prefix.bytes) {
+    PayloadReader again = section.reader();
+    planes = read_planes(again, section.payload, section.cut, max_stream_bytes, max_groups);
+  }
   if (planes.packets_total > 0 && planes.layout.segments != static_cast<std::size_t>(hierarchy.levels()) + 1)
     reader.fail("has a segment count other than the levels + 1");
   // The coding, which the header's minor version (outside every CRC) must agree with.
@@ -219,3 +243,15 @@ void rank_and_keep(IswDecoded& result, const CoefficientClasses& layout, std::ui
 }
 
 }  // namespace isowave::detail
+
+namespace isowave {
+
+std::uint64_t stream_bytes_for_keep(const IswDecoded& decoded, std::uint64_t keep) {
+  const IswStreamInfo& stream = decoded.stream;
+  if (stream.plane_counts.empty() || keep >= decoded.coefficients_total || !decoded.hierarchy) return stream.bytes;
+  const std::size_t planes =
+      detail::limit_planes(stream.plane_counts, stream.top_plane, keep, decoded.hierarchy->vertex_count(0));
+  return planes < stream.plane_ends.size() ? stream.plane_ends[planes - 1] : stream.bytes;
+}
+
+}  // namespace isowave

@@ -2,6 +2,7 @@
 // a frame precision, local frames from them, every coefficient in its frame
 // and class weight as three step-unit magnitudes, and the embedded bit planes.
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cassert>
 #include <optional>
@@ -112,6 +113,26 @@ std::uint64_t nonzero_wavelets(const SubdivisionHierarchy& hierarchy, const Plan
   return count;
 }
 
+// PCNT: per plane from `top_plane` down to 0, the wavelet coefficients with
+// a component of at least 2^plane steps (those a decode through that plane
+// has non-zero).
+std::vector<std::uint64_t> plane_counts(const SubdivisionHierarchy& hierarchy, const PlaneSymbols& s, int top_plane) {
+  std::array<std::uint64_t, 33> by_length{};  // coefficients by their largest magnitude's bit length
+  for (std::size_t i = hierarchy.vertex_count(0); i < hierarchy.fine_vertex_count(); ++i) {
+    std::uint32_t m = s.magnitude[3 * i] | s.magnitude[3 * i + 1] | s.magnitude[3 * i + 2];
+    int length = 0;
+    for (; m != 0; m >>= 1) ++length;
+    ++by_length[static_cast<std::size_t>(length)];
+  }
+  std::vector<std::uint64_t> nonzero;
+  std::uint64_t count = 0;
+  for (int plane = top_plane; plane >= 0; --plane) {
+    count += by_length[static_cast<std::size_t>(plane + 1)];
+    nonzero.push_back(count);
+  }
+  return nonzero;
+}
+
 // What the planes from the top down to plane `low` decode to, in world units
 // (base control points first): every component known to that plane.
 void values_at_plane(const PlaneSymbols& s, int low, const V2Scales& scales, const std::vector<Vec3>& frame_base,
@@ -192,7 +213,10 @@ std::string encode_isw_v2(const SubdivisionHierarchy& hierarchy, const std::vect
   put_base(out, hierarchy.base(), 2);
   put_quantization_v2(out, scales, hierarchy.levels(), nonzero_wavelets(hierarchy, symbols));
   put_base_points(out, hierarchy.base(), base_q);
-  if (by_space) put_group_index(out, index);
+  if (by_space) {
+    put_group_index(out, index);
+    put_plane_counts(out, plane_counts(hierarchy, symbols, planes.top_plane));
+  }
   put_planes(out, layout, planes.packets, PlaneEnding::Complete);
   put_section(out, "END ", std::string_view());
   std::uint64_t kept = UINT64_MAX;  // plane stream bytes
@@ -280,15 +304,16 @@ std::string rewrite_isw(const std::string& file, const IswRewrite& rewrite) {
   const std::vector<Section> sections = sections_of_v2(file, &minor);
   std::string out;
   put_file_header(out, 2, minor);  // the planes' coding
-  std::string_view index;  // GIDX's payload, rewritten with PLNS (its CRCs)
+  std::string_view index;   // GIDX's payload, rewritten with PLNS (its CRCs)
+  std::string_view counts;  // PCNT's, which comes after GIDX
   for (const Section& section : sections) {
     if (section.tag == "RDTB") continue;  // replaced
     if (section.tag == "META" && rewrite.metadata) {
       put_meta(out, *rewrite.metadata, 2);
       continue;
     }
-    if (section.tag == "GIDX") {
-      index = section.payload;
+    if (section.tag == "GIDX" || section.tag == "PCNT") {
+      (section.tag == "GIDX" ? index : counts) = section.payload;
       continue;
     }
     if (section.tag != "PLNS") {
@@ -306,6 +331,7 @@ std::string rewrite_isw(const std::string& file, const IswRewrite& rewrite) {
       put_section(out, "GIDX",
                   with_crcs(index, bytes_crc(plane_table(planes.layout, planes.packets, ending)),
                             group_crcs(planes.packets, planes.layout.groups)));
+    if (!counts.empty()) put_section(out, "PCNT", counts);
     put_planes(out, planes.layout, planes.packets, ending);
   }
   return out;

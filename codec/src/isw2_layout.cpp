@@ -143,4 +143,38 @@ std::vector<IswRatePoint> read_rate_table(PayloadReader& reader) {
   return table;
 }
 
+void put_plane_counts(std::string& out, const std::vector<std::uint64_t>& nonzero) {
+  std::string payload;
+  put_u32(payload, static_cast<std::uint32_t>(nonzero.size()));
+  for (const std::uint64_t n : nonzero) put_u64(payload, n);
+  put_section(out, "PCNT", payload);
+}
+
+std::vector<std::uint64_t> read_plane_counts(PayloadReader& reader) {
+  const auto rows = reader.read<std::uint32_t>();
+  if (rows > 32 || rows > reader.remaining() / 8) reader.fail("has an impossible row count");
+  std::vector<std::uint64_t> nonzero(rows);
+  for (std::size_t k = 0; k < nonzero.size(); ++k) {
+    nonzero[k] = reader.read<std::uint64_t>();
+    if (k > 0 && nonzero[k] < nonzero[k - 1]) reader.fail("holds counts that decrease");
+  }
+  return nonzero;
+}
+
+std::size_t limit_planes(const std::vector<std::uint64_t>& nonzero, int top_plane, std::uint64_t keep,
+                         std::uint64_t base) {
+  const std::size_t rows = nonzero.size();
+  const auto first = static_cast<std::size_t>(std::lower_bound(nonzero.begin(), nonzero.end(), keep) - nonzero.begin());
+  if (first >= rows) return rows;
+  const auto squared_step = [&](std::size_t k) { return std::ldexp(1.0, 2 * (top_plane - static_cast<int>(k))); };
+  // What is dropped: the rest of plane `first`, and every later plane's.
+  double dropped = 2.25 * static_cast<double>(nonzero[first] - keep) * squared_step(first);
+  for (std::size_t k = first + 1; k < rows; ++k)
+    dropped += 2.25 * static_cast<double>(nonzero[k] - nonzero[k - 1]) * squared_step(k);
+  const double kept = static_cast<double>(keep) + static_cast<double>(base);
+  for (std::size_t k = first + 1; k < rows; ++k)
+    if (kept * squared_step(k) <= dropped / 10) return k + 1;
+  return rows;
+}
+
 }  // namespace isowave::detail

@@ -114,6 +114,31 @@ std::vector<PacketSpan> present_packets(const std::vector<std::uint64_t>& sizes,
 void put_rate_table(std::string& out, const std::vector<IswRatePoint>& rows);
 std::vector<IswRatePoint> read_rate_table(PayloadReader& reader);
 
+// PCNT (2.2): u32 rows, each u64: per plane of the complete stream, from the
+// top, the wavelet coefficients non-zero once that plane is decoded
+// (non-decreasing). Reading checks the rows' count and order.
+void put_plane_counts(std::string& out, const std::vector<std::uint64_t>& nonzero);
+std::vector<std::uint64_t> read_plane_counts(PayloadReader& reader);
+
+// How much of the plane stream a decode reads: at most `bytes`, and with a
+// coefficient limit `keep` and PCNT's counts, the planes limit_planes() gives.
+struct StreamPrefix {
+  std::uint64_t bytes = UINT64_MAX;
+  std::uint64_t keep = UINT64_MAX;                      // UINT64_MAX: no limit
+  const std::vector<std::uint64_t>* nonzero = nullptr;  // PCNT, if the file has one
+};
+
+// The planes (from the top) a decode keeping `keep` wavelet coefficients
+// (and `base` control points) reads, from PCNT's counts `nonzero` (rows from
+// plane top_plane down): the fewest past the plane that makes the keep-th
+// coefficient significant whose quantization error, (keep + base) x 4^p
+// squared steps when plane p is the last read (3 components, each off by
+// up to 2^p), is at most a tenth of the error of what is dropped, 2.25 x 4^b
+// per coefficient of plane b (its largest component in [2^b, 2^(b+1)));
+// all of them when none is. docs/FORMAT.md, "Percentages".
+std::size_t limit_planes(const std::vector<std::uint64_t>& nonzero, int top_plane, std::uint64_t keep,
+                         std::uint64_t base);
+
 // What IswPlaneValues keeps of an encoding: every entry's magnitudes and
 // signs, and what turns them into world coefficients.
 struct PlaneValuesState {
@@ -146,13 +171,13 @@ struct StreamAccess {
   std::uint64_t file_size = 0;
 };
 
-// The decoder's PLNS (isw2_decoder.cpp): decodes at most `max_stream_bytes`
-// of the section's packets into result.coefficients (world units; base
+// The decoder's PLNS (isw2_decoder.cpp): decodes the `prefix` of the
+// section's packets into result.coefficients (world units; base
 // control points included, and result.base.positions) and result.stream.
 // Error(Format) naming the section for a damaged complete packet, or (2.2)
 // a packet table or a group's packets that disagree with GIDX's CRCs.
 void decode_plane_stream(const Section& section, const SubdivisionHierarchy& hierarchy,
-                         const CoefficientClasses& layout, const V2Scales& scales, std::uint64_t max_stream_bytes,
+                         const CoefficientClasses& layout, const V2Scales& scales, const StreamPrefix& prefix,
                          const StreamAccess& access, IswDecoded& result);
 
 // result.ranked: the non-zero wavelet coefficients by importance (class

@@ -137,6 +137,7 @@ struct DecodeState {
   int major = 1;
   V2Scales scales;  // version 2
   std::optional<GroupIndex> group_index;  // version 2.2
+  bool saw_plane_counts = false;          // PCNT (result.stream.plane_counts)
   // A file read in part: its bytes past `bytes`, and its size.
   std::function<std::string(std::uint64_t, std::uint64_t)> fetch;
   std::uint64_t file_size = 0;
@@ -389,13 +390,20 @@ Next decode_section(const Section& section, DecodeState& state) {
     result.stream.rate_table = read_rate_table(reader);
   } else if (section.tag == "GIDX") {
     state.group_index = read_group_index(reader, result.base.face_count());
+  } else if (section.tag == "PCNT") {
+    result.stream.plane_counts = read_plane_counts(reader);
+    state.saw_plane_counts = true;
   } else if (section.tag == "PLNS") {
     await_hierarchy(state);
     const IswDecodeOptions& o = state.options;
     const StreamAccess access{state.group_index ? &*state.group_index : nullptr, &state.base_q,
                               o.region ? &*o.region : nullptr, o.frustum && !o.region ? &*o.frustum : nullptr,
                               state.fetch, state.file_size};
-    decode_plane_stream(section, *state.hierarchy, *state.layout, state.scales, stream_limit(state), access, result);
+    // A coefficient limit reads only the planes it needs (not with a region,
+    // whose limit applies outside it); PCNT is checked against PLNS always.
+    StreamPrefix prefix{stream_limit(state), UINT64_MAX, state.saw_plane_counts ? &result.stream.plane_counts : nullptr};
+    if (!o.region && !o.frustum && state.limit < result.coefficients_total) prefix.keep = state.limit;
+    decode_plane_stream(section, *state.hierarchy, *state.layout, state.scales, prefix, access, result);
     if (state.fetch && section.cut) {
       // Read in part: the file holds the rest of PLNS and an END after it
       // (whose bytes are not read), or it is truncated.
@@ -655,7 +663,24 @@ std::string read_through_plane_table(FileReader& file) {
 
 IswDecoded read_isw(const std::string& path, const IswDecodeOptions& options) {
   const auto start = Clock::now();
-  if ((options.region || options.frustum) && options.max_file_bytes == UINT64_MAX) {
+  // Reads in part whatever may need only part of the stream: a region, a
+  // view, a coefficient limit (2.2's PCNT), a stream limit.
+  const bool limited = options.max_coefficients != UINT64_MAX || options.max_percent < 100 ||
+                       options.max_stream_bytes != UINT64_MAX || options.max_error_cells > 0;
+  if (options.max_file_bytes != UINT64_MAX) {  // a prefix of the file, which is not truncated
+    FileReader file(path);
+    const std::string bytes = file.read(0, options.max_file_bytes);
+    const double read_seconds = seconds_since(start);
+    IswDecoded result = decode_isw(bytes, path, options);
+    if (bytes.size() < file.size()) {
+      result.truncated = false;
+      result.truncation_note.clear();
+    }
+    result.file_bytes = file.size();
+    result.seconds.read = read_seconds;
+    return result;
+  }
+  if (options.region || options.frustum || limited) {
     FileReader file(path);
     const std::string prefix = read_through_plane_table(file);
     const double read_seconds = seconds_since(start);

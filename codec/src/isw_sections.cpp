@@ -36,7 +36,7 @@ struct StreamTag {
 };
 constexpr StreamTag kStream1[] = {{"CHNK", true, true}, {"END ", false, false}};
 constexpr StreamTag kStream2[] = {
-    {"RDTB", false, true}, {"GIDX", false, true}, {"PLNS", false, false}, {"END ", false, false}};
+    {"RDTB", false, true}, {"GIDX", false, true}, {"PCNT", false, true}, {"PLNS", false, false}, {"END ", false, false}};
 
 struct StreamOrder {
   const StreamTag* tags;

@@ -64,7 +64,7 @@ std::vector<Vec3> take_reconstruction(IswDecoded& decoded, std::size_t keep, int
 
 std::vector<RateDistortionRow> rate_distortion(const IswDecoded& decoded, const std::vector<double>& percents,
                                                const std::vector<Vec3>* reference, const PointErrors* all_decoded_errors,
-                                               const RowSurfaceVisitor& visit) {
+                                               const RowSurfaceVisitor& visit, const PrefixValues& prefix_values) {
   // Version 2: a stream its encoder cut (convert --size) ends inside a plane; complete is every byte read.
   const bool partial = decoded.major_version >= 2 ? decoded.stream.decoded < decoded.stream.bytes
                                                   : decoded.chunks_decoded != decoded.chunks_total;
@@ -101,23 +101,36 @@ std::vector<RateDistortionRow> rate_distortion(const IswDecoded& decoded, const 
   };
 
   std::vector<RateDistortionRow> rows;
-  std::vector<Vec3> reconstruction;
+  std::vector<Vec3> reconstruction, prefix_coefficients;
+  std::uint64_t prefix_read = UINT64_MAX;  // the prefix in prefix_coefficients
   const auto add_row = [&](std::size_t wavelets, bool is_base) {
     RateDistortionRow row;
     row.wavelet_coefficients = std::min(wavelets, decoded.ranked.size());
     row.kept = h.vertex_count(0) + wavelets;
     row.percent = 100.0 * static_cast<double>(row.kept) / static_cast<double>(fine);
+    row.bytes = bytes_for(row.wavelet_coefficients);
     PointErrors e;
     if (wavelets >= decoded.ranked.size() && (!reference || all_decoded_errors)) {
       if (reference) e = *all_decoded_errors;  // else: the full decode itself, zero
     } else {
-      reconstruct_into(decoded, wavelets, -1, reconstruction);
+      const std::uint64_t prefix = stream_bytes_for_keep(decoded, wavelets);
+      if (prefix_values && prefix < decoded.stream.bytes) {
+        // What decode --percent keeps: the most important of the prefix's values.
+        if (prefix != prefix_read) prefix_values(prefix, prefix_coefficients);
+        prefix_read = prefix;
+        reconstruction = prefix_coefficients;
+        keep_most_important(h, reconstruction, decoded.class_weights, wavelets);
+        synthesize(h, reconstruction);
+        reconstruction.resize(fine);
+        row.bytes = decoded.stream.offset + prefix;
+      } else {
+        reconstruct_into(decoded, wavelets, -1, reconstruction);
+      }
       e = point_errors(reconstruction, compare_to, fine);
       if (visit) visit(rows.size(), row.wavelet_coefficients, reconstruction);
     }
     row.rms = e.rms;
     row.max = e.max;
-    row.bytes = bytes_for(row.wavelet_coefficients);
     row.is_base = is_base;
     rows.push_back(row);
   };
@@ -126,12 +139,21 @@ std::vector<RateDistortionRow> rate_distortion(const IswDecoded& decoded, const 
   return rows;
 }
 
+PrefixValues decode_prefixes(const std::string& file) {
+  return [&file](std::uint64_t stream_bytes, std::vector<Vec3>& coefficients) {
+    IswDecodeOptions options;
+    options.max_stream_bytes = stream_bytes;
+    options.order = IswOrder::Index;
+    coefficients = decode_isw(file, "statistics", options).coefficients;
+  };
+}
+
 ErrorTable error_table(const IswDecoded& decoded, const std::vector<double>& percents, const std::vector<Vec3>* full_decode,
-                       const RowSurfaceVisitor& visit) {
+                       const RowSurfaceVisitor& visit, const PrefixValues& prefix_values) {
   // Rows keeping every decoded coefficient are the full decode itself.
   const PointErrors none;
   ErrorTable table;
-  table.rows = rate_distortion(decoded, percents, full_decode, full_decode ? &none : nullptr, visit);
+  table.rows = rate_distortion(decoded, percents, full_decode, full_decode ? &none : nullptr, visit, prefix_values);
   table.quantization = recorded_quantization_error(decoded.metadata);
   return table;
 }

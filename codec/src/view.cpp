@@ -54,7 +54,56 @@ struct FaceViewData {
   int levels = 0;
   std::vector<Vec3> lo, hi;
   std::vector<double> omitted;  // f (L + 1) + l
+  // The normal cone of the face's finest faces: a unit axis and the largest
+  // angle (radians) between it and a finest face's normal (pi: unknown).
+  std::vector<Vec3> axis;
+  std::vector<double> spread;
 };
+
+// Visits the (area-weighted) normals of base face f's finest faces: a
+// level-L quad (corner, edge, centre, edge) in the parent's orientation, or
+// the base polygon's own when L = 0.
+template <class Visit>
+void for_each_finest_normal(const SubdivisionHierarchy& h, std::size_t f, const std::vector<Vec3>& fine, Visit&& visit) {
+  if (h.levels() == 0) {
+    const PolygonMesh& base = h.base();
+    Vec3 n{};
+    for (std::uint32_t k = base.face_offsets[f]; k < base.face_offsets[f + 1]; ++k) {
+      const std::uint32_t next = k + 1 < base.face_offsets[f + 1] ? k + 1 : base.face_offsets[f];
+      n = n + cross(fine[base.face_vertices[k]], fine[base.face_vertices[next]]);
+    }
+    visit(n);
+    return;
+  }
+  const RefinementStep& s = h.step(h.levels());
+  const auto [first, end] = h.descendant_faces(f, h.levels() - 1);
+  for (std::size_t p = first; p < end; ++p) {
+    const Vec3& centre = fine[s.first_face_vertex() + p];
+    const std::uint32_t begin = s.face_offsets[p], stop = s.face_offsets[p + 1];
+    for (std::uint32_t k = begin; k < stop; ++k) {
+      const std::uint32_t previous = k > begin ? k - 1 : stop - 1;
+      visit(cross(centre - fine[s.face_vertices[k]], fine[s.face_edges[previous]] - fine[s.face_edges[k]]));
+    }
+  }
+}
+
+// The normal cone of base face f's finest faces: the axis of their summed
+// normals and the widest angle from it (pi when they sum to nothing).
+void normal_cone(const SubdivisionHierarchy& h, std::size_t f, const std::vector<Vec3>& fine, Vec3& axis,
+                 double& spread) {
+  Vec3 sum{};
+  for_each_finest_normal(h, f, fine, [&](const Vec3& n) { sum = sum + n; });
+  const double length = norm(sum);
+  spread = std::acos(-1.0);
+  if (!(length > 0) || !std::isfinite(length)) return;
+  axis = sum * (1 / length);
+  double widest = 0;
+  for_each_finest_normal(h, f, fine, [&](const Vec3& n) {
+    const double l = norm(n);
+    if (l > 0) widest = std::max(widest, std::acos(std::clamp(dot(axis, n) / l, -1.0, 1.0)));  // degenerate: no direction
+  });
+  spread = widest;
+}
 
 FaceViewData face_view_data(const IswDecoded& decoded, const std::vector<Vec3>& fine) {
   const SubdivisionHierarchy& h = *decoded.hierarchy;
@@ -64,6 +113,8 @@ FaceViewData face_view_data(const IswDecoded& decoded, const std::vector<Vec3>& 
   data.omitted = face_details(decoded);
   data.lo.resize(faces);
   data.hi.resize(faces);
+  data.axis.resize(faces);
+  data.spread.resize(faces);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, faces, 1024), [&](const tbb::blocked_range<std::size_t>& r) {
     for (std::size_t f = r.begin(); f < r.end(); ++f) {
       constexpr double inf = std::numeric_limits<double>::infinity();
@@ -75,6 +126,7 @@ FaceViewData face_view_data(const IswDecoded& decoded, const std::vector<Vec3>& 
       });
       data.lo[f] = lo;
       data.hi[f] = hi;
+      normal_cone(h, f, fine, data.axis[f], data.spread[f]);
       // Detail per level into what each level leaves out: omitted[l] = sum over m > l.
       double* row = data.omitted.data() + f * stride;
       double sum = 0;
@@ -88,9 +140,25 @@ FaceViewData face_view_data(const IswDecoded& decoded, const std::vector<Vec3>& 
   return data;
 }
 
-// Face f's level for the camera (-1: outside the frustum, level 0).
-int face_level(const FaceViewData& data, std::size_t f, const Camera& camera, double pixel_error) {
-  if (camera.box_outside(data.lo[f], data.hi[f])) return -1;
+constexpr int kOutsideFrustum = -1, kFacingAway = -2;
+
+// Whether every finest face of f faces away from the camera at every point
+// of f's box: the angle between the cone's axis and the direction to the
+// box's centre, plus the cone's spread, plus the angle the box's bounding
+// sphere subtends, stays below 90 degrees.
+bool facing_away(const FaceViewData& data, std::size_t f, const Vec3& eye) {
+  const Vec3 centre = (data.lo[f] + data.hi[f]) * 0.5, to_centre = centre - eye;
+  const double distance = norm(to_centre), radius = norm(data.hi[f] - data.lo[f]) * 0.5;
+  if (!(distance > radius)) return false;
+  const double to_axis = std::acos(std::clamp(dot(data.axis[f], to_centre) / distance, -1.0, 1.0));
+  return to_axis + data.spread[f] + std::asin(radius / distance) < std::acos(0.0);
+}
+
+// Face f's level for the camera (or kOutsideFrustum, kFacingAway: level 0).
+int face_level(const FaceViewData& data, std::size_t f, const Camera& camera, double pixel_error,
+               BackFaces back_faces) {
+  if (camera.box_outside(data.lo[f], data.hi[f])) return kOutsideFrustum;
+  if (back_faces == BackFaces::Cull && facing_away(data, f, camera.position)) return kFacingAway;
   const double distance = norm(camera.position - clamp_to_box(camera.position, data.lo[f], data.hi[f]));
   const double scale = distance > 0 ? camera.pixels_per_unit(distance) : std::numeric_limits<double>::infinity();
   // The coarsest level whose omitted detail stays within the pixel error.
@@ -115,28 +183,30 @@ void check_view(const IswDecoded& decoded, const Camera& camera, double pixel_er
 }
 
 // Every base face's level into `out` (culled faces at 0, counted).
-void levels_for(const FaceViewData& data, const Camera& camera, double pixel_error, ViewLevels& out) {
+void levels_for(const FaceViewData& data, const Camera& camera, double pixel_error, BackFaces back_faces,
+                ViewLevels& out) {
   out.levels.assign(data.lo.size(), 0);
-  std::vector<std::uint8_t> culled(out.levels.size(), 0);
+  std::vector<std::int8_t> culled(out.levels.size(), 0);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, out.levels.size(), 4096), [&](const tbb::blocked_range<std::size_t>& r) {
     for (std::size_t f = r.begin(); f < r.end(); ++f) {
-      const int level = face_level(data, f, camera, pixel_error);
-      culled[f] = level < 0;
+      const int level = face_level(data, f, camera, pixel_error, back_faces);
+      culled[f] = static_cast<std::int8_t>(std::min(level, 0));
       out.levels[f] = std::max(level, 0);
     }
   });
-  out.culled = static_cast<std::size_t>(std::count(culled.begin(), culled.end(), 1));
+  out.culled = static_cast<std::size_t>(std::count(culled.begin(), culled.end(), kOutsideFrustum));
+  out.back_facing = static_cast<std::size_t>(std::count(culled.begin(), culled.end(), kFacingAway));
 }
 
 }  // namespace
 
 ViewLevels view_face_levels(const IswDecoded& decoded, const std::vector<Vec3>& fine, const Camera& camera,
-                            double pixel_error) {
+                            double pixel_error, BackFaces back_faces) {
   check_view(decoded, camera, pixel_error);
   if (fine.size() < decoded.hierarchy->fine_vertex_count())
     throw Error(ErrorKind::InvalidArgument, "a view decode needs the fine control points");
   ViewLevels out;
-  levels_for(face_view_data(decoded, fine), camera, pixel_error, out);
+  levels_for(face_view_data(decoded, fine), camera, pixel_error, back_faces, out);
   return out;
 }
 
@@ -161,12 +231,12 @@ ViewRefiner::~ViewRefiner() = default;
 ViewRefiner::ViewRefiner(ViewRefiner&&) noexcept = default;
 ViewRefiner& ViewRefiner::operator=(ViewRefiner&&) noexcept = default;
 
-std::vector<std::uint32_t> ViewRefiner::set_view(const Camera& camera, double pixel_error) {
+std::vector<std::uint32_t> ViewRefiner::set_view(const Camera& camera, double pixel_error, BackFaces back_faces) {
   if (!(pixel_error > 0) || !std::isfinite(pixel_error))
     throw Error(ErrorKind::InvalidArgument, "the pixel error must be a positive number");
   check_camera(camera);
   ViewLevels next;
-  levels_for(data_->faces, camera, pixel_error, next);
+  levels_for(data_->faces, camera, pixel_error, back_faces, next);
   // The faces whose level changed, and their neighbours across base edges
   // (their transitions change).
   const SubdivisionHierarchy& h = *data_->hierarchy;
@@ -201,10 +271,11 @@ PolygonMesh ViewRefiner::mesh() const {
   return adaptive_control_mesh(*data_->hierarchy, data_->current.levels, data_->points);
 }
 
-PolygonMesh view_mesh(const IswDecoded& decoded, const Camera& camera, double pixel_error, ViewLevels* report) {
+PolygonMesh view_mesh(const IswDecoded& decoded, const Camera& camera, double pixel_error, ViewLevels* report,
+                      BackFaces back_faces) {
   check_view(decoded, camera, pixel_error);
   ViewRefiner refiner(decoded);
-  refiner.set_view(camera, pixel_error);
+  refiner.set_view(camera, pixel_error, back_faces);
   PolygonMesh mesh = refiner.mesh();
   if (report) *report = refiner.levels();
   return mesh;

@@ -406,10 +406,12 @@ std::vector<double> normal_energy_share(const SubdivisionHierarchy& h, const std
 // the rate target asks for (rate_control.h), and the file: its metadata
 // records the quantization error of the cut stream (the full decode against
 // the fitted points) and its RDTB the D measured at the stream's prefixes.
-// Returns what a 100% decode of the file gives.
+// Returns what a 100% decode of the file gives; `planes` receives what the
+// stream's plane ends decode to (the summary rows' prefixes).
 std::vector<Vec3> analyze_and_encode(const std::shared_ptr<const SubdivisionHierarchy>& hierarchy,
                                      IswMetadata metadata, detail::FineSurfaceMeter& meter, const std::string& source,
-                                     const ConvertOptions& options, ConvertResult& result, ProgressSink& progress) {
+                                     const ConvertOptions& options, ConvertResult& result, IswPlaneValues& planes,
+                                     ProgressSink& progress) {
   auto start = Clock::now();
   progress.begin_stage("analysis");
   std::vector<Vec3> coefficients = result.fit.positions;
@@ -423,14 +425,12 @@ std::vector<Vec3> analyze_and_encode(const std::shared_ptr<const SubdivisionHier
   encode_options.step = options.step_cells * result.cell_size;
   encode_options.frame_step = kFrameStepCells * result.cell_size;
   if (!result.frame_base.empty()) encode_options.frame_base = &result.frame_base;
-  IswPlaneValues planes;
   const std::string whole = encode_isw(*hierarchy, coefficients, metadata, encode_options, planes);
   result.normal_share = normal_energy_share(*hierarchy, coefficients, planes.frame_normals());
   result.plane_bits = planes.plane_bits();
   std::vector<Vec3>().swap(coefficients);
   detail::RatePlan plan =
       detail::plan_rate(whole, planes, hierarchy, meter, options.rate, result.extracted_vertices, result.cell_size);
-  planes = IswPlaneValues{};
   if (plan.target_missed)
     result.warnings.push_back("the whole stream lies " + number(plan.error / result.cell_size) +
                               " cells from the isosurface, more than the maximum error asked for: the fit's own error "
@@ -448,8 +448,8 @@ std::vector<Vec3> analyze_and_encode(const std::shared_ptr<const SubdivisionHier
 // isosurface, measured on the row's synthesis (one at a time; a row keeping
 // every coefficient is the file's, a repeated row the row before's).
 void evaluate(const std::shared_ptr<const SubdivisionHierarchy>& hierarchy, const std::vector<Vec3>& full_decode,
-              detail::FineSurfaceMeter& meter, const std::string& source, const ConvertOptions& options,
-              ConvertResult& result, ProgressSink& progress) {
+              const IswPlaneValues& planes, detail::FineSurfaceMeter& meter, const std::string& source,
+              const ConvertOptions& options, ConvertResult& result, ProgressSink& progress) {
   const auto start = Clock::now();
   progress.begin_stage("evaluate");
   IswDecodeOptions decode_options;
@@ -465,7 +465,15 @@ void evaluate(const std::shared_ptr<const SubdivisionHierarchy>& hierarchy, cons
     d_cells[row] = known != by_wavelets.end() ? known->second : meter.d(surface) / result.cell_size;
     by_wavelets[wavelets] = d_cells[row];
   };
-  ErrorTable errors = error_table(decoded, options.summary_percents, &full_decode, measure_row);
+  // A row reading a prefix keeps the most important of what that plane end
+  // decodes to, which the encoder knows (no decoding).
+  const auto prefix_values = [&](std::uint64_t stream_bytes, std::vector<Vec3>& coefficients) {
+    const std::vector<std::uint64_t>& ends = planes.plane_ends();
+    const auto end = std::find(ends.begin(), ends.end(), stream_bytes);
+    if (end == ends.end()) throw std::logic_error(source + ": a summary row's prefix ends inside a plane");
+    planes.coefficients_at(static_cast<std::size_t>(end - ends.begin()), coefficients);
+  };
+  ErrorTable errors = error_table(decoded, options.summary_percents, &full_decode, measure_row, prefix_values);
   result.summary = std::move(errors.rows);
   result.quantization = errors.quantization;
   progress.end_stage();
@@ -511,9 +519,10 @@ ConvertResult convert_volume(Volume volume, const std::string& source, const Con
 
   // D of the rate table's prefixes and of the summary rows, over one fine mesh.
   detail::FineSurfaceMeter meter(*hierarchy, against_surface);
+  IswPlaneValues planes;
   const std::vector<Vec3> full_decode =
-      analyze_and_encode(hierarchy, std::move(metadata), meter, source, options, result, progress);
-  evaluate(hierarchy, full_decode, meter, source, options, result, progress);
+      analyze_and_encode(hierarchy, std::move(metadata), meter, source, options, result, planes, progress);
+  evaluate(hierarchy, full_decode, planes, meter, source, options, result, progress);
   return result;
 }
 

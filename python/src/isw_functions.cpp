@@ -16,6 +16,7 @@
 #include "isowave/codec/view.h"
 #include "isowave/codec/statistics.h"
 #include "isowave/core/error.h"
+#include "isowave/core/mesh_io.h"
 #include "isowave/pipeline/convert.h"
 #include "isowave/pipeline/prepare.h"
 #include "isowave/transform/limit_surface.h"
@@ -175,7 +176,7 @@ std::optional<RegionOfInterest> region_argument(const py::object& roi, const py:
 py::tuple decode(const fs::path& file, const py::object& percent, const py::object& coefficients,
                  const py::object& max_error, const py::object& bytes, const py::object& level, bool limit,
                  bool triangulate, const py::object& roi, const py::object& roi_sphere, double roi_falloff,
-                 const py::object& view, double pixel_error, const std::string& oracle) {
+                 const py::object& view, double pixel_error, bool cull_back_faces, const std::string& oracle) {
   const std::string path = file.string();
   if (!max_error.is_none() && !bytes.is_none())
     throw Error(ErrorKind::InvalidArgument, "give at most one of max_error and bytes");
@@ -184,6 +185,7 @@ py::tuple decode(const fs::path& file, const py::object& percent, const py::obje
   const std::optional<RegionOfInterest> region = region_argument(roi, roi_sphere, roi_falloff);
   if (region && !level.is_none()) throw Error(ErrorKind::InvalidArgument, "roi gives the finest level: no level");
   const std::optional<Camera> camera = camera_argument(view);
+  if (cull_back_faces && !camera) throw Error(ErrorKind::InvalidArgument, "cull_back_faces needs a view");
   if (camera && (region || !level.is_none() || !percent.is_none() || !coefficients.is_none() || limit))
     throw Error(ErrorKind::InvalidArgument, "view chooses each face's level: no roi, level, percent, coefficients or limit");
   IswDecodeOptions options;
@@ -223,7 +225,7 @@ py::tuple decode(const fs::path& file, const py::object& percent, const py::obje
       throw Error(ErrorKind::InvalidArgument,
                   "level must be in 0.." + std::to_string(decoded.levels) + ", got " + std::to_string(l));
     if (camera) {
-      mesh = view_mesh(decoded, *camera, pixel_error);
+      mesh = view_mesh(decoded, *camera, pixel_error, nullptr, cull_back_faces ? BackFaces::Cull : BackFaces::Refine);
     } else if (region) {
       const std::size_t keep = percent.is_none() ? outside : coefficients_for_percent(*decoded.hierarchy, percent_value);
       mesh = region_mesh(decoded, *region, keep);
@@ -246,10 +248,11 @@ py::list stats(const fs::path& file, const std::vector<double>& percents) {
   double cell = 1, fine = 1, extracted = 0;
   {
     py::gil_scoped_release release;
-    const IswDecoded decoded = read_isw(path);
+    const std::string bytes = read_file_bytes(path);
+    const IswDecoded decoded = decode_isw(bytes, path);
     if (decoded.truncated)
       throw Error(ErrorKind::Format, path + ": " + decoded.truncation_note + "; stats need the whole file");
-    errors = error_table(decoded, percents);
+    errors = error_table(decoded, percents, nullptr, nullptr, decode_prefixes(bytes));
     cell = recorded_cell_size(decoded.metadata);
     fine = static_cast<double>(decoded.hierarchy->fine_vertex_count());
     extracted = decoded.metadata.number("extracted_vertices", 0);

@@ -48,7 +48,7 @@ file's metadata, default 'numpy array'). Returns the result `isowave convert --j
 (bytes, vertex counts, levels, seconds per stage, fit quality, the rate-distortion rows with D, the
 quantization error, warnings).)";
 
-constexpr const char* kDecodeDoc = R"(decode(path, *, percent=None, coefficients=None, max_error=None, bytes=None, level=None, limit=False, triangulate=False, roi=None, roi_sphere=None, roi_falloff=0, view=None, pixel_error=1.0, oracle="weighted") -> (vertices, faces)
+constexpr const char* kDecodeDoc = R"(decode(path, *, percent=None, coefficients=None, max_error=None, bytes=None, level=None, limit=False, triangulate=False, roi=None, roi_sphere=None, roi_falloff=0, view=None, pixel_error=1.0, cull_back_faces=False, oracle="weighted") -> (vertices, faces)
 
 Rebuilds the surface of an .isw file as `isowave decode`: the base mesh and the most important
 wavelet coefficients, at most one of percent (0..100 of full resolution, counted as the paper does;
@@ -65,7 +65,8 @@ a version 2.2 file), as `isowave decode --roi`; roi_falloff (world units) weight
 by a Gaussian of the distance from the region (`--roi-falloff`). view: a camera, a dict {"position": (x, y, z),
 "target": (x, y, z), "up": (x, y, z), "fov": degrees, "viewport": (width, height)} or the path of
 such a JSON file: each base face refined until the detail left out projects to at most pixel_error
-pixels, faces outside the view frustum kept whole, as `isowave decode --view`. A file cut inside its
+pixels, faces outside the view frustum kept whole (and with cull_back_faces=True those facing away,
+`--cull-back-faces`), as `isowave decode --view`. A file cut inside its
 coefficients decodes what it holds, with a UserWarning.)";
 
 constexpr const char* kStatsDoc = R"(stats(path, percents=(100, 20, 10, 5)) -> list of dict
@@ -112,7 +113,7 @@ PYBIND11_MODULE(isowave, m) {
         py::arg("level") = py::none(), py::arg("limit") = false, py::arg("triangulate") = false,
         py::arg("roi") = py::none(), py::arg("roi_sphere") = py::none(), py::arg("roi_falloff") = 0.0,
         py::arg("view") = py::none(),
-        py::arg("pixel_error") = 1.0, py::arg("oracle") = "weighted", kDecodeDoc);
+        py::arg("pixel_error") = 1.0, py::arg("cull_back_faces") = false, py::arg("oracle") = "weighted", kDecodeDoc);
   define_view_refiner(m);
   m.def("stats", &stats, py::arg("path"), py::arg("percents") = std::vector<double>{100, 20, 10, 5}, kStatsDoc);
   m.def("keep_freed_memory_for_reuse", &isowave::keep_freed_memory_for_reuse, kKeepMemoryDoc);

@@ -25,10 +25,11 @@ incrementally). view: a camera (a dict with position, target, up, fov, viewport,
 path) whose frustum alone is read from a version 2.2 file; None reads the whole file. Every base face
 starts at level 0 until set_view().)";
 
-constexpr const char* kSetViewDoc = R"(set_view(view, pixel_error=1.0) -> uint32 array
+constexpr const char* kSetViewDoc = R"(set_view(view, pixel_error=1.0, cull_back_faces=False) -> uint32 array
 
 Refines each base face until the detail left out projects to at most pixel_error pixels (faces outside
-the frustum at level 0) and returns, ascending, the base faces whose patch changed (their level, or a
+the frustum at level 0, and with cull_back_faces=True those facing away: a closed surface seen from
+outside, `--cull-back-faces`) and returns, ascending, the base faces whose patch changed (their level, or a
 neighbour's across a base edge): re-emit those with patches().)";
 
 constexpr const char* kPatchesDoc = R"(patches(faces) -> (polygon_faces, ends, corners)
@@ -71,18 +72,18 @@ void define_view_refiner(py::module_& m) {
            py::arg("path"), py::kw_only(), py::arg("view") = py::none())
       .def(
           "set_view",
-          [](ViewRefiner& refiner, const py::object& view, double pixel_error) {
+          [](ViewRefiner& refiner, const py::object& view, double pixel_error, bool cull_back_faces) {
             const std::optional<Camera> camera = camera_argument(view);
             if (!camera) throw Error(ErrorKind::InvalidArgument, "set_view needs a camera");
             std::vector<std::uint32_t> changed;
             {
               py::gil_scoped_release release;
-              changed = refiner.set_view(*camera, pixel_error);
+              changed = refiner.set_view(*camera, pixel_error, cull_back_faces ? BackFaces::Cull : BackFaces::Refine);
             }
             const auto n = static_cast<py::ssize_t>(changed.size());
             return owned_array<std::uint32_t>(std::move(changed), {n});
           },
-          py::arg("view"), py::arg("pixel_error") = 1.0, kSetViewDoc)
+          py::arg("view"), py::arg("pixel_error") = 1.0, py::arg("cull_back_faces") = false, kSetViewDoc)
       .def_property_readonly(
           "levels",
           [](const ViewRefiner& refiner) {

@@ -171,16 +171,18 @@ def camera_below(path, distance, fov):
     return camera, full
 
 
-def test_decode_of_a_view_gives_the_cli_mesh_from_a_dict_or_a_file(cli, sphere_isw, tmp_path):
+@pytest.mark.parametrize("cull", [False, True])
+def test_decode_of_a_view_gives_the_cli_mesh_from_a_dict_or_a_file(cli, sphere_isw, tmp_path, cull):
     cli_path, _ = sphere_isw
     camera, full = camera_below(cli_path, 2, 20)
     path = tmp_path / "camera.json"
     path.write_text(json.dumps(camera))
     obj = tmp_path / "view.obj"
-    cli("decode", cli_path, "--view", path, "--pixel-error", 2, "--triangulate", "-o", obj, "--quiet")
+    cli("decode", cli_path, "--view", path, "--pixel-error", 2, "--triangulate", "-o", obj, "--quiet",
+        *(["--cull-back-faces"] if cull else []))
     cli_vertices, cli_faces = read_obj(obj)
     for view in (camera, str(path)):
-        vertices, faces = isowave.decode(cli_path, view=view, pixel_error=2, triangulate=True)
+        vertices, faces = isowave.decode(cli_path, view=view, pixel_error=2, triangulate=True, cull_back_faces=cull)
         np.testing.assert_allclose(vertices, cli_vertices, rtol=1e-7, atol=1e-7)
         np.testing.assert_array_equal(faces, cli_faces)
     assert len(vertices) < len(full)
@@ -188,6 +190,20 @@ def test_decode_of_a_view_gives_the_cli_mesh_from_a_dict_or_a_file(cli, sphere_i
         isowave.decode(cli_path, view=dict(camera, zoom=2))
     with pytest.raises(isowave.Error, match="view chooses"):
         isowave.decode(cli_path, view=camera, percent=5)
+
+
+def test_culling_back_faces_keeps_the_far_side_whole(sphere_isw):
+    cli_path, _ = sphere_isw
+    camera, _ = camera_below(cli_path, 2, 40)
+    culled = isowave.decode(cli_path, view=camera, pixel_error=0.5, cull_back_faces=True, triangulate=True)[1]
+    assert len(culled) < len(isowave.decode(cli_path, view=camera, pixel_error=0.5, triangulate=True)[1])
+    refiner = isowave.ViewRefiner(cli_path)
+    refiner.set_view(camera, pixel_error=0.5, cull_back_faces=True)
+    culled_levels = refiner.levels.copy()
+    refiner.set_view(camera, pixel_error=0.5)
+    assert (culled_levels <= refiner.levels).all() and (culled_levels < refiner.levels).any()
+    with pytest.raises(isowave.Error, match="cull_back_faces needs a view"):
+        isowave.decode(cli_path, cull_back_faces=True)
 
 
 def test_view_refiner_patches_make_the_view_mesh_and_a_move_names_what_changed(sphere_isw):

@@ -390,6 +390,7 @@ TEST_F(CliTest, BadInputGivesOneLineAndANonZeroExitCode) {
       {"decode", path("missing.isw"), "--roi", "1,2,3", "-o", path("x.ply")},
       {"decode", path("missing.isw"), "--roi-sphere", "1,2,3,0", "-o", path("x.ply")},
       {"decode", path("missing.isw"), "--pixel-error", "1", "-o", path("x.ply")},
+      {"decode", path("missing.isw"), "--cull-back-faces", "-o", path("x.ply")},
       {"decode", path("missing.isw"), "--percent", "5", "--oracle", "best", "-o", path("x.ply")},
       {"decode", path("missing.isw"), "--oracle", "greedy", "-o", path("x.ply")},  // nothing to choose
       {"decode", path("missing.isw"), "--view", path("missing.json"), "--roi", "0,0,0,1,1,1", "-o", path("x.ply")},

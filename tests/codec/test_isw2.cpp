@@ -6,6 +6,7 @@
 // (non-normal flags) decoding as 2.0 does.
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <random>
 
 #include <gtest/gtest.h>
@@ -169,35 +170,144 @@ TEST(IswFormat2, SizeLimitCutsTheStreamAndRateTableChoosesThePrefix) {
   EXPECT_EQ(decode_isw(tabled, "tabled.isw", within).stream.decoded, full.stream.bytes);
 }
 
-TEST(IswFormat2, PercentKeepsTheMostImportantOfTheDecodedCoefficients) {
+std::size_t nonzero_wavelets(const IswDecoded& d) {
+  std::size_t n = 0;
+  for (std::size_t i = d.hierarchy->vertex_count(0); i < d.coefficients.size(); ++i) n += d.coefficients[i] == Vec3{} ? 0 : 1;
+  return n;
+}
+
+// PCNT as docs/FORMAT.md gives it: u32 rows, a u64 each.
+std::vector<std::uint64_t> plane_counts(const std::string& file) {
+  const std::string payload = test::payload_of(file, "PCNT");
+  std::uint32_t rows = 0;
+  std::memcpy(&rows, payload.data(), 4);
+  std::vector<std::uint64_t> counts(rows);
+  for (std::uint32_t k = 0; k < rows; ++k) std::memcpy(&counts[k], payload.data() + 4 + 8 * k, 8);
+  return counts;
+}
+
+// What a coefficient limit `keep` reads (docs/FORMAT.md, "Percentages"),
+// with the counts found by decoding each plane end: the fewest planes past
+// the one that makes the keep-th coefficient significant whose quantization
+// error (keep + base) 4^p is at most a tenth of the dropped coefficients'
+// 2.25 x 4^b each.
+IswDecoded prefix_for(const std::string& file, std::size_t keep) {
+  const IswDecoded full = decode_isw(file, "test.isw");
+  const std::vector<std::uint64_t>& ends = full.stream.plane_ends;
+  IswDecodeOptions options;
+  options.order = IswOrder::Index;
+  std::vector<double> counts;
+  for (const std::uint64_t end : ends) {
+    options.max_stream_bytes = end;
+    counts.push_back(static_cast<double>(nonzero_wavelets(decode_isw(file, "test.isw", options))));
+  }
+  const auto plane_of = [&](std::size_t k) { return full.stream.top_plane - static_cast<int>(k); };
+  std::size_t first = 0;
+  while (first < counts.size() && counts[first] < static_cast<double>(keep)) ++first;
+  options.max_stream_bytes = UINT64_MAX;
+  if (first < counts.size()) {
+    double dropped = 2.25 * (counts[first] - static_cast<double>(keep)) * std::pow(4.0, plane_of(first));
+    for (std::size_t k = first + 1; k < counts.size(); ++k)
+      dropped += 2.25 * (counts[k] - counts[k - 1]) * std::pow(4.0, plane_of(k));
+    const double kept = static_cast<double>(keep + full.hierarchy->vertex_count(0));
+    for (std::size_t k = first + 1; k + 1 < counts.size(); ++k)
+      if (kept * std::pow(4.0, plane_of(k)) <= dropped / 10) {
+        options.max_stream_bytes = ends[k];
+        break;
+      }
+  }
+  return decode_isw(file, "test.isw", options);
+}
+
+TEST(IswFormat2, PlaneCountsAreTheNonZeroCoefficientsAtEachPlaneEnd) {
   const Encoded e = encode_sample(test::genus_slab(2), 3, 1e-4);
   const IswDecoded full = decode_isw(e.bytes, "test.isw");
+  const std::vector<std::uint64_t> counts = plane_counts(e.bytes);
+  ASSERT_EQ(counts.size(), full.stream.plane_ends.size());
+  ASSERT_EQ(counts.size(), static_cast<std::size_t>(full.stream.top_plane + 1));
+  IswDecodeOptions options;
+  options.order = IswOrder::Index;
+  for (std::size_t k = 0; k < counts.size(); ++k) {
+    options.max_stream_bytes = full.stream.plane_ends[k];
+    EXPECT_EQ(counts[k], nonzero_wavelets(decode_isw(e.bytes, "test.isw", options))) << "plane end " << k;
+  }
+  EXPECT_EQ(counts.back(), full.coefficients_total);
+}
+
+TEST(IswFormat2, PercentKeepsTheMostImportantOfThePlanesItNeeds) {
+  const Encoded e = encode_sample(test::genus_slab(2), 3, 1e-4);
+  for (const double percent : {0.0, 3.0, 10.0, 40.0}) {
+    IswDecodeOptions options;
+    options.max_percent = percent;
+    const IswDecoded d = decode_isw(e.bytes, "test.isw", options);
+    const std::size_t keep = coefficients_for_percent(*d.hierarchy, percent);
+    ASSERT_EQ(d.ranked.size(), keep);
+    const IswDecoded reference = prefix_for(e.bytes, keep);
+    EXPECT_EQ(d.stream.decoded, reference.stream.decoded) << percent << "%";
+    EXPECT_EQ(stream_bytes_for_keep(decode_isw(e.bytes, "test.isw"), keep), d.stream.decoded) << percent << "%";
+    const CoefficientClasses classes(*d.hierarchy);
+    const auto importance = [&](std::size_t i) {
+      return norm(reference.coefficients[i]) * d.class_weights[static_cast<std::size_t>(classes.of(i))];
+    };
+    double least_kept = INFINITY;
+    std::vector<std::uint8_t> kept(d.coefficients.size(), 0);
+    for (std::uint32_t i : d.ranked) {
+      kept[i] = 1;
+      least_kept = std::min(least_kept, importance(i));
+      ASSERT_EQ(d.coefficients[i], reference.coefficients[i]);
+    }
+    for (std::size_t i = classes.base(); i < d.coefficients.size(); ++i)
+      if (!kept[i]) {
+        ASSERT_LE(importance(i), least_kept) << i;
+        ASSERT_EQ(d.coefficients[i], Vec3{}) << i;
+      }
+  }
+  // Without PCNT (as 2.1 files) a limit ranks the whole stream.
   IswDecodeOptions options;
   options.max_percent = 10;
-  const IswDecoded d = decode_isw(e.bytes, "test.isw", options);
-  ASSERT_EQ(d.ranked.size(), coefficients_for_percent(*d.hierarchy, 10));
-  const CoefficientClasses classes(*d.hierarchy);
-  const auto importance = [&](std::size_t i) {
-    return norm(full.coefficients[i]) * d.class_weights[static_cast<std::size_t>(classes.of(i))];
+  const std::string without = test::join([&] {
+    std::vector<std::string> parts = test::split_sections(e.bytes);
+    parts.erase(std::remove_if(parts.begin(), parts.end(), [](const std::string& p) { return test::section_tag(p) == "PCNT"; }),
+                parts.end());
+    return parts;
+  }());
+  EXPECT_EQ(decode_isw(without, "test.isw", options).stream.decoded, decode_isw(e.bytes, "test.isw").stream.decoded);
+}
+
+TEST(IswFormat2, PlaneCountsThatDisagreeWithTheStreamAreFormatErrors) {
+  const Encoded e = encode_sample(test::genus_slab(2), 3, 1e-4);
+  const std::vector<std::uint64_t> counts = plane_counts(e.bytes);
+  const auto with_counts = [&](const std::vector<std::uint64_t>& rows) {
+    std::string payload(4, '\0');
+    const auto n = static_cast<std::uint32_t>(rows.size());
+    std::memcpy(payload.data(), &n, 4);
+    for (const std::uint64_t r : rows) payload.append(reinterpret_cast<const char*>(&r), 8);
+    return test::with_section_payload(e.bytes, "PCNT", payload);
   };
-  double least_kept = INFINITY;
-  std::vector<std::uint8_t> kept(d.coefficients.size(), 0);
-  for (std::uint32_t i : d.ranked) {
-    kept[i] = 1;
-    least_kept = std::min(least_kept, importance(i));
-    ASSERT_EQ(d.coefficients[i], full.coefficients[i]);
-  }
-  for (std::size_t i = classes.base(); i < d.coefficients.size(); ++i)
-    if (!kept[i]) {
-      ASSERT_LE(importance(i), least_kept) << i;
-      ASSERT_EQ(d.coefficients[i], Vec3{}) << i;
+  IswDecodeOptions options;  // with or without a limit
+  std::vector<std::uint64_t> decreasing = counts, short_table = counts, too_many = counts;
+  std::swap(decreasing[1], decreasing.back());
+  short_table.pop_back();
+  too_many.back() = 1u << 30;
+  for (const auto& [rows, what] : {std::pair{decreasing, "decrease"}, std::pair{short_table, "does not match PCNT"},
+                                   std::pair{too_many, "does not match PCNT"}}) {
+    for (const double percent : {100.0, 10.0}) {
+      options.max_percent = percent;
+      try {
+        decode_isw(with_counts(rows), "test.isw", options);
+        ADD_FAILURE() << what;
+      } catch (const Error& error) {
+        EXPECT_EQ(error.kind(), ErrorKind::Format);
+        EXPECT_NE(std::string(error.what()).find(what), std::string::npos) << error.what();
+      }
     }
+  }
 }
 
 TEST(IswFormat2, PercentKeepsWhatTheChosenOracleKeeps) {
   const Encoded e = encode_sample(test::genus_slab(2), 3, 1e-4);
-  const IswDecoded full = decode_isw(e.bytes, "test.isw");
-  const std::size_t keep = coefficients_for_percent(*full.hierarchy, 10);
+  const std::size_t keep = coefficients_for_percent(*decode_isw(e.bytes, "test.isw").hierarchy, 10);
+  const IswDecoded read = prefix_for(e.bytes, keep);
   IswDecodeOptions options;
   options.max_percent = 10;
   // Magnitude: no kept coefficient smaller than one left out.
@@ -205,15 +315,15 @@ TEST(IswFormat2, PercentKeepsWhatTheChosenOracleKeeps) {
   const IswDecoded by_magnitude = decode_isw(e.bytes, "test.isw", options);
   ASSERT_EQ(by_magnitude.ranked.size(), keep);
   double least_kept = INFINITY, most_dropped = 0;
-  for (std::size_t i = full.hierarchy->vertex_count(0); i < full.coefficients.size(); ++i)
-    if (by_magnitude.coefficients[i] == Vec3{}) most_dropped = std::max(most_dropped, norm(full.coefficients[i]));
-    else least_kept = std::min(least_kept, norm(full.coefficients[i]));
+  for (std::size_t i = read.hierarchy->vertex_count(0); i < read.coefficients.size(); ++i)
+    if (by_magnitude.coefficients[i] == Vec3{}) most_dropped = std::max(most_dropped, norm(read.coefficients[i]));
+    else least_kept = std::min(least_kept, norm(read.coefficients[i]));
   EXPECT_LE(most_dropped, least_kept);
-  // Greedy: keep_greedy's choice over the whole decode.
+  // Greedy: keep_greedy's choice over what was read.
   options.oracle = Oracle::Greedy;
   const IswDecoded by_greedy = decode_isw(e.bytes, "test.isw", options);
-  std::vector<Vec3> expected = full.coefficients;
-  EXPECT_EQ(by_greedy.ranked, keep_greedy(*full.hierarchy, expected, full.class_weights, keep));
+  std::vector<Vec3> expected = read.coefficients;
+  EXPECT_EQ(by_greedy.ranked, keep_greedy(*read.hierarchy, expected, read.class_weights, keep));
   EXPECT_EQ(by_greedy.coefficients, expected);
 }
 
@@ -297,19 +407,27 @@ void expect_format_error(const std::string& bytes, const std::string& section, c
   }
 }
 
-// docs/FORMAT.md: after BPTS, optionally RDTB, then GIDX (2.2), PLNS and
-// END, each once. Any other order or repetition is an error, and costs no
-// second decode; a 2.2 stream without its GIDX is one too.
+// docs/FORMAT.md: after BPTS, optionally RDTB, then GIDX (2.2), optionally
+// PCNT, PLNS and END, each once. Any other order or repetition is an error,
+// and costs no second decode; a 2.2 stream without its GIDX is one too.
 TEST(IswFormat2, RepeatedOrMisplacedStreamSectionsAreFormatErrors) {
   const Encoded e = encode_sample(test::cube(), 2, 1e-3);
   IswRewrite rewrite;
   rewrite.rate_table = {{0, 0.5}};
-  const std::vector<std::string> parts = test::split_sections(rewrite_isw(e.bytes, rewrite));
-  ASSERT_EQ(parts.size(), 9u);  // the file header, META, BASE, QUAN, BPTS, RDTB, GIDX, PLNS, END
+  std::vector<std::string> parts = test::split_sections(rewrite_isw(e.bytes, rewrite));
+  ASSERT_EQ(parts.size(), 10u);  // the file header, META, BASE, QUAN, BPTS, RDTB, GIDX, PCNT, PLNS, END
+  const std::string counts = parts[7];
+  parts.erase(parts.begin() + 7);
   const std::string head = parts[0] + parts[1] + parts[2] + parts[3] + parts[4];
   const std::string &rdtb = parts[5], &index = parts[6], &planes = parts[7], &end = parts[8];
-  ASSERT_EQ(test::section_tag(rdtb) + test::section_tag(index) + test::section_tag(planes) + test::section_tag(end),
-            "RDTBGIDXPLNSEND ");
+  ASSERT_EQ(test::section_tag(rdtb) + test::section_tag(index) + test::section_tag(counts) + test::section_tag(planes) +
+                test::section_tag(end),
+            "RDTBGIDXPCNTPLNSEND ");
+  EXPECT_EQ(decode_isw(head + index + counts + planes + end, "counts.isw").coefficients,
+            decode_isw(head + index + planes + end, "no_counts.isw").coefficients);
+  expect_format_error(head + counts + index + planes + end, "GIDX", "PCNT before GIDX");
+  expect_format_error(head + index + counts + counts + planes + end, "PCNT", "PCNT twice");
+  expect_format_error(head + index + planes + counts + end, "PCNT", "PCNT after PLNS");
   // Complete and empty: top plane -1, 2.1's coding, 1 group, 3 segments, no packets.
   const std::string no_packets = test::make_section("PLNS", std::string("\xff\x02\x01\x03\x00", 5));
   const std::string unknown = test::make_section("NEWS", "a later minor version's");

@@ -240,6 +240,25 @@ TEST(RandomAccess, CutAndRewrittenFilesReadInPart) {
   EXPECT_LE(cut_part.stream.decoded, half);
 }
 
+// A coefficient limit, a maximum error or a stream limit reads the headers and
+// the stream's prefix it decodes, no more, and decodes as from memory.
+TEST(RandomAccess, LimitsReadOnlyThePrefixTheyDecode) {
+  const Sample& s = sample();
+  std::vector<IswDecodeOptions> limits(3);
+  limits[0].max_percent = 2;
+  limits[1].max_coefficients = 0;
+  limits[2].max_stream_bytes = 5000;
+  for (const IswDecodeOptions& options : limits) {
+    const IswDecoded part = read_isw(s.path, options);
+    EXPECT_EQ(part.file_bytes_read, part.stream.offset + part.stream.decoded);
+    EXPECT_LT(part.file_bytes_read, s.bytes.size() / 2);
+    EXPECT_FALSE(part.truncated);
+    const IswDecoded memory = decode_isw(s.bytes, "memory.isw", options);
+    EXPECT_EQ(part.coefficients, memory.coefficients);
+    EXPECT_EQ(part.ranked, memory.ranked);
+  }
+}
+
 // Files before 2.2 have no index: a region decode reads and decodes every group.
 TEST(RandomAccess, EarlierVersionsDecodeEveryGroup) {
   const Sample& s = sample();

@@ -132,6 +132,63 @@ TEST(View, FacesOutsideTheFrustumStayBaseFacesAndFacesInViewAreKept) {
   EXPECT_EQ(away.culled, away.levels.size());
 }
 
+// A closed surface: a sphere of radius 5 around the origin over a 96-face
+// base (the cube's level-2 control mesh), outward, at 2 levels.
+ViewCase sphere_case() {
+  const SubdivisionHierarchy cube(test::cube(), 2);
+  PolygonMesh base = cube.control_mesh(2, subdivide(cube, test::cube().positions));
+  const auto on_sphere = [](Vec3 p) { return normalized(p - Vec3{0.5, 0.5, 0.5}) * 5.0; };
+  for (Vec3& p : base.positions) p = on_sphere(p);
+  ViewCase out;
+  out.decoded.hierarchy = std::make_shared<const SubdivisionHierarchy>(base, 2);
+  out.decoded.levels = 2;
+  out.fine = subdivide(*out.decoded.hierarchy, base.positions);
+  for (Vec3& p : out.fine) p = on_sphere(p);
+  out.decoded.coefficients = out.fine;
+  analyze(*out.decoded.hierarchy, out.decoded.coefficients);
+  out.decoded.class_weights = std::vector<double>(5, 1.0);
+  return out;
+}
+
+// Back faces (BackFaces::Cull): a culled face's finest polygons all face
+// away from the eye (Newell normal against the direction from the eye to
+// their centroid, computed here from the fine control mesh), most of the
+// far side is culled, and without Cull nothing is culled for facing away.
+TEST(View, CulledBackFacesFaceAwayAndOnlyThey) {
+  const ViewCase c = sphere_case();
+  const SubdivisionHierarchy& h = *c.decoded.hierarchy;
+  const PolygonMesh mesh = h.control_mesh(2, c.fine);
+  for (const Vec3 eye : {Vec3{0, 0, 20}, Vec3{14, -9, 3}}) {
+    const Camera camera = camera_at(eye, {0, 0, 0}, 60);
+    const ViewLevels refined = view_face_levels(c.decoded, c.fine, camera, 0.01);
+    EXPECT_EQ(refined.back_facing, 0u);
+    const ViewLevels v = view_face_levels(c.decoded, c.fine, camera, 0.01, BackFaces::Cull);
+    // From 4 radii away 62.5% of the sphere faces away (cos = 1/4 at the
+    // horizon); the cone test is conservative but catches most of it.
+    EXPECT_GT(v.back_facing, v.levels.size() * 2 / 5);
+    EXPECT_LE(v.back_facing, v.levels.size() * 5 / 8);
+    for (std::size_t f = 0; f < h.base().face_count(); ++f) {
+      std::vector<std::uint8_t> mine(c.fine.size(), 0);
+      for_each_fine_point(h, f, [&](std::size_t p) { return (mine[p] = 1); });
+      bool away = true;
+      for (std::size_t q = 0; q < mesh.face_count(); ++q) {
+        const std::uint32_t* corner = mesh.face_begin(q);
+        const std::uint32_t n = mesh.face_size(q);
+        if (!std::all_of(corner, corner + n, [&](std::uint32_t v) { return mine[v] != 0; })) continue;
+        Vec3 normal{}, centroid{};
+        for (std::uint32_t k = 0; k < n; ++k) {
+          normal = normal + cross(mesh.positions[corner[k]], mesh.positions[corner[(k + 1) % n]]);
+          centroid = centroid + mesh.positions[corner[k]] * (1.0 / n);
+        }
+        away = away && dot(normal, centroid - eye) > 0;
+      }
+      if (v.levels[f] == 0 && refined.levels[f] > 0) {
+        EXPECT_TRUE(away) << "face " << f << " is culled but faces the eye";
+      }
+    }
+  }
+}
+
 // A view decode of a 2.2 file reads the groups its frustum needs: every face
 // with a point in the image gets the level and the points of the whole
 // file's decode, from fewer bytes.

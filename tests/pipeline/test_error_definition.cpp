@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
 #include <vector>
 
 #include "isowave/pipeline/convert.h"
@@ -48,12 +49,22 @@ ConvertResult convert_mixing(double step_cells) {
 
 // What `isowave stats` reports for the bytes convert wrote.
 ErrorTable stats_of(const ConvertResult& result) {
-  return error_table(decode_isw(result.bytes, "test"), {100, 20, 10, 5});
+  return error_table(decode_isw(result.bytes, "test"), {100, 20, 10, 5}, nullptr, nullptr, decode_prefixes(result.bytes));
+}
+
+// What `decode --coefficients keep` gives (from a file with plane counts,
+// the prefix they name), synthesized, and the file bytes it read.
+std::vector<Vec3> decode_keeping(const std::string& file, std::size_t keep, std::uint64_t& bytes) {
+  IswDecodeOptions options;
+  options.max_coefficients = keep;
+  const IswDecoded decoded = decode_isw(file, "test", options);
+  bytes = decoded.stream.offset + decoded.stream.decoded;
+  return synthesis_keeping(decoded, keep);
 }
 
 // Convert's summary and stats' table of the same file are the same numbers,
-// and each row is the direct distance of its reconstruction from the full
-// decode (so the 100% row is zero).
+// and each row is the direct distance of what `decode --coefficients` gives
+// from the full decode (so the 100% row is zero), with the bytes it read.
 TEST(ErrorDefinition, ConvertAndStatsReportTheSameRows) {
   const ConvertResult result = convert_mixing(0.01);
   const IswDecoded decoded = decode_isw(result.bytes, "test");
@@ -68,9 +79,11 @@ TEST(ErrorDefinition, ConvertAndStatsReportTheSameRows) {
     EXPECT_EQ(from_convert.bytes, from_stats.bytes);
     EXPECT_NEAR(from_convert.rms, from_stats.rms, tolerance) << "row " << k;
     EXPECT_NEAR(from_convert.max, from_stats.max, tolerance) << "row " << k;
-    const DirectErrors direct = direct_errors(synthesis_keeping(decoded, from_stats.wavelet_coefficients), full);
+    std::uint64_t bytes = 0;
+    const DirectErrors direct = direct_errors(decode_keeping(result.bytes, from_stats.wavelet_coefficients, bytes), full);
     EXPECT_NEAR(from_stats.rms, direct.rms, tolerance) << "row " << k;
     EXPECT_NEAR(from_stats.max, direct.max, tolerance) << "row " << k;
+    if (k > 0) EXPECT_EQ(from_stats.bytes, bytes) << "row " << k;  // the prefix it read
   }
   EXPECT_EQ(stats.rows.front().rms, 0.0);  // 100%: the full decode itself
   EXPECT_GT(stats.rows.back().rms, 0.0);   // the base mesh alone

@@ -252,6 +252,10 @@ struct IswStreamInfo {
   double tangential_factor = 1;
   double frame_step = 0;      // world units
   std::vector<IswRatePoint> rate_table;  // RDTB, if the file has one
+  // PCNT (2.2), if the file has one: per plane from the top, the wavelet
+  // coefficients non-zero once it is decoded; a coefficient limit then reads
+  // a prefix (docs/FORMAT.md, "Percentages").
+  std::vector<std::uint64_t> plane_counts;
   std::size_t groups = 0;           // the planes' independent groups
   std::size_t groups_decoded = 0;   // those decoded (all, but with a region of a 2.2 file)
 };
@@ -361,6 +365,12 @@ struct IswDecodeOptions {
 // the hierarchy's or the counts do not match. Cost: the header sections.
 IswDecoded expected_decode(const std::shared_ptr<const SubdivisionHierarchy>& hierarchy, std::vector<Vec3> stored,
                           std::vector<std::uint32_t> ranked, const std::string& bytes, const std::string& name);
+
+// The plane stream bytes a decode keeping `keep` wavelet coefficients reads
+// of the file whose complete decode is `decoded`: with PCNT, the planes
+// docs/FORMAT.md ("Percentages") names, else (or when they are all of them)
+// decoded.stream.bytes. Cost: O(planes).
+std::uint64_t stream_bytes_for_keep(const IswDecoded& decoded, std::uint64_t keep);
 
 // Decodes an .isw file's bytes; `name` heads error messages. Errors:
 // Error(Format) for anything that is not a well-formed file (naming the

@@ -20,7 +20,7 @@ struct RateDistortionRow {
   std::size_t wavelet_coefficients = 0;
   double rms = 0;                    // world units, >= 0
   double max = 0;                    // world units, >= 0
-  std::uint64_t bytes = 0;           // file prefix a reader needs (headers, base, chunks up to this rank)
+  std::uint64_t bytes = 0;           // file prefix a reader needs (headers, base, and the chunks or planes the row reads)
   bool is_base = false;              // the row of the base mesh alone (the last)
 };
 
@@ -55,19 +55,33 @@ struct ErrorTable {
 // coefficient count and the fine control points its synthesis gave (rows
 // keeping every decoded coefficient have none), which it may use as
 // scratch: convert measures each row's D there.
+// `prefix_values`, if given, puts into its second argument the coefficients
+// (base control points first, world units) a decode of the first
+// `stream_bytes` plane stream bytes has: a row whose count reads a prefix
+// (stream_bytes_for_keep()) then keeps the most important of those, as
+// `decode --percent` does, and its `bytes` are that prefix (one call per
+// distinct prefix, rows in the given order); other rows, and all without
+// it, keep the complete decode's most important coefficients.
 using RowSurfaceVisitor = std::function<void(std::size_t row, std::size_t wavelets, std::vector<Vec3>& surface)>;
+using PrefixValues = std::function<void(std::uint64_t stream_bytes, std::vector<Vec3>& coefficients)>;
 std::vector<RateDistortionRow> rate_distortion(const IswDecoded& decoded, const std::vector<double>& percents,
                                                const std::vector<Vec3>* reference = nullptr,
                                                const PointErrors* all_decoded_errors = nullptr,
-                                               const RowSurfaceVisitor& visit = nullptr);
+                                               const RowSurfaceVisitor& visit = nullptr,
+                                               const PrefixValues& prefix_values = nullptr);
 
-// The error table of a complete decode (see rate_distortion) for `percents`,
-// the base-mesh row last. `full_decode`, if given, must be the synthesis of
+// PrefixValues from a file's bytes (`file` must outlive it): one decode of
+// the prefix per call.
+PrefixValues decode_prefixes(const std::string& file);
+
+// The error table of a complete decode (see rate_distortion;
+// `prefix_values` as there) for `percents`, the base-mesh row last. `full_decode`, if given, must be the synthesis of
 // every decoded coefficient (the caller has it already): it saves one
 // synthesis. Throws Error(InvalidArgument) for a truncated decode. Cost: one
 // synthesis per row below 100%, and the full decode unless given.
 ErrorTable error_table(const IswDecoded& decoded, const std::vector<double>& percents,
-                       const std::vector<Vec3>* full_decode = nullptr, const RowSurfaceVisitor& visit = nullptr);
+                       const std::vector<Vec3>* full_decode = nullptr, const RowSurfaceVisitor& visit = nullptr,
+                       const PrefixValues& prefix_values = nullptr);
 
 // Writes `errors` (the full decode against the fitted points, world units)
 // into the metadata keys quantization_rmse and quantization_max; the

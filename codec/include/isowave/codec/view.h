@@ -19,8 +19,19 @@
 namespace isowave {
 
 struct ViewLevels {
-  std::vector<int> levels;    // per base face, 0..L
-  std::size_t culled = 0;     // base faces outside the frustum (level 0)
+  std::vector<int> levels;       // per base face, 0..L
+  std::size_t culled = 0;        // base faces outside the frustum (level 0)
+  std::size_t back_facing = 0;   // base faces facing away, with BackFaces::Cull (level 0)
+};
+
+// What a view does with base faces that face away from the camera.
+enum class BackFaces {
+  Refine,  // as any other face (the default: an isosurface may be seen from either side)
+  // Level 0 where every point of the face's patch faces away (its normal cone,
+  // widened by the angle its box subtends from the camera, lies behind): for
+  // a closed surface seen from outside, as a renderer culling back faces
+  // shows it (Linsen et al.; the normals are the mesh's orientation).
+  Cull,
 };
 
 // Per base face of `decoded` (a decode: hierarchy and coefficients, all of
@@ -31,11 +42,12 @@ struct ViewLevels {
 // edge's coefficient counts for both faces along it), projects to at most
 // `pixel_error` (> 0) pixels at the distance from the camera to the box of
 // the face's fine points (a box holding the camera: the finest level); level
-// 0 outside the frustum. A nearer camera never gives a coarser level to a
-// face inside the frustum. Error(InvalidArgument) for a decode without a
-// hierarchy or a pixel error that is not positive. Cost: O(fine vertices).
+// 0 outside the frustum, and for faces facing away with BackFaces::Cull. A
+// nearer camera never gives a coarser level to a face inside the frustum
+// (and not culled). Error(InvalidArgument) for a decode without a hierarchy
+// or a pixel error that is not positive. Cost: O(fine vertices).
 ViewLevels view_face_levels(const IswDecoded& decoded, const std::vector<Vec3>& fine, const Camera& camera,
-                            double pixel_error);
+                            double pixel_error, BackFaces back_faces = BackFaces::Refine);
 
 // For interactive use (issue #48, item 6): a decode synthesized once, then
 // refined or coarsened as the camera moves. Each set_view() costs O(base
@@ -48,7 +60,7 @@ class ViewRefiner {
   // `decoded`: a decode (all of it, or read with options.frustum for a first
   // camera near those it will move to). Error(InvalidArgument) without a
   // hierarchy. Cost: one synthesis and O(fine vertices); keeps the fine
-  // control points and 7 + L doubles per base face. Every face starts at 0.
+  // control points and 11 + L doubles per base face. Every face starts at 0.
   explicit ViewRefiner(const IswDecoded& decoded);
   ~ViewRefiner();
   ViewRefiner(ViewRefiner&&) noexcept;
@@ -58,7 +70,8 @@ class ViewRefiner {
   // the base faces whose patch changed: those whose level changed and their
   // neighbours across base edges (their transition polygons). Errors as
   // view_face_levels().
-  std::vector<std::uint32_t> set_view(const Camera& camera, double pixel_error);
+  std::vector<std::uint32_t> set_view(const Camera& camera, double pixel_error,
+                                      BackFaces back_faces = BackFaces::Refine);
   const ViewLevels& levels() const;
   // The fine control points: patch() indices refer to them.
   const std::vector<Vec3>& points() const;
@@ -77,6 +90,6 @@ class ViewRefiner {
 // crack-free mesh of view_face_levels() (adaptive_control_mesh, the vertices
 // it uses only); `report` (optional) receives the levels. Cost: one synthesis.
 PolygonMesh view_mesh(const IswDecoded& decoded, const Camera& camera, double pixel_error,
-                      ViewLevels* report = nullptr);
+                      ViewLevels* report = nullptr, BackFaces back_faces = BackFaces::Refine);
 
 }  // namespace isowave
