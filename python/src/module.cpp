@@ -92,6 +92,16 @@ Gives the memory kept for reuse back to the kernel (malloc_trim).)";
 
 PYBIND11_MODULE(isowave, m) {
   using namespace isowave::python;
+  // Every array the module hands over is NumPy's: without NumPy in this
+  // interpreter, say so at import rather than at the first call.
+  try {
+    py::module_::import("numpy");
+  } catch (py::error_already_set&) {
+    const std::string python = py::module_::import("sys").attr("executable").cast<std::string>();
+    throw py::import_error("isowave needs NumPy, which " + python +
+                           " cannot import (Debian: apt install python3-numpy; else: " + python +
+                           " -m pip install numpy)");
+  }
   m.doc() = kModuleDoc;
   static py::exception<isowave::Error> error_type(m, "Error", PyExc_RuntimeError);
   py::register_exception_translator([](std::exception_ptr thrown) {
