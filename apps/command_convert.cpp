@@ -21,6 +21,7 @@
 #include "isowave/pipeline/convert.h"
 #include "isowave/pipeline/prepare.h"
 #include "isowave/codec/isw_format.h"
+#include "isowave/core/peak_memory.h"
 #include "isowave/core/error.h"
 #include "isowave/core/huge_page_vector.h"
 #include "isowave/extract/volume_io.h"
@@ -46,6 +47,7 @@ struct JobOutcome {
   std::string error;
   bool usage_error = false;  // failed with ErrorKind::InvalidArgument (what exit code 2 means)
   double load_seconds = 0;
+  double load_peak_bytes = 0;    // core/peak_memory.h: restarted before the load, read after it
   std::size_t volume_bytes = 0;  // the samples as the input stores them
   ConvertResult result;
 };
@@ -265,8 +267,10 @@ void run_job(const Job& job, const RunSettings& settings, JobOutcome& outcome, c
   if (!settings.force && fs::exists(job.output))
     throw Error(ErrorKind::Io, job.output + ": already exists (use --force to overwrite)");
   const auto start = std::chrono::steady_clock::now();
+  reset_peak_memory();
   Volume volume = load_volume(job.input, settings.read, progress);
   outcome.load_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  outcome.load_peak_bytes = peak_memory_bytes();
   cli::report_loaded_volume("convert", job.input, volume, settings.load_report, &progress);
   outcome.volume_bytes = volume.sample_count() * scalar_type_size(volume.source_type);
   ConvertOptions options = settings.convert;
@@ -426,6 +430,36 @@ void render_json_plane_bits(std::string& out, const IswPlaneBits& b) {
           b.tangential_significance, b.tangential_sign, b.tangential_refinement, b.joint_significance, b.descendants);
 }
 
+// Each stage's peak memory, and per isosurface vertex its time and peak:
+// the profile issue #51 starts from.
+void render_json_profile(std::string& out, const JobOutcome& o) {
+  const ConvertResult& r = o.result;
+  const ConvertPeaks& p = r.peak_bytes;
+  using Figures = std::vector<std::pair<const char*, double>>;
+  const Figures peaks{{"load", o.load_peak_bytes}, {"extract", p.extract},   {"simplify", p.simplify},
+                      {"fit", p.fit},              {"analysis", p.analysis}, {"encode", p.encode},
+                      {"evaluate", p.evaluate}};
+  const Figures seconds{{"load", o.load_seconds},         {"extract", r.seconds.extract},
+                        {"simplify", r.seconds.simplify}, {"distance", r.seconds.distance},
+                        {"fit", r.seconds.fit},           {"analysis", r.seconds.analysis},
+                        {"encode", r.seconds.encode},     {"evaluate", r.seconds.evaluate}};
+  const auto object = [&](const char* key, const Figures& figures, double scale, const char* format) {
+    appendf(out, "\"%s\": {", key);
+    for (std::size_t k = 0; k < figures.size(); ++k) {
+      appendf(out, "%s\"%s\": ", k ? ", " : "", figures[k].first);
+      appendf(out, format, figures[k].second * scale);
+    }
+    out += "}";
+  };
+  const double per_vertex = 1.0 / std::max<double>(1.0, static_cast<double>(r.extracted_vertices));
+  object("peak_megabytes", peaks, 1.0 / 1048576.0, "%.1f");
+  out += ", \"per_isosurface_vertex\": {";
+  object("microseconds", seconds, 1e6 * per_vertex, "%.4g");
+  out += ", ";
+  object("peak_bytes", peaks, per_vertex, "%.4g");
+  out += "}, ";
+}
+
 void render_json_result(std::string& out, const JobOutcome& o) {
   const ConvertResult& r = o.result;
   appendf(out,
@@ -439,6 +473,7 @@ void render_json_result(std::string& out, const JobOutcome& o) {
           r.levels, o.load_seconds, r.seconds.extract, r.seconds.simplify, r.seconds.distance, r.seconds.fit,
           r.seconds.analysis, r.seconds.encode, r.seconds.evaluate, r.fit_isosurface.rms, r.fit_isosurface.max,
           r.fit_isosurface.far, r.uncovered_share, r.folded_share(), r.base_attempts);
+  render_json_profile(out, o);
   if (r.max_error_cells > 0) appendf(out, "\"max_error_percent_cell\": %.6g, ", 100.0 * r.max_error_cells);
   if (r.extraction.topology_tolerance > 0)
     appendf(out, "\"topology_tolerance\": %s, ", cli::topology_tolerance_json(r.extraction).c_str());

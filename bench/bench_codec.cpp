@@ -44,6 +44,7 @@
 #include "isowave/codec/isw_format.h"
 #include "isowave/codec/statistics.h"
 #include "isowave/core/mesh_io.h"
+#include "isowave/core/peak_memory.h"
 #include "isowave/extract/volume_io.h"
 #include "isowave/core/surface_distance.h"
 #include "isowave/transform/wavelet_transform.h"
@@ -54,21 +55,6 @@ using Clock = std::chrono::steady_clock;
 namespace {
 
 double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
-
-// Restarts the peak (VmHWM) at the current resident size, so that each
-// dataset's figure is its own (Linux >= 4.0).
-void reset_peak_rss() {
-  std::ofstream clear("/proc/self/clear_refs");
-  clear << "5";
-}
-
-double peak_rss_mb() {
-  std::ifstream status("/proc/self/status");
-  std::string line;
-  while (std::getline(status, line))
-    if (line.rfind("VmHWM:", 0) == 0) return std::atof(line.c_str() + 6) / 1024.0;
-  return 0;
-}
 
 // Bytes of zstd -19 on a buffer, through the zstd command (0 if unavailable).
 std::size_t zstd_bytes(const std::string& data) {
@@ -106,7 +92,7 @@ void run(const Dataset& dataset) {
   if (min_component) std::printf(", --min-component-vertices %zu", min_component);
   std::printf(")\n");
   release_freed_memory();  // the previous dataset's leftovers
-  reset_peak_rss();
+  reset_peak_memory();  // each dataset's figure its own
   auto start = Clock::now();
   Volume volume = read_volume(dataset.path);
   const double load = seconds_since(start);
@@ -116,7 +102,7 @@ void run(const Dataset& dataset) {
   start = Clock::now();
   const ConvertResult r = convert_volume(std::move(volume), dataset.path, options);
   const double convert_seconds = seconds_since(start);
-  const double peak = peak_rss_mb();
+  const double peak = peak_memory_bytes() / 1048576.0;
   const double cell = r.cell_size;
   std::printf("isosurface %zu vertices; base mesh %zu vertices (%.2f%% of the fine mesh), %d levels, %zu fine control points\n",
               r.extracted_vertices, r.base_vertices, 100.0 * r.base_vertices / r.fine_vertices, r.levels, r.fine_vertices);

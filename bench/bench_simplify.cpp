@@ -41,6 +41,7 @@
 #include "isowave/core/error.h"
 #include "isowave/core/mesh_io.h"
 #include "isowave/core/mesh_topology.h"
+#include "isowave/core/peak_memory.h"
 #include "isowave/extract/isosurface.h"
 #include "isowave/extract/volume_io.h"
 #include "isowave/simplify/collapse_error.h"
@@ -51,19 +52,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 double seconds(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
-
-// Peak resident set size (VmHWM) in bytes; reset_peak() restarts it (Linux >= 4.0).
-void reset_peak() {
-  std::ofstream clear("/proc/self/clear_refs");
-  clear << "5";
-}
-double peak_bytes() {
-  std::ifstream status("/proc/self/status");
-  std::string line;
-  while (std::getline(status, line))
-    if (line.rfind("VmHWM:", 0) == 0) return std::stod(line.substr(6)) * 1024.0;
-  return 0;
-}
 
 // CPU seconds this process has used (all threads, user + system).
 double cpu_seconds() {
@@ -280,14 +268,14 @@ int main(int argc, char** argv) {
     options.parallel = parallel;
     options.lazy_stencil = lazy_stencil;
     options.batch_error_factor = batch_factor;
-    reset_peak();
-    const double peak_before = peak_bytes();
+    isowave::reset_peak_memory();
+    const double peak_before = isowave::peak_memory_bytes();
     const double cpu_before = cpu_seconds(), steal_before = steal_seconds();
     start = Clock::now();
     isowave::simplify::SimplifyResult result = isowave::simplify::simplify(triangles, options);
     const double isowave_seconds = seconds(start);
     const double cpu = cpu_seconds() - cpu_before, steal = steal_seconds() - steal_before;
-    const double peak = peak_bytes();
+    const double peak = isowave::peak_memory_bytes();
     std::printf("%s", isowave::simplify::format_report(result.report).c_str());
     const double vertices = double(triangles.vertex_count());
     std::printf("isowave simplify: %.3f s; CPU %.2f s; %.2f CPU s stolen by the hypervisor meanwhile; peak memory "
@@ -297,13 +285,13 @@ int main(int argc, char** argv) {
     if (surface_map) {
       isowave::simplify::SimplifyOptions mapped = options;
       mapped.surface_map = isowave::simplify::SurfaceMapping::Build;
-      reset_peak();
+      isowave::reset_peak_memory();
       start = Clock::now();
       const isowave::simplify::SimplifyResult with_map = isowave::simplify::simplify(triangles, mapped);
       const double map_seconds = seconds(start);
       std::printf("with the surface map: %.3f s (%.2fx the plain run; the map adds %.2fx its time), peak %.0f MB; "
                   "same base mesh: %s\n",
-                  map_seconds, map_seconds / isowave_seconds, map_seconds / isowave_seconds - 1.0, peak_bytes() / 1e6,
+                  map_seconds, map_seconds / isowave_seconds, map_seconds / isowave_seconds - 1.0, isowave::peak_memory_bytes() / 1e6,
                   fingerprint(with_map.base) == fingerprint(result.base) ? "yes" : "NO");
     }
     const isowave::TopologySummary before = isowave::summarize_topology(triangles);

@@ -132,8 +132,8 @@ struct StreamPrefix {
 // (and `base` control points) reads, from PCNT's counts `nonzero` (rows from
 // plane top_plane down): the fewest past the plane that makes the keep-th
 // coefficient significant whose quantization error, (keep + base) x 4^p
-// squared steps when plane p is the last read (3 components, each off by
-// up to 2^p), is at most a tenth of the error of what is dropped, 2.25 x 4^b
+// squared steps when plane p is the last read (3 components, each known
+// to an interval of 2^p), is at most a tenth of the error of what is dropped, 2.25 x 4^b
 // per coefficient of plane b (its largest component in [2^b, 2^(b+1)));
 // all of them when none is. docs/FORMAT.md, "Percentages".
 std::size_t limit_planes(const std::vector<std::uint64_t>& nonzero, int top_plane, std::uint64_t keep,

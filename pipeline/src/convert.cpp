@@ -17,6 +17,7 @@
 #include "isowave/codec/importance.h"
 #include "isowave/codec/statistics.h"
 #include "isowave/core/error.h"
+#include "isowave/core/peak_memory.h"
 #include "isowave/core/memory_check.h"
 #include "isowave/core/surface_error.h"
 #include "isowave/transform/wavelet_transform.h"
@@ -39,6 +40,20 @@ std::string number(double v) {
   s << v;
   return s.str();
 }
+
+// A stage's wall-clock seconds, added to the result's, and the process's
+// peak resident memory at its end, raised into the result's.
+class StageClock {
+ public:
+  StageClock() : start_(Clock::now()) {}
+  void end(double& seconds, double& peak_bytes) const {
+    seconds += seconds_since(start_);
+    peak_bytes = std::max(peak_bytes, peak_memory_bytes());
+  }
+
+ private:
+  Clock::time_point start_;
+};
 
 // A share as a percentage in fixed notation ("100.00%", never "1e+02%").
 std::string percent(double share) {
@@ -118,12 +133,12 @@ class BackgroundDistance {
 simplify::SimplifyResult simplify_base(const PreparedSurface& prepared,
                                        const simplify::SimplifyOptions& simplify_options,
                                        const ConvertOptions& options, ConvertResult& result, ProgressSink& progress) {
-  const auto start = Clock::now();
+  const StageClock clock;
   simplify::SimplifyResult simplified = simplify::simplify(prepared.isosurface.mesh, simplify_options, progress);
   result.simplification = simplified.report;
   result.base_vertices = simplified.base.vertex_count();
   if (result.base_attempts == 1) result.first_base_vertices = result.base_vertices;
-  result.seconds.simplify += seconds_since(start);
+  clock.end(result.seconds.simplify, result.peak_bytes.simplify);
   return simplified;
 }
 
@@ -237,9 +252,9 @@ std::shared_ptr<const SubdivisionHierarchy> base_and_fit(PreparedSurface& prepar
     result.fit = ShrinkWrapResult{};  // the previous try's, before the next one's peak
     hierarchy.reset();
     input.map = &simplified.map;
-    const auto start = Clock::now();
+    const StageClock clock;
     hierarchy = take_fit(fit_surface(base, input, fit, progress), result);
-    result.seconds.fit += seconds_since(start);
+    clock.end(result.seconds.fit, result.peak_bytes.fit);
     // With the levels fixed, a larger base multiplies the fine mesh: it grows
     // only when the levels follow it.
     const std::size_t grown = 2 * base.vertex_count();
@@ -412,14 +427,14 @@ std::vector<Vec3> analyze_and_encode(const std::shared_ptr<const SubdivisionHier
                                      IswMetadata metadata, detail::FineSurfaceMeter& meter, const std::string& source,
                                      const ConvertOptions& options, ConvertResult& result, IswPlaneValues& planes,
                                      ProgressSink& progress) {
-  auto start = Clock::now();
+  const StageClock analysis_clock;
   progress.begin_stage("analysis");
   std::vector<Vec3> coefficients = result.fit.positions;
   analyze(*hierarchy, coefficients);
   progress.end_stage();
-  result.seconds.analysis = seconds_since(start);
+  analysis_clock.end(result.seconds.analysis, result.peak_bytes.analysis);
 
-  start = Clock::now();
+  const StageClock encode_clock;
   progress.begin_stage("encode");
   IswEncodeOptions encode_options;
   encode_options.step = options.step_cells * result.cell_size;
@@ -438,7 +453,7 @@ std::vector<Vec3> analyze_and_encode(const std::shared_ptr<const SubdivisionHier
   std::vector<Vec3> full_decode =
       write_planned_file(whole, std::move(plan), std::move(metadata), hierarchy, meter, source, options, result);
   progress.end_stage();
-  result.seconds.encode = seconds_since(start);
+  encode_clock.end(result.seconds.encode, result.peak_bytes.encode);
   return full_decode;
 }
 
@@ -450,7 +465,7 @@ std::vector<Vec3> analyze_and_encode(const std::shared_ptr<const SubdivisionHier
 void evaluate(const std::shared_ptr<const SubdivisionHierarchy>& hierarchy, const std::vector<Vec3>& full_decode,
               const IswPlaneValues& planes, detail::FineSurfaceMeter& meter, const std::string& source,
               const ConvertOptions& options, ConvertResult& result, ProgressSink& progress) {
-  const auto start = Clock::now();
+  const StageClock clock;
   progress.begin_stage("evaluate");
   IswDecodeOptions decode_options;
   decode_options.hierarchy = hierarchy;
@@ -477,7 +492,7 @@ void evaluate(const std::shared_ptr<const SubdivisionHierarchy>& hierarchy, cons
   result.summary = std::move(errors.rows);
   result.quantization = errors.quantization;
   progress.end_stage();
-  result.seconds.evaluate = seconds_since(start);
+  clock.end(result.seconds.evaluate, result.peak_bytes.evaluate);
 }
 
 }  // namespace
@@ -488,24 +503,26 @@ ConvertResult convert_volume(Volume volume, const std::string& source, const Con
   ConvertResult result;
   result.cell_size = volume.cell_size();
 
-  const auto start = Clock::now();
+  const StageClock extract_clock;
   PreparedSurface prepared = extract_surface(std::move(volume), options.prepare, source, progress);
   result.extraction = prepared.isosurface.report;
   result.extracted_vertices = prepared.isosurface.mesh.vertex_count();
-  result.seconds.extract = seconds_since(start);
+  extract_clock.end(result.seconds.extract, result.peak_bytes.extract);
 
   std::size_t target = 0;
   // D's reference, for the levels and the summary rows, and the levels'
   // bound (in the fit's time).
-  const auto reference_start = Clock::now();
+  const StageClock reference_clock;
   const SurfaceErrorReference against_surface(prepared.isosurface.mesh, kErrorSamples);
   result.max_error_cells = level_error_bound(prepared, options);
-  result.seconds.fit = seconds_since(reference_start);
+  reference_clock.end(result.seconds.fit, result.peak_bytes.fit);
   const std::shared_ptr<const SubdivisionHierarchy> fitted =
       base_and_fit(prepared, against_surface, options, result, target, progress);
   add_fit_warnings(options, target, result);
   refuse_unusable_fit(source, options, result);
-  // The same surface over the base in the order its coder sends compactly.
+  // The same surface over the base in the order its coder sends compactly
+  // (in the analysis' time).
+  const StageClock order_clock;
   CanonicalSurface canonical = canonical_surface(fitted, std::move(result.fit.positions));
   const std::shared_ptr<const SubdivisionHierarchy> hierarchy = canonical.hierarchy;
   result.fit.positions = std::move(canonical.fine);
@@ -519,6 +536,7 @@ ConvertResult convert_volume(Volume volume, const std::string& source, const Con
 
   // D of the rate table's prefixes and of the summary rows, over one fine mesh.
   detail::FineSurfaceMeter meter(*hierarchy, against_surface);
+  order_clock.end(result.seconds.analysis, result.peak_bytes.analysis);
   IswPlaneValues planes;
   const std::vector<Vec3> full_decode =
       analyze_and_encode(hierarchy, std::move(metadata), meter, source, options, result, planes, progress);

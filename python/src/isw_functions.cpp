@@ -94,6 +94,11 @@ py::dict summary_of(const ConvertResult& r, const std::string& path, const Conve
                           py::arg("simplify") = r.seconds.simplify, py::arg("distance") = r.seconds.distance,
                           py::arg("fit") = r.seconds.fit, py::arg("analysis") = r.seconds.analysis,
                           py::arg("encode") = r.seconds.encode, py::arg("evaluate") = r.seconds.evaluate);
+  const ConvertPeaks& p = r.peak_bytes;
+  const double megabyte = 1.0 / 1048576.0;
+  s["peak_megabytes"] = py::dict(py::arg("extract") = p.extract * megabyte, py::arg("simplify") = p.simplify * megabyte,
+                                 py::arg("fit") = p.fit * megabyte, py::arg("analysis") = p.analysis * megabyte,
+                                 py::arg("encode") = p.encode * megabyte, py::arg("evaluate") = p.evaluate * megabyte);
   s["fit_isosurface_rms_cells"] = r.fit_isosurface.rms;
   s["fit_isosurface_max_cells"] = r.fit_isosurface.max;
   s["fit_points_beyond_one_cell"] = r.fit_isosurface.far;

@@ -43,6 +43,7 @@ def test_convert_summary_has_the_cli_json_figures(sphere_isw, tmp_path):
         for key in ("percent", "rmse_percent_cell", "d_percent_cell"):
             assert ours[key] == pytest.approx(theirs[key], rel=1e-4, abs=1e-6), key
     assert set(summary["seconds"]) == set(cli_result["seconds"])
+    assert set(summary["peak_megabytes"]) == set(cli_result["peak_megabytes"]) - {"load"}
     assert [level["fine_vertices"] for level in summary["fit_levels"]] == \
         [level["fine_vertices"] for level in cli_result["fit_levels"]]
     for ours, theirs in zip(summary["fit_levels"], cli_result["fit_levels"]):

@@ -2,6 +2,9 @@
 // measured against the full decode of the file).
 #include <gtest/gtest.h>
 
+#include <chrono>
+#include <iterator>
+
 #include <algorithm>
 #include <cmath>
 #include <string>
@@ -70,6 +73,24 @@ TEST(Convert, SummaryRowsReportTheirDecodesSurfaceError) {
     EXPECT_NEAR(result.summary_surface_error[k], d, 1e-9 * d) << "row " << k << " at " << row.percent << "%";
   }
   EXPECT_GT(result.summary_surface_error.back(), result.summary_surface_error.front());
+}
+
+// The profile (issue #51): the stages' times add up to the whole conversion
+// (the wall-clock time around it, less what convert_volume does between
+// stages), and the peaks never fall from stage to stage, the last holding at
+// least the fine control points' decode.
+TEST(Convert, StageTimesAddUpToTheWholeAndPeaksGrow) {
+  const Volume field = make_builtin_field("mixing", 48);
+  const auto start = std::chrono::steady_clock::now();
+  const ConvertResult result = convert_volume(field, "mixing", ConvertOptions{});
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  std::printf("[ report ] stages %.3f s of %.3f s\n", result.seconds.total(), wall);
+  EXPECT_LE(result.seconds.total(), wall);
+  EXPECT_GE(result.seconds.total(), 0.95 * wall - 0.02) << "wall " << wall;
+  const ConvertPeaks& p = result.peak_bytes;
+  const double peaks[] = {p.extract, p.simplify, p.fit, p.analysis, p.encode, p.evaluate};
+  for (std::size_t k = 1; k < std::size(peaks); ++k) EXPECT_LE(peaks[k - 1], peaks[k]) << "stage " << k;
+  EXPECT_GE(p.evaluate, 24.0 * static_cast<double>(result.fine_vertices));
 }
 
 TEST(Convert, WarnsWhenTheFitLeavesPartsOfTheSurfaceOut) {

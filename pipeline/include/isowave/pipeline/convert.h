@@ -97,10 +97,22 @@ struct ConvertOptions {
 
 // Wall-clock seconds per stage. The signed-distance field is computed
 // alongside the base mesh; `distance` is only the wait for it afterwards, so
-// that the stages add up to the whole conversion.
+// that the stages add up to the whole conversion. `fit` includes building
+// D's reference, and `analysis` putting the fitted surface in the base
+// coder's order.
 struct ConvertTimings {
   double extract = 0, simplify = 0, distance = 0, fit = 0, analysis = 0, encode = 0, evaluate = 0;
   double total() const { return extract + simplify + distance + fit + analysis + encode + evaluate; }
+};
+
+// The process's peak resident bytes at the end of each stage
+// (core/peak_memory.h; 0 where the system does not say). The allocator keeps
+// freed memory for reuse (huge_page_vector.h), so the figures never fall: a
+// stage's growth over the stage before is what it added. The distance field,
+// built during simplify, counts there. Process-wide: with several
+// conversions at once (a batch's --jobs) each figure includes the others'.
+struct ConvertPeaks {
+  double extract = 0, simplify = 0, fit = 0, analysis = 0, encode = 0, evaluate = 0;
 };
 
 // Share of the fine control points that may lie more than a cell off the
@@ -192,6 +204,7 @@ struct ConvertResult {
   std::size_t extracted_vertices = 0, base_vertices = 0, fine_vertices = 0, fine_faces = 0;
   double cell_size = 1;
   ConvertTimings seconds;
+  ConvertPeaks peak_bytes;
   // The fitted fine control points against the isosurface of the field they
   // were fitted to (first order, cells). More than kFarPointsWarning of them
   // farther than a cell away adds a warning.
