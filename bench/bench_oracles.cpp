@@ -97,7 +97,7 @@ int run(const Options& o) {
     for (const Choice& choice : choices) {
       std::vector<Vec3> kept = decoded.coefficients;
       const auto start = Clock::now();
-      if (choice.oracle == Oracle::Greedy) keep_greedy(h, kept, decoded.class_weights, keep, choice.smallest_batch);
+      if (choice.oracle == Oracle::Greedy) keep_greedy(h, kept, keep, choice.smallest_batch);
       else keep_most_important(h, kept, choice.oracle == Oracle::Magnitude ? unit : decoded.class_weights, keep);
       double seconds = seconds_since(start);
       if (choice.name == "prefix") {  // what decode --percent reads and keeps (the PCNT prefix of a 2.2 file)

@@ -131,12 +131,8 @@ def isw():
     offset = golden22.index(b"GIDX")
     write("isw", "golden_2_2_cut_in_index.isw", golden22[:offset + 16 + (len(sections22[5]) - 20) // 2])
     write("isw", "golden_2_2_no_index.isw", b"".join(sections22[:5]) + b"".join(sections22[6:]))
-    # PCNT between GIDX and PLNS: one count per plane (the PLNS payload's first byte is the top plane), rising
-    # by one (the harness rewrites the CRCs).
-    top = struct.unpack("<b", sections22[6][16:17])[0]
-    payload = struct.pack("<I", top + 1) + b"".join(struct.pack("<Q", k) for k in range(top + 1))
-    counts = b"PCNT" + struct.pack("<Q", len(payload)) + b"\0" * 4 + payload + b"\0" * 4
-    write("isw", "golden_2_2_counts.isw", b"".join(sections22[:6]) + counts + b"".join(sections22[6:]))
+    # 2.2 with PCNT (plane counts) between GIDX and PLNS.
+    shutil.copy(os.path.join(data, "golden_2_2_counts.isw"), os.path.join(CORPUS, "isw", "golden_2_2_counts.isw"))
 
 
 def npy():

@@ -220,11 +220,6 @@ void rank_and_keep(IswDecoded& result, const CoefficientClasses& layout, std::ui
       if (!(result.coefficients[i] == Vec3{})) result.ranked.push_back(static_cast<std::uint32_t>(i));
     return;
   }
-  if (oracle == Oracle::Greedy) {
-    result.ranked = keep_greedy(*result.hierarchy, result.coefficients, result.class_weights,
-                                static_cast<std::size_t>(std::min<std::uint64_t>(keep, result.coefficients.size())));
-    return;
-  }
   std::vector<RankedEntry> keyed;
   keyed.reserve(static_cast<std::size_t>(std::min<std::uint64_t>(result.coefficients_total, result.coefficients.size())));
   for (std::size_t i = layout.base(); i < result.coefficients.size(); ++i) {
@@ -232,6 +227,10 @@ void rank_and_keep(IswDecoded& result, const CoefficientClasses& layout, std::ui
     if (c == Vec3{}) continue;
     const double weight = oracle == Oracle::Magnitude ? 1.0 : result.class_weights[static_cast<std::size_t>(layout.of(i))];
     keyed.push_back({weight * norm(c), static_cast<std::uint32_t>(i), 0});
+  }
+  if (oracle == Oracle::Greedy && keep < keyed.size()) {
+    result.ranked = keep_greedy(*result.hierarchy, result.coefficients, static_cast<std::size_t>(keep));
+    return;
   }
   sort_by_importance(keyed);
   result.ranked.resize(keyed.size());

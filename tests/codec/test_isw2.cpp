@@ -323,7 +323,7 @@ TEST(IswFormat2, PercentKeepsWhatTheChosenOracleKeeps) {
   options.oracle = Oracle::Greedy;
   const IswDecoded by_greedy = decode_isw(e.bytes, "test.isw", options);
   std::vector<Vec3> expected = read.coefficients;
-  EXPECT_EQ(by_greedy.ranked, keep_greedy(*read.hierarchy, expected, read.class_weights, keep));
+  EXPECT_EQ(by_greedy.ranked, keep_greedy(*read.hierarchy, expected, keep));
   EXPECT_EQ(by_greedy.coefficients, expected);
 }
 

@@ -1,6 +1,6 @@
 // The golden .isw files: tests/codec/data/golden_1_0.isw, golden_2_0.isw,
-// golden_2_1.isw and golden_2_2.isw were written by the format 1.0, 2.0, 2.1
-// and 2.2 encoders from the surface that
+// golden_2_1.isw, golden_2_2.isw and golden_2_2_counts.isw (2.2 with PCNT)
+// were written by the format 1.0, 2.0, 2.1 and 2.2 encoders from the surface that
 // golden_surface() defines, and every later reader must decode them to that surface. Its expected values
 // come from the generator below, not from a decode: base topology, sharp
 // flags and metadata exactly, base control points and coefficients within
@@ -8,7 +8,7 @@
 // and decimal constants, so it gives the same values on every platform.
 //
 // Regenerate only with a new format version (and keep the old files, whose
-// tests must keep passing): ISOWAVE_WRITE_GOLDEN_1_0=PATH (or _2_0, _2_1, _2_2) codec_tests
+// tests must keep passing): ISOWAVE_WRITE_GOLDEN_1_0=PATH (or _2_0, _2_1, _2_2, _2_2_COUNTS) codec_tests
 // --gtest_filter='IswGolden.*' writes that version's file to PATH.
 #include <algorithm>
 #include <cmath>
@@ -280,6 +280,36 @@ TEST(IswGolden, Format22FileDecodesToItsGeneratorAndByRegion) {
 }
 
 TEST(IswGolden, Format22FileDecodesAtEveryByteOfItsStream) { expect_every_byte_decodes("golden_2_2.isw"); }
+
+// The 2.2 file with plane counts (PCNT, written since session 37; the file
+// above predates them): the same surface; the counts are the non-zero
+// coefficients a decode has at each plane end; a percentage reads a prefix
+// of whole planes and decodes as from memory.
+TEST(IswGolden, Format22FileWithPlaneCountsDecodesToItsGeneratorAndReadsAPrefix) {
+  const GoldenSurface expected = golden_surface_21();
+  if (write_golden_2("ISOWAVE_WRITE_GOLDEN_2_2_COUNTS", expected, 2, kFrameStep21, 48))
+    GTEST_SKIP() << "wrote the 2.2 golden file with plane counts";
+  const IswDecoded d = expect_golden_2("golden_2_2_counts.isw", expected, 2);
+  if (HasFailure()) return;
+  ASSERT_EQ(d.stream.plane_counts.size(), d.stream.plane_ends.size());
+  IswDecodeOptions options;
+  options.order = IswOrder::Index;
+  for (std::size_t k = 0; k < d.stream.plane_ends.size(); ++k) {
+    options.max_stream_bytes = d.stream.plane_ends[k];
+    const IswDecoded prefix = read_isw(golden_path("golden_2_2_counts.isw"), options);
+    std::size_t nonzero = 0;
+    for (std::size_t i = prefix.base.vertex_count(); i < prefix.coefficients.size(); ++i)
+      nonzero += prefix.coefficients[i] == Vec3{} ? 0 : 1;
+    EXPECT_EQ(d.stream.plane_counts[k], nonzero) << "plane end " << k;
+  }
+  IswDecodeOptions percent;
+  percent.max_percent = 10;
+  const IswDecoded part = read_isw(golden_path("golden_2_2_counts.isw"), percent);
+  EXPECT_LT(part.file_bytes_read, part.file_bytes);
+  EXPECT_EQ(part.file_bytes_read, part.stream.offset + part.stream.decoded);
+  std::ifstream in(golden_path("golden_2_2_counts.isw"), std::ios::binary);
+  EXPECT_EQ(part.coefficients, decode_isw(std::string((std::istreambuf_iterator<char>(in)), {}), "golden", percent).coefficients);
+}
 
 }  // namespace
 }  // namespace isowave

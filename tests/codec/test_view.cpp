@@ -174,7 +174,7 @@ TEST(View, CulledBackFacesFaceAwayAndOnlyThey) {
       for (std::size_t q = 0; q < mesh.face_count(); ++q) {
         const std::uint32_t* corner = mesh.face_begin(q);
         const std::uint32_t n = mesh.face_size(q);
-        if (!std::all_of(corner, corner + n, [&](std::uint32_t v) { return mine[v] != 0; })) continue;
+        if (!std::all_of(corner, corner + n, [&](std::uint32_t p) { return mine[p] != 0; })) continue;
         Vec3 normal{}, centroid{};
         for (std::uint32_t k = 0; k < n; ++k) {
           normal = normal + cross(mesh.positions[corner[k]], mesh.positions[corner[(k + 1) % n]]);

@@ -81,8 +81,9 @@ TEST(Convert, SummaryRowsReportTheirDecodesSurfaceError) {
 // least the fine control points' decode.
 TEST(Convert, StageTimesAddUpToTheWholeAndPeaksGrow) {
   const Volume field = make_builtin_field("mixing", 48);
+  const ConvertOptions options;
   const auto start = std::chrono::steady_clock::now();
-  const ConvertResult result = convert_volume(field, "mixing", ConvertOptions{});
+  const ConvertResult result = convert_volume(field, "mixing", options);
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   std::printf("[ report ] stages %.3f s of %.3f s\n", result.seconds.total(), wall);
   EXPECT_LE(result.seconds.total(), wall);

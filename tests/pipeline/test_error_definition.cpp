@@ -83,7 +83,9 @@ TEST(ErrorDefinition, ConvertAndStatsReportTheSameRows) {
     const DirectErrors direct = direct_errors(decode_keeping(result.bytes, from_stats.wavelet_coefficients, bytes), full);
     EXPECT_NEAR(from_stats.rms, direct.rms, tolerance) << "row " << k;
     EXPECT_NEAR(from_stats.max, direct.max, tolerance) << "row " << k;
-    if (k > 0) EXPECT_EQ(from_stats.bytes, bytes) << "row " << k;  // the prefix it read
+    if (k > 0) {
+      EXPECT_EQ(from_stats.bytes, bytes) << "row " << k;  // the prefix it read
+    }
   }
   EXPECT_EQ(stats.rows.front().rms, 0.0);  // 100%: the full decode itself
   EXPECT_GT(stats.rows.back().rms, 0.0);   // the base mesh alone

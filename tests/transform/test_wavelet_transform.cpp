@@ -302,5 +302,33 @@ TEST(WaveletTransform, SynthesisMatchesANaiveTranscriptionOfTheRules) {
   }
 }
 
+// wavelet_squared_norms() against the definition: the dense synthesis of
+// every coefficient's unit vector, its squared norm over the fine control
+// points, on the generated corpus (boundaries, creases, sharp vertices,
+// polygons), with and without sharp vertices.
+TEST(WaveletTransform, WaveletSquaredNormsAreThoseOfTheSynthesizedUnitVectors) {
+  for (const auto& [name, mesh] : test::generated_corpus()) {
+    for (const bool sharp : {false, true}) {
+      PolygonMesh base = mesh;
+      if (sharp) {
+        base.sharp.assign(base.vertex_count(), 0);
+        for (std::size_t v = 0; v < base.vertex_count(); v += 4) base.sharp[v] = 1;
+      }
+      const SubdivisionHierarchy h(base, 2);
+      const std::vector<double> norms = wavelet_squared_norms(h);
+      ASSERT_EQ(norms.size(), h.fine_vertex_count());
+      for (std::size_t i = 0; i < h.vertex_count(0); ++i) ASSERT_EQ(norms[i], 0.0);
+      for (std::size_t i = h.vertex_count(0); i < h.fine_vertex_count(); ++i) {
+        std::vector<Vec3> unit(h.fine_vertex_count());
+        unit[i].x = 1;
+        synthesize(h, unit);
+        double expected = 0;
+        for (const Vec3& p : unit) expected += p.x * p.x;
+        ASSERT_NEAR(norms[i], expected, 1e-12 * expected) << name << (sharp ? " with sharp vertices" : "") << " entry " << i;
+      }
+    }
+  }
+}
+
 }  // namespace
 }  // namespace isowave

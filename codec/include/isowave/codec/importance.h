@@ -87,18 +87,17 @@ Oracle oracle_from_name(const std::string& name);
 // until `keep` remain, and zeroes the others in `coefficients` (base control
 // points are never rejected). The error of rejecting c_k after the set R is
 // |c_k|^2 ||psi_k||^2 + 2 c_k . (S^T S c_R)_k, S the synthesis to the fine
-// control points: exact for the cross terms (a synthesis and its transpose),
-// with ||psi_k||^2 the class's mean, class_weights[c]^2 (wavelet_norms()).
-// The paper rejects one coefficient per update, O(n^2); this rejects in
+// control points, exactly: ||psi_k||^2 from wavelet_squared_norms()
+// (transform/wavelet_transform.h), the cross terms from a synthesis and its
+// transpose. The paper rejects one coefficient per update, O(n^2); this rejects in
 // batches, each half of what is left to reject but at least
 // smallest_batch x keep (> 0; at least one), re-scoring after each: a batch's
 // own cross terms are not seen. Returns the kept coefficients, largest
-// rejection error (in the last round) first. Cost: about
-// log2(rejected / (smallest_batch x keep)) + 2 syntheses and transposed
-// syntheses, O(entries) each.
+// rejection error (in the last round) first. Cost: wavelet_squared_norms(),
+// and about log2(rejected / (smallest_batch x keep)) + 2 syntheses and
+// transposed syntheses, O(entries) each.
 std::vector<std::uint32_t> keep_greedy(const SubdivisionHierarchy& hierarchy, std::vector<Vec3>& coefficients,
-                                       const std::vector<double>& class_weights, std::size_t keep,
-                                       double smallest_batch = 1.0 / 64);
+                                       std::size_t keep, double smallest_batch = 1.0 / 64);
 
 // Number of wavelet coefficients kept at `percent` of full resolution, counted
 // as the paper does: the total is the fine control point count (base vertices

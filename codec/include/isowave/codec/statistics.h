@@ -74,10 +74,10 @@ std::vector<RateDistortionRow> rate_distortion(const IswDecoded& decoded, const 
 // the prefix per call.
 PrefixValues decode_prefixes(const std::string& file);
 
-// The error table of a complete decode (see rate_distortion;
-// `prefix_values` as there) for `percents`, the base-mesh row last. `full_decode`, if given, must be the synthesis of
-// every decoded coefficient (the caller has it already): it saves one
-// synthesis. Throws Error(InvalidArgument) for a truncated decode. Cost: one
+// The error table of a complete decode (see rate_distortion; `prefix_values`
+// as there) for `percents`, the base-mesh row last. `full_decode`, if given,
+// must be the synthesis of every decoded coefficient (the caller has it
+// already): it saves one synthesis. Throws Error(InvalidArgument) for a truncated decode. Cost: one
 // synthesis per row below 100%, and the full decode unless given.
 ErrorTable error_table(const IswDecoded& decoded, const std::vector<double>& percents,
                        const std::vector<Vec3>* full_decode = nullptr, const RowSurfaceVisitor& visit = nullptr,

@@ -46,6 +46,16 @@ std::vector<Vec3> subdivide(const SubdivisionHierarchy& hierarchy, const std::ve
 // Shrink-wrap fitting refines with this, level by level.
 void subdivide_level(const SubdivisionHierarchy& hierarchy, int level, std::vector<Vec3>& data);
 
+// Per entry of the coarse-to-fine array, the squared L2 norm over the fine
+// control points of its wavelet: the synthesis to the finest level of the
+// unit vector at that entry (one component), exactly (to rounding), by
+// following its support through the lifting steps; 0 for base entries.
+// Greedy truncation weighs coefficients by it (codec/importance.h). Cost:
+// each wavelet's support at every level it crosses, summed: O(levels x fine
+// vertices x the finest supports), many syntheses' worth; parallel; a
+// double and two 32-bit marks per fine vertex per thread.
+std::vector<double> wavelet_squared_norms(const SubdivisionHierarchy& hierarchy);
+
 // The transpose of one level of synthesis. Synthesis of `level` is a linear
 // map from (level-(level-1) control points, level-`level` coefficients) to
 // level-`level` control points, in place over the first vertex_count(level)
