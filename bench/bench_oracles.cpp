@@ -60,11 +60,45 @@ Options parse(int argc, char** argv) {
   return o;
 }
 
+// A row: an oracle over the whole stream, or (`prefix`) what decode
+// --percent reads and keeps (the PCNT prefix of a 2.2 file).
 struct Choice {
   std::string name;
   Oracle oracle;
   double smallest_batch;
+  bool prefix;
 };
+
+// The coefficients `choice` keeps at `percent` and the seconds it took.
+std::vector<Vec3> kept_by(const Choice& choice, const IswDecoded& decoded, const std::string& file, double percent,
+                          double& seconds) {
+  const SubdivisionHierarchy& h = *decoded.hierarchy;
+  const std::size_t keep = coefficients_for_percent(h, percent);
+  const auto start = Clock::now();
+  if (choice.prefix) {
+    IswDecodeOptions limit;
+    limit.max_percent = percent;
+    IswDecoded part = read_isw(file, limit);
+    seconds = seconds_since(start);
+    const IswDecodeTimings& t = part.seconds;
+    std::printf("%8.2f %12s read %llu of %llu file bytes (%.1f%%); seconds: read %.3f, headers %.3f, hierarchy %.3f "
+                "(waited %.3f), planes %.3f, rank %.3f, to world %.3f\n",
+                percent, "prefix", static_cast<unsigned long long>(part.file_bytes_read),
+                static_cast<unsigned long long>(part.file_bytes),
+                100.0 * static_cast<double>(part.file_bytes_read) / static_cast<double>(part.file_bytes), t.read,
+                t.headers, t.hierarchy, t.hierarchy_wait, t.chunks, t.rank, t.dequantize);
+    return std::move(part.coefficients);
+  }
+  std::vector<Vec3> kept = decoded.coefficients;
+  if (choice.oracle == Oracle::Greedy) {
+    keep_greedy(h, kept, keep, choice.smallest_batch);
+  } else {
+    const std::vector<double> unit(decoded.class_weights.size(), 1.0);
+    keep_most_important(h, kept, choice.oracle == Oracle::Magnitude ? unit : decoded.class_weights, keep);
+  }
+  seconds = seconds_since(start);
+  return kept;
+}
 
 int run(const Options& o) {
   IswDecodeOptions whole;
@@ -82,39 +116,20 @@ int run(const Options& o) {
     extract.iso = o.iso;
     reference.emplace(extract_isosurface(volume, extract).mesh);
   }
-  std::vector<Choice> choices{
-      {"magnitude", Oracle::Magnitude, 0}, {"weighted", Oracle::Weighted, 0}, {"prefix", Oracle::Weighted, 0}};
+  std::vector<Choice> choices{{"magnitude", Oracle::Magnitude, 0, false},
+                              {"weighted", Oracle::Weighted, 0, false},
+                              {"prefix", Oracle::Weighted, 0, true}};
   for (double b : o.batches) {
     char name[32];
     std::snprintf(name, sizeof name, "greedy/%g", b);
-    choices.push_back({name, Oracle::Greedy, b});
+    choices.push_back({name, Oracle::Greedy, b, false});
   }
   std::printf("%s: %zu fine points, %zu base, %d levels\n", o.file.c_str(), h.fine_vertex_count(), h.vertex_count(0), h.levels());
   std::printf("%8s %12s %14s %12s %10s\n", "percent", "oracle", "RMSE [% cell]", "D [% cell]", "seconds");
-  const std::vector<double> unit(decoded.class_weights.size(), 1.0);
-  for (double percent : o.percents) {
-    const std::size_t keep = coefficients_for_percent(h, percent);
+  for (double percent : o.percents)
     for (const Choice& choice : choices) {
-      std::vector<Vec3> kept = decoded.coefficients;
-      const auto start = Clock::now();
-      if (choice.oracle == Oracle::Greedy) keep_greedy(h, kept, keep, choice.smallest_batch);
-      else keep_most_important(h, kept, choice.oracle == Oracle::Magnitude ? unit : decoded.class_weights, keep);
-      double seconds = seconds_since(start);
-      if (choice.name == "prefix") {  // what decode --percent reads and keeps (the PCNT prefix of a 2.2 file)
-        IswDecodeOptions limit;
-        limit.max_percent = percent;
-        const auto read_start = Clock::now();
-        IswDecoded part = read_isw(o.file, limit);
-        seconds = seconds_since(read_start);
-        kept = std::move(part.coefficients);
-        const IswDecodeTimings& t = part.seconds;
-        std::printf("%8.2f %12s read %llu of %llu file bytes (%.1f%%); seconds: read %.3f, headers %.3f, hierarchy %.3f "
-                    "(waited %.3f), planes %.3f, rank %.3f, to world %.3f\n",
-                    percent, "prefix", static_cast<unsigned long long>(part.file_bytes_read),
-                    static_cast<unsigned long long>(part.file_bytes),
-                    100.0 * static_cast<double>(part.file_bytes_read) / static_cast<double>(part.file_bytes), t.read,
-                    t.headers, t.hierarchy, t.hierarchy_wait, t.chunks, t.rank, t.dequantize);
-      }
+      double seconds = 0;
+      std::vector<Vec3> kept = kept_by(choice, decoded, o.file, percent, seconds);
       synthesize(h, kept);
       const double rms = point_errors(kept, full, h.fine_vertex_count()).rms;
       double d = -1;
@@ -122,7 +137,6 @@ int run(const Options& o) {
       std::printf("%8.2f %12s %14.3f %12.3f %10.3f\n", percent, choice.name.c_str(), 100 * rms / cell,
                   d < 0 ? -1.0 : 100 * d / cell, seconds);
     }
-  }
   return 0;
 }
 

@@ -667,15 +667,12 @@ IswDecoded read_isw(const std::string& path, const IswDecodeOptions& options) {
   // view, a coefficient limit (2.2's PCNT), a stream limit.
   const bool limited = options.max_coefficients != UINT64_MAX || options.max_percent < 100 ||
                        options.max_stream_bytes != UINT64_MAX || options.max_error_cells > 0;
-  if (options.max_file_bytes != UINT64_MAX) {  // a prefix of the file, which is not truncated
+  if (options.max_file_bytes != UINT64_MAX) {
+    // A byte past the prefix tells decode_isw the file goes on (a prefix is not truncated).
     FileReader file(path);
-    const std::string bytes = file.read(0, options.max_file_bytes);
+    const std::string bytes = file.read(0, options.max_file_bytes + 1);
     const double read_seconds = seconds_since(start);
     IswDecoded result = decode_isw(bytes, path, options);
-    if (bytes.size() < file.size()) {
-      result.truncated = false;
-      result.truncation_note.clear();
-    }
     result.file_bytes = file.size();
     result.seconds.read = read_seconds;
     return result;
