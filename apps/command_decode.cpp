@@ -42,15 +42,14 @@ std::optional<RegionOfInterest> region_option(const cli::Arguments& args) {
 // region; prints what it kept unless quiet.
 PolygonMesh decode_region(const cli::Arguments& args, const IswDecoded& decoded, const RegionOfInterest& region,
                         const std::string& input) {
-  const SubdivisionHierarchy& h = *decoded.hierarchy;
   std::size_t outside = 0;
-  if (args.has("percent")) outside = coefficients_for_percent(h, args.get_double("percent", 0));
+  if (args.has("percent")) outside = coefficients_for_percent(*decoded.hierarchy, args.get_double("percent", 0));
   if (args.has("coefficients")) outside = static_cast<std::size_t>(args.get_double("coefficients", 0));
   RegionReconstruction r;
   PolygonMesh mesh = isowave::region_mesh(decoded, region, outside, &r);
   if (!args.has("quiet"))
     std::printf("%s: region: %zu of %zu fine control points inside, %zu coefficients there, %zu kept in all (of %zu)\n",
-                input.c_str(), r.inside_points, h.fine_vertex_count(), r.region_coefficients, r.kept_coefficients,
+                input.c_str(), r.inside_points, decoded.fine_vertices, r.region_coefficients, r.kept_coefficients,
                 decoded.ranked.size());
   return mesh;
 }
@@ -193,8 +192,7 @@ int decode(const Args& raw) {
 
   if (!args.has("quiet")) {
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    const std::size_t fine = decoded.hierarchy->fine_vertex_count();
-    const std::size_t base = decoded.hierarchy->vertex_count(0);
+    const std::size_t fine = decoded.fine_vertices, base = decoded.base_vertices;
     // The paper's count: base vertices plus kept coefficients, zeros included.
     const double base_percent = 100.0 * static_cast<double>(base) / static_cast<double>(fine);
     const double percent =

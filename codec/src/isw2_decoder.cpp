@@ -2,18 +2,21 @@
 // through the plane decoder, the local frames of the frame-precision base
 // (built meanwhile on another thread), and the world coefficients.
 #include <algorithm>
+#include <cassert>
 #include <chrono>
 #include <cmath>
 
 #include <tbb/task_group.h>
 
 #include "isowave/codec/region.h"
+#include "isowave/transform/patch_hierarchy.h"
 #include "isowave/core/error.h"
 #include "isowave/core/huge_page_vector.h"
 #include "bitplane_coder.h"
 #include "coefficient_tree.h"
 #include "isw2_layout.h"
 #include "isw_models.h"
+#include "patch_selection.h"
 
 namespace isowave::detail {
 
@@ -47,18 +50,17 @@ TreeGroups stream_groups(const SubdivisionHierarchy& hierarchy, const Coefficien
   return split_tree(tree, root_groups(owners, face_group), access.index->count());
 }
 
-// The groups a region (or a view frustum) needs: those holding an entry that
-// some fine control point of a base face that may meet it (its corners' box
-// grown by its group's reach) depends on.
-std::vector<std::uint8_t> groups_for_region(const SubdivisionHierarchy& hierarchy, const std::vector<Vec3>& frame_base,
+// The groups a view frustum needs: those holding an entry that some fine
+// control point of a base face that may lie in it (its corners' box grown by
+// its group's reach) depends on.
+std::vector<std::uint8_t> groups_for_view(const SubdivisionHierarchy& hierarchy, const std::vector<Vec3>& frame_base,
                                             const TreeGroups& split, const GroupIndex& index,
                                             const std::vector<std::uint32_t>& face_group, const StreamAccess& access) {
   std::vector<std::uint8_t> points(hierarchy.fine_vertex_count(), 0);
   for (std::size_t f = 0; f < face_group.size(); ++f) {
     Vec3 lo, hi;
     face_box(hierarchy.base(), frame_base, f, index.reach[face_group[f]], lo, hi);
-    const bool meets = access.region ? access.region->meets_box(lo, hi) : !access.frustum->box_outside(lo, hi);
-    if (meets) for_each_fine_point(hierarchy, f, [&](std::size_t v) { return points[v] = 1; });
+    if (!access.frustum->box_outside(lo, hi)) for_each_fine_point(hierarchy, f, [&](std::size_t v) { return points[v] = 1; });
   }
   const std::vector<std::uint8_t> needed = entries_for_points(hierarchy, points);
   std::vector<std::uint8_t> selected(index.count(), 0);
@@ -140,21 +142,24 @@ std::uint64_t prefix_bytes(PayloadReader& reader, const PlaneStream& planes, con
 
 }  // namespace
 
-void decode_plane_stream(const Section& section, const SubdivisionHierarchy& hierarchy,
-                         const CoefficientClasses& layout, const V2Scales& scales, const StreamPrefix& prefix,
-                         const StreamAccess& access, IswDecoded& result) {
-  const auto start = Clock::now();
-  PayloadReader reader = section.reader();
+namespace {
+
+// What both decoders do first: PLNS's table read within the prefix (PCNT's
+// planes for a coefficient limit) and checked against the file's levels,
+// version and index, and reported in result.stream.
+PlaneStream open_plane_stream(PayloadReader& reader, const Section& section, int levels,
+                              const CoefficientClasses& layout, const StreamPrefix& prefix, const StreamAccess& access,
+                              IswDecoded& result, std::uint64_t& max_stream_bytes) {
   const bool by_space = result.minor_version >= 2;
   if (by_space && !access.index) reader.fail("comes without its group index (GIDX)");
   const std::uint64_t max_groups = by_space ? access.index->count() : kMaxGroups;
   PlaneStream planes = read_planes(reader, section.payload, section.cut, prefix.bytes, max_groups);
-  const std::uint64_t max_stream_bytes = prefix_bytes(reader, planes, prefix, layout);
+  max_stream_bytes = prefix_bytes(reader, planes, prefix, layout);
   if (max_stream_bytes < prefix.bytes) {
     PayloadReader again = section.reader();
     planes = read_planes(again, section.payload, section.cut, max_stream_bytes, max_groups);
   }
-  if (planes.packets_total > 0 && planes.layout.segments != static_cast<std::size_t>(hierarchy.levels()) + 1)
+  if (planes.packets_total > 0 && planes.layout.segments != static_cast<std::size_t>(levels) + 1)
     reader.fail("has a segment count other than the levels + 1");
   // The coding, which the header's minor version (outside every CRC) must agree with.
   if (section.payload.size() >= 2 && planes.layout.coding_minor() != std::min<int>(result.minor_version, 1))
@@ -173,6 +178,47 @@ void decode_plane_stream(const Section& section, const SubdivisionHierarchy& hie
   stream.planes = static_cast<int>(planes.planes_total);
   stream.plane_ends = planes.plane_ends;
   result.chunks_total = planes.planes_total;
+  return planes;
+}
+
+// The packets of the groups `only` flags (all without it), fetched when the
+// file is read in part and checked against GIDX's CRCs (2.2), through
+// `decoder`, and what was read reported.
+void decode_packets(PayloadReader& reader, const Section& section, const PlaneStream& planes,
+                    std::uint64_t max_stream_bytes, const StreamAccess& access, std::size_t groups,
+                    const std::vector<std::uint8_t>* only, PlaneDecoder& decoder, IswDecoded& result) {
+  const bool by_space = result.minor_version >= 2;
+  std::string fetched;
+  bool last_cut = planes.last_cut;
+  const std::vector<std::string_view> packets =
+      access.fetch && planes.table
+          ? fetch_packets(section, planes, max_stream_bytes, access, only ? *only : std::vector<std::uint8_t>(groups, 1),
+                          fetched, last_cut)
+          : planes.packets;
+  if (by_space && planes.table && (access.fetch || only))
+    check_group_crcs(reader, section, planes, *access.index, packets, last_cut, only);
+  decoder.decode(packets, last_cut, only);
+  IswStreamInfo& stream = result.stream;
+  for (std::size_t j = 0; j < packets.size(); ++j)
+    if (!only || (*only)[j % groups]) stream.decoded += packets[j].size();
+  stream.groups = groups;
+  stream.groups_decoded = only ? static_cast<std::size_t>(std::count(only->begin(), only->end(), 1)) : groups;
+  result.file_bytes_read += fetched.size();
+  stream.planes_decoded = decoder.planes_done();
+  result.chunks_decoded = static_cast<std::size_t>(decoder.planes_done());
+}
+
+}  // namespace
+
+void decode_plane_stream(const Section& section, const SubdivisionHierarchy& hierarchy,
+                         const CoefficientClasses& layout, const V2Scales& scales, const StreamPrefix& prefix,
+                         const StreamAccess& access, IswDecoded& result) {
+  const auto start = Clock::now();
+  PayloadReader reader = section.reader();
+  const bool by_space = result.minor_version >= 2;
+  std::uint64_t max_stream_bytes = 0;
+  const PlaneStream planes =
+      open_plane_stream(reader, section, hierarchy.levels(), layout, prefix, access, result, max_stream_bytes);
 
   // The frames need only the base the decoder has: built during the planes.
   const std::vector<Vec3> frame_base = result.base.positions;
@@ -183,32 +229,72 @@ void decode_plane_stream(const Section& section, const SubdivisionHierarchy& hie
   std::vector<std::uint32_t> face_group;
   const TreeGroups split = stream_groups(hierarchy, tree, planes, by_space ? access : StreamAccess{}, face_group);
   std::vector<std::uint8_t> selected;
-  if (by_space && (access.region || access.frustum))
-    selected = groups_for_region(hierarchy, frame_base, split, *access.index, face_group, access);
-  const std::vector<std::uint8_t>* only = selected.empty() ? nullptr : &selected;
-  std::string fetched;
-  bool last_cut = planes.last_cut;
-  const std::vector<std::string_view> packets =
-      access.fetch && planes.table
-          ? fetch_packets(section, planes, max_stream_bytes, access,
-                          only ? selected : std::vector<std::uint8_t>(split.count(), 1), fetched, last_cut)
-          : planes.packets;
-  if (by_space && planes.table && (access.fetch || only))
-    check_group_crcs(reader, section, planes, *access.index, packets, last_cut, only);
+  if (by_space && access.frustum)
+    selected = groups_for_view(hierarchy, frame_base, split, *access.index, face_group, access);
   const std::vector<std::uint8_t> classes = node_classes(layout);
   PlaneDecoder decoder(tree, classes, layout.count(), planes.layout.coding_minor(), planes.layout.top_plane, split);
-  decoder.decode(packets, last_cut, only);
-  for (std::size_t j = 0; j < packets.size(); ++j)
-    if (!only || selected[j % split.count()]) stream.decoded += packets[j].size();
-  stream.groups = split.count();
-  stream.groups_decoded = only ? static_cast<std::size_t>(std::count(selected.begin(), selected.end(), 1)) : split.count();
-  result.file_bytes_read += fetched.size();
-  stream.planes_decoded = decoder.planes_done();
-  result.chunks_decoded = static_cast<std::size_t>(decoder.planes_done());
+  decode_packets(reader, section, planes, max_stream_bytes, access, split.count(), selected.empty() ? nullptr : &selected,
+                 decoder, result);
   result.seconds.chunks = seconds_since(start);
   frames.wait();
   const auto world_start = Clock::now();
   to_world(decoder, layout, classes, scales, frame_base, normals, result);
+  result.seconds.dequantize = seconds_since(world_start);
+}
+
+void decode_patch_stream(const Section& section, int levels, const CoefficientClasses& layout, const V2Scales& scales,
+                         const StreamPrefix& prefix, const StreamAccess& access, const BaseIncidence& incidence,
+                         IswDecoded& result) {
+  assert(access.region && access.index && result.minor_version >= 2);
+  const auto start = Clock::now();
+  PayloadReader reader = section.reader();
+  std::uint64_t max_stream_bytes = 0;
+  const PlaneStream planes = open_plane_stream(reader, section, levels, layout, prefix, access, result, max_stream_bytes);
+  // The patch: the base as BPTS gives it, its groups and the faces the region needs.
+  const PolygonMesh& base = result.base;
+  const std::vector<std::uint32_t> face_group =
+      face_groups(morton_face_order(base, *access.base_q).faces, access.index->runs);
+  PatchSelection selection;
+  try {  // the base's topology, as the whole hierarchy would check it
+    selection = select_patch(base, incidence, face_group, access.index->reach, *access.region, levels);
+  } catch (const Error& error) {
+    if (error.kind() != ErrorKind::Topology && error.kind() != ErrorKind::InvalidArgument) throw;
+    reader.fail(std::string("needs a base mesh the subdivision hierarchy cannot take: ") + error.what());
+  }
+  result.seconds.hierarchy = seconds_since(start);
+  const SelectedTree selected = selected_tree(selection, layout);
+  auto patch = std::make_shared<RegionPatch>(RegionPatch{std::move(*selection.patch), {}, {}});
+  const SubdivisionHierarchy& h = patch->patch.hierarchy();
+  const std::vector<std::uint32_t>& entries = patch->patch.entries();
+  std::vector<Vec3> frame_base(h.vertex_count(0));
+  for (std::size_t v = 0; v < frame_base.size(); ++v) frame_base[v] = base.positions[patch->patch.base_vertices()[v]];
+  std::vector<Vec3> normals;
+  tbb::task_group frames;
+  frames.run([&] { normals = frame_normals(h, frame_base); });
+  // The selected groups' nodes, decoded as in the whole tree.
+  PlaneDecoder decoder(selected.tree, selected.node_class, layout.count(), planes.layout.coding_minor(),
+                       planes.layout.top_plane, selected.groups);
+  decode_packets(reader, section, planes, max_stream_bytes, access, selected.groups.count(), &selection.selected,
+                 decoder, result);
+  std::vector<Vec3> values(selected.tree.nodes);
+  decoder.values(values);
+  result.seconds.chunks = seconds_since(start);
+  // World values per patch entry: base control points at the frame precision
+  // where their group was not decoded, coefficients zero there.
+  const auto world_start = Clock::now();
+  std::vector<Vec3>& world = patch->coefficients;
+  world.assign(entries.size(), Vec3{});
+  for (std::size_t i = 0; i < values.size(); ++i) world[selected.node_entry[i]] = values[i];
+  std::vector<std::uint8_t> classes(entries.size());
+  for (std::size_t k = 0; k < entries.size(); ++k) classes[k] = static_cast<std::uint8_t>(layout.of(entries[k]));
+  frames.wait();
+  steps_to_world(classes, scales, frame_base, normals, world);
+  for (std::size_t v = 0; v < frame_base.size(); ++v) result.base.positions[patch->patch.base_vertices()[v]] = world[v];
+  patch->exact.assign(h.base().face_count(), 0);
+  const std::vector<std::uint32_t>& faces = patch->patch.faces();
+  for (const std::uint32_t f : selection.seeds)
+    patch->exact[static_cast<std::size_t>(std::lower_bound(faces.begin(), faces.end(), f) - faces.begin())] = 1;
+  result.patch = std::move(patch);
   result.seconds.dequantize = seconds_since(world_start);
 }
 

@@ -12,6 +12,7 @@
 #include "isowave/codec/isw_format.h"
 #include "isowave/core/vec3.h"
 #include "isowave/transform/hierarchy.h"
+#include "isowave/transform/patch_hierarchy.h"
 #include "bitplane_coder.h"
 #include "isw_sections.h"
 #include "local_frames.h"
@@ -157,14 +158,14 @@ std::string encode_isw_v2(const SubdivisionHierarchy& hierarchy, const std::vect
                           PlaneValuesState* values = nullptr);
 
 // What the decoder's PLNS reads besides the section: version 2.2's index
-// and frame-base integers, the region (or view frustum) whose groups alone
-// to decode, and,
-// for a file read in part, where its bytes past those in memory come from.
+// and frame-base integers, the region (decode_patch_stream()) or view
+// frustum whose groups alone to decode, and, for a file read in part, where
+// its bytes past those in memory come from.
 struct StreamAccess {
   const GroupIndex* index = nullptr;                      // GIDX (required by 2.2)
   const std::vector<QuantizedVector>* base_q = nullptr;  // BPTS's integers
   const RegionOfInterest* region = nullptr;
-  const Camera* frustum = nullptr;  // as `region`, the faces that may lie in its view
+  const Camera* frustum = nullptr;  // the faces that may lie in its view
   // File bytes [offset, offset + size) (the file's end may come first), and
   // the file's size; none when the whole file is in memory.
   std::function<std::string(std::uint64_t offset, std::uint64_t size)> fetch;
@@ -179,6 +180,15 @@ struct StreamAccess {
 void decode_plane_stream(const Section& section, const SubdivisionHierarchy& hierarchy,
                          const CoefficientClasses& layout, const V2Scales& scales, const StreamPrefix& prefix,
                          const StreamAccess& access, IswDecoded& result);
+
+// The same for a region (access.region, 2.2): only the groups the region
+// needs, over a patch of the base (patch_selection.h; `incidence` the
+// base's) instead of the whole hierarchy, into result.patch (region.h);
+// result.coefficients stays empty. Error(Format) as above, and for a base
+// the hierarchy cannot take.
+void decode_patch_stream(const Section& section, int levels, const CoefficientClasses& layout, const V2Scales& scales,
+                         const StreamPrefix& prefix, const StreamAccess& access, const BaseIncidence& incidence,
+                         IswDecoded& result);
 
 // result.ranked: the non-zero wavelet coefficients by importance (class
 // weight times magnitude, ties by index), the first `keep` of them; the

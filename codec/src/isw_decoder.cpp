@@ -24,6 +24,7 @@
 #include "isowave/core/mesh_io.h"
 #include "isowave/core/mesh_topology.h"
 #include "isowave/transform/hierarchy.h"
+#include "isowave/transform/patch_hierarchy.h"
 #include "isw2_layout.h"
 #include "isw_headers.h"
 #include "isw_models.h"
@@ -123,7 +124,12 @@ struct DecodeState {
   // The hierarchy is built during the chunk decoding, which needs only its
   // counts (the layout).
   HierarchyBuild build;
+  std::string build_context;  // heads the build's errors
   std::shared_ptr<const SubdivisionHierarchy> hierarchy;
+  // A region decode of a 2.2 file: a patch instead of the whole hierarchy
+  // (built after all when the file ends before PLNS).
+  bool patch = false;
+  std::optional<BaseIncidence> incidence;  // the patch's: the base's edges, numbered
   std::optional<CoefficientClasses> layout;
   std::uint64_t limit;  // ranked coefficients wanted
   std::vector<std::uint64_t> chunk_ends;
@@ -217,14 +223,25 @@ void plan_hierarchy(PayloadReader& reader, DecodeState& state) {
   result.seconds.headers = seconds_since(state.start);
   // With every corner counted as an edge the estimate can only grow: if
   // even that is justified, the build starts before the exact edge count.
-  const bool early =
-      !reuse && justified(classes_from_counts(result.base, result.base.face_vertices.size(), result.levels));
-  const std::string build_context = state.name + ": section BASE holds a base mesh the subdivision hierarchy cannot take: ";
-  if (early) state.build.start(result.base, result.levels, build_context);
-  state.layout.emplace(classes_from_counts(result.base, summarize_topology(result.base).edges, result.levels));
+  state.patch = state.options.region && state.major == 2 && result.minor_version >= 2 && !reuse;
+  const bool early = !reuse && !state.patch &&
+                     justified(classes_from_counts(result.base, result.base.face_vertices.size(), result.levels));
+  state.build_context = state.name + ": section BASE holds a base mesh the subdivision hierarchy cannot take: ";
+  if (early) state.build.start(result.base, result.levels, state.build_context);
+  if (state.patch) {
+    try {
+      state.incidence = base_incidence(result.base);
+    } catch (const Error& error) {
+      throw Error(ErrorKind::Format, state.build_context + error.what());
+    }
+  }
+  const std::size_t edges = state.patch ? state.incidence->edge_count() : summarize_topology(result.base).edges;
+  state.layout.emplace(classes_from_counts(result.base, edges, result.levels));
   if (!justified(*state.layout)) reader.fail("describes a hierarchy larger than the file can justify");
+  result.fine_vertices = state.layout->fine();
+  result.base_vertices = state.layout->base();
   if (reuse) state.hierarchy = state.options.hierarchy;
-  else if (!early) state.build.start(result.base, result.levels, build_context);
+  else if (!early && !state.patch) state.build.start(result.base, result.levels, state.build_context);
   const std::size_t base_count = state.layout->base();
   state.limit = std::min<std::uint64_t>(
       state.limit, coefficients_for_percent(state.layout->fine(), base_count, state.options.max_percent));
@@ -328,6 +345,10 @@ std::uint64_t decode_chunk(PayloadReader& reader, DecodeState& state) {
 
 void await_hierarchy(DecodeState& state) {
   IswDecoded& result = state.result;
+  if (state.patch && !state.build.started()) {
+    if (result.patch) return;
+    state.build.start(result.base, result.levels, state.build_context);  // no PLNS: the base alone, whole
+  }
   if (state.build.started()) {
     const auto wait_start = Clock::now();
     state.hierarchy = state.build.get();
@@ -394,7 +415,7 @@ Next decode_section(const Section& section, DecodeState& state) {
     result.stream.plane_counts = read_plane_counts(reader);
     state.saw_plane_counts = true;
   } else if (section.tag == "PLNS") {
-    await_hierarchy(state);
+    if (!state.patch) await_hierarchy(state);
     const IswDecodeOptions& o = state.options;
     const StreamAccess access{state.group_index ? &*state.group_index : nullptr, &state.base_q,
                               o.region ? &*o.region : nullptr, o.frustum && !o.region ? &*o.frustum : nullptr,
@@ -403,7 +424,9 @@ Next decode_section(const Section& section, DecodeState& state) {
     // whose limit applies outside it); PCNT is checked against PLNS always.
     StreamPrefix prefix{stream_limit(state), UINT64_MAX, state.saw_plane_counts ? &result.stream.plane_counts : nullptr};
     if (!o.region && !o.frustum && state.limit < result.coefficients_total) prefix.keep = state.limit;
-    decode_plane_stream(section, *state.hierarchy, *state.layout, state.scales, prefix, access, result);
+    if (state.patch)
+      decode_patch_stream(section, result.levels, *state.layout, state.scales, prefix, access, *state.incidence, result);
+    else decode_plane_stream(section, *state.hierarchy, *state.layout, state.scales, prefix, access, result);
     if (state.fetch && section.cut) {
       // Read in part: the file holds the rest of PLNS and an END after it
       // (whose bytes are not read), or it is truncated.
@@ -472,7 +495,7 @@ void dequantize_kept(DecodeState& state) {
 // before it), ranked by importance and cut to the limit.
 void finish_v2(DecodeState& state, bool cut) {
   IswDecoded& result = state.result;
-  if (result.coefficients.empty()) {
+  if (result.coefficients.empty() && !result.patch) {
     result.coefficients.assign(state.layout->fine(), Vec3{});
     std::copy(result.base.positions.begin(), result.base.positions.end(), result.coefficients.begin());
   }
@@ -483,6 +506,7 @@ void finish_v2(DecodeState& state, bool cut) {
                              std::to_string(stream.planes_decoded) + " of " + std::to_string(stream.planes) +
                              " planes (" + std::to_string(stream.decoded) + " stream bytes)";
   }
+  if (result.patch) return;  // nothing to rank: region_mesh() keeps what the region needs
   const auto rank_start = Clock::now();
   const bool unlimited = state.limit >= state.layout->fine() - state.layout->base();
   rank_and_keep(result, *state.layout, state.limit,

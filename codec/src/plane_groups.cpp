@@ -5,6 +5,9 @@
 #include <cmath>
 #include <limits>
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
 #include <zlib.h>
 
 #include "isowave/core/morton.h"
@@ -12,6 +15,8 @@
 namespace isowave::detail {
 
 namespace {
+
+constexpr std::size_t kFaceGrain = 1 << 14;
 
 // Sums of centroid integers need more than 64 bits (GCC and Clang's extension).
 __extension__ typedef __int128 Wide;
@@ -40,33 +45,37 @@ std::uint64_t get_varint(PayloadReader& reader) {
 
 FaceOrder morton_face_order(const PolygonMesh& base, const std::vector<QuantizedVector>& base_q) {
   const std::size_t faces = base.face_count();
-  // Centroids in integers, and their range per axis.
+  // Centroids in integers (in parallel), and their range per axis.
   std::vector<std::array<Wide, 3>> centroid(faces);
-  std::array<Wide, 3> low{}, high{};
-  for (std::size_t f = 0; f < faces; ++f) {
-    const std::uint32_t first = base.face_offsets[f], end = base.face_offsets[f + 1];
-    for (int a = 0; a < 3; ++a) {
-      Wide sum = 0;
-      for (std::uint32_t k = first; k < end; ++k) sum += base_q[base.face_vertices[k]][static_cast<std::size_t>(a)];
-      const Wide c = floor_divide(sum, static_cast<Wide>(std::max<std::uint32_t>(end - first, 1)));
-      centroid[f][static_cast<std::size_t>(a)] = c;
-      low[static_cast<std::size_t>(a)] = f == 0 ? c : std::min(low[static_cast<std::size_t>(a)], c);
-      high[static_cast<std::size_t>(a)] = f == 0 ? c : std::max(high[static_cast<std::size_t>(a)], c);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, faces, kFaceGrain), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t f = r.begin(); f < r.end(); ++f) {
+      const std::uint32_t first = base.face_offsets[f], end = base.face_offsets[f + 1];
+      for (std::size_t a = 0; a < 3; ++a) {
+        Wide sum = 0;
+        for (std::uint32_t k = first; k < end; ++k) sum += base_q[base.face_vertices[k]][a];
+        centroid[f][a] = floor_divide(sum, static_cast<Wide>(std::max<std::uint32_t>(end - first, 1)));
+      }
     }
-  }
+  });
+  std::array<Wide, 3> low{}, high{};
+  for (std::size_t f = 0; f < faces; ++f)
+    for (std::size_t a = 0; a < 3; ++a) {
+      low[a] = f == 0 ? centroid[f][a] : std::min(low[a], centroid[f][a]);
+      high[a] = f == 0 ? centroid[f][a] : std::max(high[a], centroid[f][a]);
+    }
   // One shift for all axes keeps the cells cubes (in the integers' units).
   int bits = 0;
-  for (int a = 0; a < 3; ++a)
-    bits = std::max(bits, bit_length(static_cast<UnsignedWide>(high[static_cast<std::size_t>(a)] -
-                                                                     low[static_cast<std::size_t>(a)])));
+  for (std::size_t a = 0; a < 3; ++a) bits = std::max(bits, bit_length(static_cast<UnsignedWide>(high[a] - low[a])));
   const int shift = std::max(0, bits - 21);
   std::vector<std::pair<std::uint64_t, std::uint32_t>> keyed(faces);
-  for (std::size_t f = 0; f < faces; ++f) {
-    std::uint32_t cell[3];
-    for (std::size_t a = 0; a < 3; ++a) cell[a] = static_cast<std::uint32_t>((centroid[f][a] - low[a]) >> shift);
-    keyed[f] = {morton_code(cell[0], cell[1], cell[2]), static_cast<std::uint32_t>(f)};
-  }
-  std::sort(keyed.begin(), keyed.end());
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, faces, kFaceGrain), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t f = r.begin(); f < r.end(); ++f) {
+      std::uint32_t cell[3];
+      for (std::size_t a = 0; a < 3; ++a) cell[a] = static_cast<std::uint32_t>((centroid[f][a] - low[a]) >> shift);
+      keyed[f] = {morton_code(cell[0], cell[1], cell[2]), static_cast<std::uint32_t>(f)};
+    }
+  });
+  tbb::parallel_sort(keyed.begin(), keyed.end());  // distinct pairs: the same order on any thread count
   FaceOrder order;
   order.faces.resize(faces);
   order.keys.resize(faces);

@@ -259,7 +259,7 @@ py::list stats(const fs::path& file, const std::vector<double>& percents) {
       throw Error(ErrorKind::Format, path + ": " + decoded.truncation_note + "; stats need the whole file");
     errors = error_table(decoded, percents, nullptr, nullptr, decode_prefixes(bytes));
     cell = recorded_cell_size(decoded.metadata);
-    fine = static_cast<double>(decoded.hierarchy->fine_vertex_count());
+    fine = static_cast<double>(decoded.fine_vertices);
     extracted = decoded.metadata.number("extracted_vertices", 0);
   }
   py::list rows;

@@ -23,6 +23,7 @@
 
 #include "isowave/codec/importance.h"
 #include "isowave/codec/isw_format.h"
+#include "isowave/codec/region.h"
 #include "isowave/transform/wavelet_transform.h"
 
 namespace isowave {
@@ -267,14 +268,15 @@ TEST(IswGolden, Format22FileDecodesToItsGeneratorAndByRegion) {
   options.region = make_region({-10, -10, -10, 10, 10, 0.2}, false, "region");
   const IswDecoded part = read_isw(golden_path("golden_2_2.isw"), options);
   EXPECT_EQ(part.file_bytes_read, part.stream.offset + part.stream.decoded);
-  std::vector<Vec3> whole = d.coefficients, region = part.coefficients;
-  synthesize(*d.hierarchy, whole);
-  synthesize(*part.hierarchy, region);
+  ASSERT_TRUE(part.patch);
+  const PolygonMesh whole = region_mesh(d, *options.region, 0), mine = region_mesh(part, *options.region, 0);
+  EXPECT_EQ(mine.face_vertices, whole.face_vertices);
+  ASSERT_EQ(mine.positions.size(), whole.positions.size());
   std::size_t inside = 0;
-  for (std::size_t v = 0; v < d.hierarchy->fine_vertex_count(); ++v)
-    if (options.region->contains(whole[v])) {
+  for (std::size_t v = 0; v < whole.positions.size(); ++v)
+    if (options.region->contains(whole.positions[v])) {
       ++inside;
-      EXPECT_LT(norm(region[v] - whole[v]), 1e-12) << v;
+      EXPECT_LT(norm(mine.positions[v] - whole.positions[v]), 1e-12) << v;
     }
   EXPECT_GT(inside, 0u);
 }

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <fstream>
 #include <map>
+#include <random>
 #include <tuple>
 
 #include <gtest/gtest.h>
@@ -120,6 +121,14 @@ PolygonMesh genus_slab(int genus) {
         mesh.add_face({vertex(x, y + 1, 0), vertex(x, y + 1, 1), vertex(x + 1, y + 1, 1), vertex(x + 1, y + 1, 0)});
     }
   return mesh;
+}
+
+std::vector<Vec3> random_vectors(std::size_t count, std::uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> n(0.0, 1.0);
+  std::vector<Vec3> v(count);
+  for (Vec3& p : v) p = {n(rng), n(rng), n(rng)};
+  return v;
 }
 
 std::vector<NamedMesh> generated_corpus() {

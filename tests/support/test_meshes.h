@@ -32,6 +32,9 @@ struct NamedMesh {
 // The always-available corpus: closed, with boundary, genus > 0, polygonal.
 std::vector<NamedMesh> generated_corpus();
 
+// `count` vectors of independent standard normal components (seeded).
+std::vector<Vec3> random_vectors(std::size_t count, std::uint32_t seed);
+
 // Moves every vertex by a uniform random offset in [-amount, amount]^3.
 void jitter(PolygonMesh& mesh, double amount, std::uint32_t seed);
 // The positions of a mesh's sharp vertices, sorted.

@@ -14,14 +14,6 @@
 namespace isowave {
 namespace {
 
-std::vector<Vec3> random_vectors(std::size_t count, std::uint32_t seed) {
-  std::mt19937 rng(seed);
-  std::normal_distribution<double> n(0.0, 1.0);
-  std::vector<Vec3> v(count);
-  for (Vec3& p : v) p = {n(rng), n(rng), n(rng)};
-  return v;
-}
-
 double inner(const std::vector<Vec3>& a, const std::vector<Vec3>& b, std::size_t count) {
   double sum = 0;
   for (std::size_t i = 0; i < count; ++i) sum += dot(a[i], b[i]);
@@ -33,8 +25,8 @@ void check_transpose(const std::string& name, PolygonMesh mesh, int levels, std:
   const SubdivisionHierarchy h(mesh, levels);
   for (int level = 1; level <= levels; ++level) {
     const std::size_t n = h.vertex_count(level);
-    const std::vector<Vec3> x = random_vectors(n, seed + 17 * static_cast<std::uint32_t>(level));
-    const std::vector<Vec3> g = random_vectors(n, seed + 31 * static_cast<std::uint32_t>(level));
+    const std::vector<Vec3> x = test::random_vectors(n, seed + 17 * static_cast<std::uint32_t>(level));
+    const std::vector<Vec3> g = test::random_vectors(n, seed + 31 * static_cast<std::uint32_t>(level));
     std::vector<Vec3> sx = x;  // level-(level-1) control points and the level's coefficients
     synthesize_level(h, level, sx);
     std::vector<Vec3> stg = g;
@@ -61,7 +53,7 @@ TEST(SynthesisTranspose, InnerProductsAgreeOnGeneratedMeshes) {
 TEST(SynthesisTranspose, IdenticalForAnyThreadCount) {
   const PolygonMesh mesh = test::quad_grid(40, 30, true, true);
   const SubdivisionHierarchy h(mesh, 3);
-  const std::vector<Vec3> g = random_vectors(h.fine_vertex_count(), 3);
+  const std::vector<Vec3> g = test::random_vectors(h.fine_vertex_count(), 3);
   std::vector<Vec3> parallel = g, serial = g;
   synthesize_level_transpose(h, 3, parallel);
   {

@@ -272,6 +272,8 @@ struct IswDecodeTimings {
   double dequantize = 0;  // the coarse-to-fine coefficient array
 };
 
+struct RegionPatch;  // region.h
+
 struct IswDecoded {
   std::uint16_t major_version = 0, minor_version = 0;  // the file's, from its header
   IswMetadata metadata;
@@ -294,8 +296,14 @@ struct IswDecoded {
   std::uint64_t file_bytes = 0;  // the file's size
   IswStreamInfo stream;                  // version 2
   // The subdivision hierarchy of `base` and `levels` (options.hierarchy when
-  // that one matches the file).
+  // that one matches the file); none after a region decode of a 2.2 file.
   std::shared_ptr<const SubdivisionHierarchy> hierarchy;
+  // That hierarchy's fine and base control points (set by every decode).
+  std::size_t fine_vertices = 0, base_vertices = 0;
+  // A region decode of a 2.2 file (options.region): the patch of the base
+  // it built and decoded, in place of `hierarchy` and `coefficients`
+  // (region.h).
+  std::shared_ptr<const RegionPatch> patch;
   // Version 1: chunks the encoder wrote (QUAN) and those decoded; version 2:
   // planes (PLNS) and complete planes decoded.
   std::size_t chunks_total = 0;
@@ -340,12 +348,11 @@ struct IswDecodeOptions {
   Oracle oracle = Oracle::Weighted;
   // Read only the metadata, base mesh and section table (for `info`).
   bool headers_only = false;
-  // Version 2.2: decode only the plane-stream groups whose coefficients the
-  // fine control points near `region` depend on (those of every group whose
-  // box in GIDX meets it): inside the region the points equal the complete
-  // decode's; elsewhere coefficients of other groups are zero and their base
-  // control points at the frame precision (BPTS). read_isw() then reads only
-  // those groups' packets. Earlier versions decode every group.
+  // A region decode with nothing kept outside (region_mesh()). Version 2.2:
+  // decodes only the plane-stream groups whose coefficients the fine control
+  // points near `region` depend on, over a patch of the base (IswDecoded::
+  // patch) without the whole hierarchy; read_isw() then reads only those
+  // groups' packets. Earlier versions decode every group.
   std::optional<RegionOfInterest> region;
   // Version 2.2, as `region` for the faces that may lie in this camera's
   // view frustum (a view decode); ignored with `region`.

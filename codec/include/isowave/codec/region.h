@@ -17,6 +17,7 @@
 #include "isowave/core/mesh.h"
 #include "isowave/core/vec3.h"
 #include "isowave/transform/hierarchy.h"
+#include "isowave/transform/patch_hierarchy.h"
 
 namespace isowave {
 
@@ -56,12 +57,26 @@ RegionReconstruction reconstruct_region(const IswDecoded& decoded, const RegionO
 std::vector<int> region_face_levels(const SubdivisionHierarchy& hierarchy, const std::vector<Vec3>& fine,
                                     const RegionOfInterest& region, int outside_level);
 
+// What a region decode of a 2.2 file holds (IswDecoded::patch, from
+// IswDecodeOptions::region) in place of the whole hierarchy and array.
+struct RegionPatch {
+  PatchHierarchy patch;
+  std::vector<Vec3> coefficients;  // per patch entry, world units: base control points, then wavelet coefficients
+  std::vector<std::uint8_t> exact;  // per patch base face: 1 if its fine control points equal the complete decode's
+};
+
 // What a region decode writes (decode --roi, Python's decode(roi=...)):
 // reconstruct_region()'s points as the finest control mesh when coefficients
-// are kept outside; with none, the base faces the region does not reach stay
-// whole, joined crack-free to the fine ones (adaptive_control_mesh, the
-// vertices it uses only). `counts` (optional) receives the reconstruction's
-// counts, without its points.
+// are kept outside; with none, the base faces where no fine control point
+// lies inside the region stay whole, joined crack-free to the finest faces
+// of those where one does (adaptive_patch(); the vertices used only, in the
+// order of their entries). A vertex of the finest faces takes its point
+// (inside the region the complete decode's); a base vertex of whole faces
+// only, its base control point (the base mesh). `decoded` is a complete
+// decode, or a region decode's patch (then outside_keep must be 0, else
+// Error(InvalidArgument)); both give the same faces, and the same points
+// where the patch decoded the base control points. `counts` (optional)
+// receives the reconstruction's counts, without its points.
 PolygonMesh region_mesh(const IswDecoded& decoded, const RegionOfInterest& region, std::size_t outside_keep,
                         RegionReconstruction* counts = nullptr);
 
