@@ -12,6 +12,7 @@
 
 #include "fuzz_support.h"
 #include "isowave/codec/isw_format.h"
+#include "isowave/codec/region.h"
 #include "isowave/codec/region_of_interest.h"
 
 namespace {
@@ -47,10 +48,14 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   std::string bytes(reinterpret_cast<const char*>(data), size);
   fix_crcs(bytes);
   isowave::fuzz::expect_clean([&] { isowave::decode_isw(bytes, "fuzz.isw"); });
-  // A region decode (2.2): the groups it selects, and GIDX's CRCs checked.
+  // A region decode (2.2): the groups it selects, GIDX's CRCs checked, the
+  // patch it builds and the mesh over it.
   isowave::IswDecodeOptions region;
   region.region = isowave::make_region({-1, -1, -1, 1, 1, 1}, false, "region");
-  isowave::fuzz::expect_clean([&] { isowave::decode_isw(bytes, "fuzz.isw", region); });
+  isowave::fuzz::expect_clean([&] {
+    const isowave::IswDecoded decoded = isowave::decode_isw(bytes, "fuzz.isw", region);
+    isowave::region_mesh(decoded, *region.region, 0);
+  });
   // A coefficient limit (2.2): the prefix PCNT's counts choose.
   isowave::IswDecodeOptions percent;
   percent.max_percent = 5;

@@ -26,6 +26,8 @@ py::tuple decode(const std::filesystem::path& path, const py::object& percent, c
                  const py::object& max_error, const py::object& bytes, const py::object& level, bool limit,
                  bool triangulate, const py::object& roi, const py::object& roi_sphere, double roi_falloff,
                  const py::object& view, double pixel_error, bool cull_back_faces, const std::string& oracle);
+py::dict decode_polygons(const std::filesystem::path& path, const py::object& percent, const py::object& max_error,
+                         const py::object& bytes, const py::object& level, bool limit);
 py::list stats(const std::filesystem::path& path, const std::vector<double>& percents);
 // isowave.ViewRefiner (view_refiner.cpp).
 void define_view_refiner(py::module_& m);

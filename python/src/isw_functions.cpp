@@ -176,6 +176,25 @@ std::optional<RegionOfInterest> region_argument(const py::object& roi, const py:
   return region;
 }
 
+// bytes and max_error (at most one): the file prefix a decode reads.
+void prefix_options(const py::object& max_error, const py::object& bytes, IswDecodeOptions& options) {
+  if (!max_error.is_none() && !bytes.is_none())
+    throw Error(ErrorKind::InvalidArgument, "give at most one of max_error and bytes");
+  if (!bytes.is_none()) options.max_file_bytes = bytes.cast<std::uint64_t>();
+  if (!max_error.is_none()) {
+    options.max_error_cells = max_error.cast<double>();
+    if (!(options.max_error_cells > 0) || !std::isfinite(options.max_error_cells))
+      throw Error(ErrorKind::InvalidArgument, "max_error must be a positive number of cells");
+  }
+}
+
+// A percentage in 0..100.
+double percent_argument(const py::object& percent) {
+  const double value = percent.cast<double>();
+  if (!(value >= 0 && value <= 100)) throw Error(ErrorKind::InvalidArgument, "percent must be in 0..100");
+  return value;
+}
+
 }  // namespace
 
 py::tuple decode(const fs::path& file, const py::object& percent, const py::object& coefficients,
@@ -183,8 +202,6 @@ py::tuple decode(const fs::path& file, const py::object& percent, const py::obje
                  bool triangulate, const py::object& roi, const py::object& roi_sphere, double roi_falloff,
                  const py::object& view, double pixel_error, bool cull_back_faces, const std::string& oracle) {
   const std::string path = file.string();
-  if (!max_error.is_none() && !bytes.is_none())
-    throw Error(ErrorKind::InvalidArgument, "give at most one of max_error and bytes");
   if (!percent.is_none() && !coefficients.is_none())
     throw Error(ErrorKind::InvalidArgument, "give at most one of percent and coefficients");
   const std::optional<RegionOfInterest> region = region_argument(roi, roi_sphere, roi_falloff);
@@ -200,20 +217,14 @@ py::tuple decode(const fs::path& file, const py::object& percent, const py::obje
   options.order = region && limited ? IswOrder::Importance : IswOrder::Index;
   double percent_value = 100;
   if (!percent.is_none()) {
-    percent_value = percent.cast<double>();
-    if (!(percent_value >= 0 && percent_value <= 100)) throw Error(ErrorKind::InvalidArgument, "percent must be in 0..100");
+    percent_value = percent_argument(percent);
     if (!region) options.max_percent = percent_value;
   }
   if (!coefficients.is_none() && !region) options.max_coefficients = coefficients.cast<std::uint64_t>();
   options.oracle = oracle_from_name(oracle);
   if (options.oracle != Oracle::Weighted && (!limited || region))
     throw Error(ErrorKind::InvalidArgument, "oracle chooses what percent or coefficients keep (not with roi)");
-  if (!bytes.is_none()) options.max_file_bytes = bytes.cast<std::uint64_t>();
-  if (!max_error.is_none()) {
-    options.max_error_cells = max_error.cast<double>();
-    if (!(options.max_error_cells > 0) || !std::isfinite(options.max_error_cells))
-      throw Error(ErrorKind::InvalidArgument, "max_error must be a positive number of cells");
-  }
+  prefix_options(max_error, bytes, options);
   // A region with nothing kept outside, or a view, reads only the groups it needs (2.2).
   if (region && !limited) options.region = region;
   options.frustum = camera;
@@ -243,6 +254,52 @@ py::tuple decode(const fs::path& file, const py::object& percent, const py::obje
   }
   if (!truncation.empty() && PyErr_WarnEx(PyExc_UserWarning, truncation.c_str(), 1) != 0) throw py::error_already_set();
   return mesh_arrays(std::move(mesh));
+}
+
+py::dict decode_polygons(const fs::path& file, const py::object& percent, const py::object& max_error,
+                         const py::object& bytes, const py::object& level, bool limit) {
+  const std::string path = file.string();
+  IswDecodeOptions options;
+  options.order = percent.is_none() ? IswOrder::Index : IswOrder::Importance;
+  if (!percent.is_none()) options.max_percent = percent_argument(percent);
+  prefix_options(max_error, bytes, options);
+  PolygonMesh mesh;
+  std::vector<std::int8_t> born;
+  std::vector<double> detail;
+  std::string truncation;
+  std::uint64_t bytes_read = 0, file_bytes = 0;
+  {
+    py::gil_scoped_release release;
+    IswDecoded decoded = read_isw(path, options);
+    if (decoded.truncated) truncation = path + ": " + decoded.truncation_note;
+    const int l = level.is_none() ? decoded.levels : level.cast<int>();
+    if (l < 0 || l > decoded.levels)
+      throw Error(ErrorKind::InvalidArgument,
+                  "level must be in 0.." + std::to_string(decoded.levels) + ", got " + std::to_string(l));
+    // Vertex i of a level's control mesh is entry i of the coarse-to-fine array.
+    const SubdivisionHierarchy& h = *decoded.hierarchy;
+    const std::size_t n = h.vertex_count(l), base = h.vertex_count(0);
+    born.resize(n);
+    detail.assign(n, 0.0);
+    for (std::size_t i = 0; i < n; ++i) {
+      born[i] = static_cast<std::int8_t>(h.level_of_index(i));
+      if (i >= base) detail[i] = norm(decoded.coefficients[i]);
+    }
+    mesh = h.control_mesh(l, take_reconstruction(decoded, decoded.ranked.size(), l));
+    if (limit) mesh.positions = limit_surface(mesh).positions;
+    bytes_read = decoded.file_bytes_read;
+    file_bytes = decoded.file_bytes;
+  }
+  if (!truncation.empty() && PyErr_WarnEx(PyExc_UserWarning, truncation.c_str(), 1) != 0) throw py::error_already_set();
+  const auto vertices = static_cast<py::ssize_t>(mesh.vertex_count());
+  const auto offsets = static_cast<py::ssize_t>(mesh.face_offsets.size());
+  const auto corners = static_cast<py::ssize_t>(mesh.face_vertices.size());
+  return py::dict(py::arg("vertices") = owned_array<double>(std::move(mesh.positions), {vertices, 3}),
+                  py::arg("offsets") = owned_array<std::uint32_t>(std::move(mesh.face_offsets), {offsets}),
+                  py::arg("corners") = owned_array<std::uint32_t>(std::move(mesh.face_vertices), {corners}),
+                  py::arg("level") = owned_array<std::int8_t>(std::move(born), {vertices}),
+                  py::arg("detail") = owned_array<double>(std::move(detail), {vertices}),
+                  py::arg("bytes_read") = bytes_read, py::arg("file_bytes") = file_bytes);
 }
 
 py::list stats(const fs::path& file, const std::vector<double>& percents) {

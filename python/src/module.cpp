@@ -69,6 +69,16 @@ pixels, faces outside the view frustum kept whole (and with cull_back_faces=True
 `--cull-back-faces`), as `isowave decode --view`. A file cut inside its
 coefficients decodes what it holds, with a UserWarning.)";
 
+constexpr const char* kDecodePolygonsDoc = R"(decode_polygons(path, *, percent=None, max_error=None, bytes=None, level=None, limit=False) -> dict
+
+The control mesh of one level as `decode` gives it, for viewers (the ParaView reader): faces as
+polygons of any size (the base mesh mixes them), and per-vertex arrays. Keys: vertices (n, 3)
+float64; offsets (m + 1,) uint32 and corners uint32, face f's vertices being
+corners[offsets[f]:offsets[f + 1]] (VTK's cell arrays); level (n,) int8, the level each vertex
+first appears on (0: a base vertex); detail (n,) float64, the magnitude of the decoded wavelet
+coefficient at each vertex (world units; 0 at base vertices and where nothing was kept);
+bytes_read and file_bytes. percent, max_error, bytes, level and limit as in decode.)";
+
 constexpr const char* kStatsDoc = R"(stats(path, percents=(100, 20, 10, 5)) -> list of dict
 
 The paper's Table 1 for an .isw file, as the rows of `isowave stats --json`: per percentage, then the
@@ -125,6 +135,9 @@ PYBIND11_MODULE(isowave, m) {
         py::arg("view") = py::none(),
         py::arg("pixel_error") = 1.0, py::arg("cull_back_faces") = false, py::arg("oracle") = "weighted", kDecodeDoc);
   define_view_refiner(m);
+  m.def("decode_polygons", &decode_polygons, py::arg("path"), py::kw_only(), py::arg("percent") = py::none(),
+        py::arg("max_error") = py::none(), py::arg("bytes") = py::none(), py::arg("level") = py::none(),
+        py::arg("limit") = false, kDecodePolygonsDoc);
   m.def("stats", &stats, py::arg("path"), py::arg("percents") = std::vector<double>{100, 20, 10, 5}, kStatsDoc);
   m.def("keep_freed_memory_for_reuse", &isowave::keep_freed_memory_for_reuse, kKeepMemoryDoc);
   m.def("release_freed_memory", &isowave::release_freed_memory, kReleaseMemoryDoc);

@@ -238,3 +238,40 @@ def test_view_refiner_patches_make_the_view_mesh_and_a_move_names_what_changed(s
     assert len(refiner.set_view(moved, pixel_error=0.5)) == 0
     points = refiner.points
     assert points.shape[1] == 3 and not points.flags.writeable
+
+
+def read_obj_polygons(path):
+    """Vertices and faces (0-based lists, any size) of an ASCII OBJ file."""
+    vertices, faces = [], []
+    with open(path) as f:
+        for line in f:
+            fields = line.split()
+            if fields and fields[0] == "v":
+                vertices.append([float(x) for x in fields[1:4]])
+            elif fields and fields[0] == "f":
+                faces.append([int(x.split("/")[0]) - 1 for x in fields[1:]])
+    return np.array(vertices), faces
+
+
+@pytest.mark.parametrize("level", [0, 1, None])
+def test_decode_polygons_gives_the_cli_polygons_and_per_vertex_levels(cli, sphere_isw, tmp_path, level):
+    cli_path, _ = sphere_isw
+    obj = tmp_path / "decoded.obj"
+    cli("decode", cli_path, "--percent", 20, "-o", obj, "--quiet", *(["--level", level] if level is not None else []))
+    cli_vertices, cli_faces = read_obj_polygons(obj)
+    d = isowave.decode_polygons(cli_path, percent=20, level=level)
+    np.testing.assert_allclose(d["vertices"], cli_vertices, rtol=1e-7, atol=1e-7)
+    offsets, corners = d["offsets"], d["corners"]
+    assert [corners[a:b].tolist() for a, b in zip(offsets[:-1], offsets[1:])] == cli_faces
+    if level == 0:
+        assert len(set(np.diff(offsets))) > 1  # the base mesh mixes polygons
+    # Each level holds as many vertices as a decode at that level adds to the one below.
+    counts = [len(isowave.decode_polygons(cli_path, level=l)["vertices"]) for l in range(4)]
+    finest = 3 if level is None else level
+    np.testing.assert_array_equal(np.bincount(d["level"], minlength=finest + 1), np.diff([0] + counts[:finest + 1]))
+    assert np.all(d["detail"][d["level"] == 0] == 0)
+    assert d["bytes_read"] <= d["file_bytes"] == cli_path.stat().st_size
+    if level != 0:
+        assert d["detail"].max() > 0
+        # The base mesh alone keeps no coefficient: no detail anywhere.
+        assert isowave.decode_polygons(cli_path, percent=0, level=level)["detail"].max() == 0
