@@ -7,8 +7,9 @@ import pytest
 import isowave
 
 
-def read_obj(path):
-    """Vertices and faces (0-based) of an ASCII OBJ file."""
+def read_obj(path, polygons=False):
+    """Vertices and faces (0-based) of an ASCII OBJ file: an array of equal faces, or with polygons=True a
+    list of faces of any size."""
     vertices, faces = [], []
     with open(path) as f:
         for line in f:
@@ -17,7 +18,7 @@ def read_obj(path):
                 vertices.append([float(x) for x in fields[1:4]])
             elif fields and fields[0] == "f":
                 faces.append([int(x.split("/")[0]) - 1 for x in fields[1:]])
-    return np.array(vertices), np.array(faces)
+    return np.array(vertices), faces if polygons else np.array(faces)
 
 
 def test_convert_of_a_path_writes_the_cli_bytes(cli, sphere_isw, tmp_path):
@@ -240,25 +241,12 @@ def test_view_refiner_patches_make_the_view_mesh_and_a_move_names_what_changed(s
     assert points.shape[1] == 3 and not points.flags.writeable
 
 
-def read_obj_polygons(path):
-    """Vertices and faces (0-based lists, any size) of an ASCII OBJ file."""
-    vertices, faces = [], []
-    with open(path) as f:
-        for line in f:
-            fields = line.split()
-            if fields and fields[0] == "v":
-                vertices.append([float(x) for x in fields[1:4]])
-            elif fields and fields[0] == "f":
-                faces.append([int(x.split("/")[0]) - 1 for x in fields[1:]])
-    return np.array(vertices), faces
-
-
 @pytest.mark.parametrize("level", [0, 1, None])
 def test_decode_polygons_gives_the_cli_polygons_and_per_vertex_levels(cli, sphere_isw, tmp_path, level):
     cli_path, _ = sphere_isw
     obj = tmp_path / "decoded.obj"
     cli("decode", cli_path, "--percent", 20, "-o", obj, "--quiet", *(["--level", level] if level is not None else []))
-    cli_vertices, cli_faces = read_obj_polygons(obj)
+    cli_vertices, cli_faces = read_obj(obj, polygons=True)
     d = isowave.decode_polygons(cli_path, percent=20, level=level)
     np.testing.assert_allclose(d["vertices"], cli_vertices, rtol=1e-7, atol=1e-7)
     offsets, corners = d["offsets"], d["corners"]
