@@ -168,7 +168,10 @@ int decode(const Args& raw) {
                 "--view chooses each face's level: no --roi, --level, --percent, --coefficients or --limit");
   IswDecodeOptions options = decode_options(args, region);
   // A view reads only the groups its frustum needs (2.2).
-  if (view) options.frustum = read_camera(args.get("view"));
+  if (view) {
+    options.frustum = read_camera(args.get("view"));
+    options.view_scope = IswDecodeOptions::ViewScope::Patch;
+  }
   const std::string& input = args.positional()[0];
   IswDecoded decoded = read_isw(input, options);
   if (args.has("max-error") && decoded.stream.rate_table.empty())

@@ -245,7 +245,7 @@ void decode_plane_stream(const Section& section, const SubdivisionHierarchy& hie
 void decode_patch_stream(const Section& section, int levels, const CoefficientClasses& layout, const V2Scales& scales,
                          const StreamPrefix& prefix, const StreamAccess& access, const BaseIncidence& incidence,
                          IswDecoded& result) {
-  assert(access.region && access.index && result.minor_version >= 2);
+  assert((access.region || access.frustum) && access.index && result.minor_version >= 2);
   const auto start = Clock::now();
   PayloadReader reader = section.reader();
   std::uint64_t max_stream_bytes = 0;
@@ -256,7 +256,8 @@ void decode_patch_stream(const Section& section, int levels, const CoefficientCl
       face_groups(morton_face_order(base, *access.base_q).faces, access.index->runs);
   PatchSelection selection;
   try {  // the base's topology, as the whole hierarchy would check it
-    selection = select_patch(base, incidence, face_group, access.index->reach, *access.region, levels);
+    selection = select_patch(base, incidence, face_group, access.index->reach, PatchTarget{access.region, access.frustum},
+                             levels);
   } catch (const Error& error) {
     if (error.kind() != ErrorKind::Topology && error.kind() != ErrorKind::InvalidArgument) throw;
     reader.fail(std::string("needs a base mesh the subdivision hierarchy cannot take: ") + error.what());

@@ -126,8 +126,8 @@ struct DecodeState {
   HierarchyBuild build;
   std::string build_context;  // heads the build's errors
   std::shared_ptr<const SubdivisionHierarchy> hierarchy;
-  // A region decode of a 2.2 file: a patch instead of the whole hierarchy
-  // (built after all when the file ends before PLNS).
+  // A region or view decode of a 2.2 file over a patch instead of the whole
+  // hierarchy (built after all when the file ends before PLNS).
   bool patch = false;
   std::optional<BaseIncidence> incidence;  // the patch's: the base's edges, numbered
   std::optional<CoefficientClasses> layout;
@@ -223,7 +223,9 @@ void plan_hierarchy(PayloadReader& reader, DecodeState& state) {
   result.seconds.headers = seconds_since(state.start);
   // With every corner counted as an edge the estimate can only grow: if
   // even that is justified, the build starts before the exact edge count.
-  state.patch = state.options.region && state.major == 2 && result.minor_version >= 2 && !reuse;
+  const IswDecodeOptions& o = state.options;
+  const bool local = o.region || (o.frustum && o.view_scope == IswDecodeOptions::ViewScope::Patch);
+  state.patch = local && state.major == 2 && result.minor_version >= 2 && !reuse;
   const bool early = !reuse && !state.patch &&
                      justified(classes_from_counts(result.base, result.base.face_vertices.size(), result.levels));
   state.build_context = state.name + ": section BASE holds a base mesh the subdivision hierarchy cannot take: ";

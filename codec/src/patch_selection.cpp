@@ -37,12 +37,12 @@ std::vector<std::uint32_t> entry_groups(const PatchHierarchy& patch, const Coeff
 
 // Step 1.
 std::vector<std::uint8_t> seed_faces(const PolygonMesh& base, const std::vector<std::uint32_t>& face_group,
-                                     const std::vector<float>& reach, const RegionOfInterest& region) {
+                                     const std::vector<float>& reach, const PatchTarget& target) {
   std::vector<std::uint8_t> seeds(base.face_count(), 0);
   for (std::size_t f = 0; f < seeds.size(); ++f) {
     Vec3 lo, hi;
     face_box(base, base.positions, f, reach[face_group[f]], lo, hi);
-    seeds[f] = region.meets_box(lo, hi);
+    seeds[f] = target.meets(lo, hi);
   }
   return seeds;
 }
@@ -65,9 +65,9 @@ std::vector<std::uint8_t> groups_for_seeds(const PatchSelection& s, const std::v
 
 PatchSelection select_patch(const PolygonMesh& base, const BaseIncidence& incidence,
                             const std::vector<std::uint32_t>& face_group, const std::vector<float>& reach,
-                            const RegionOfInterest& region, int levels, int candidate_rings) {
+                            const PatchTarget& target, int levels, int candidate_rings) {
   PatchSelection s;
-  const std::vector<std::uint8_t> is_seed = seed_faces(base, face_group, reach, region);
+  const std::vector<std::uint8_t> is_seed = seed_faces(base, face_group, reach, target);
   for (std::size_t f = 0; f < is_seed.size(); ++f)
     if (is_seed[f]) s.seeds.push_back(static_cast<std::uint32_t>(f));
   std::vector<std::uint8_t> near = is_seed, candidates(reach.size(), 0);

@@ -1,9 +1,10 @@
 #pragma once
-// Private: what a region decode of a 2.2 file builds instead of the whole
-// hierarchy (issue #48, item 5; docs/FORMAT.md, "Version 2.2"):
+// Private: what a region or view decode of a 2.2 file builds instead of the
+// whole hierarchy (issue #48, item 5; docs/FORMAT.md, "Version 2.2"):
 //   1. the seed faces: base faces whose corners' box, grown by their group's
-//      reach (GIDX), meets the region: every fine control point inside the
-//      region belongs to one;
+//      reach (GIDX), meets the region or may lie in the camera's view
+//      frustum: every fine control point inside the region (in the view)
+//      belongs to one;
 //   2. the patch: the seeds and 2 kExactRings rings (their fine control
 //      points, and the local frames of the entries those depend on, are
 //      then the whole hierarchy's), and every face of the groups within
@@ -20,6 +21,7 @@
 #include <optional>
 #include <vector>
 
+#include "isowave/codec/camera.h"
 #include "isowave/codec/importance.h"
 #include "isowave/codec/region_of_interest.h"
 #include "isowave/core/mesh.h"
@@ -29,6 +31,15 @@
 
 namespace isowave::detail {
 
+// What the seeds meet: a region, or (without one) a view frustum.
+struct PatchTarget {
+  const RegionOfInterest* region = nullptr;
+  const Camera* frustum = nullptr;
+  bool meets(const Vec3& lo, const Vec3& hi) const {
+    return region ? region->meets_box(lo, hi) : !frustum->box_outside(lo, hi);
+  }
+};
+
 struct PatchSelection {
   std::vector<std::uint32_t> seeds;    // base faces, ascending (step 1)
   std::optional<PatchHierarchy> patch;  // step 2
@@ -37,14 +48,14 @@ struct PatchSelection {
   std::vector<std::uint8_t> selected;   // per group: decoded (step 3)
 };
 
-// Steps 1-3 for `region` over `base` (positions: the frame base, BPTS) with
+// Steps 1-3 for `target` over `base` (positions: the frame base, BPTS) with
 // its groups (`face_group`, per base face; `reach`, per group), `levels`
 // levels; step 2 takes the groups within `candidate_rings` rings (fewer
 // make step 3 grow the patch, as a test forces). Cost: the patch's
 // hierarchy and one transposed synthesis over it (more when it grows).
 PatchSelection select_patch(const PolygonMesh& base, const BaseIncidence& incidence,
                             const std::vector<std::uint32_t>& face_group, const std::vector<float>& reach,
-                            const RegionOfInterest& region, int levels, int candidate_rings = kExactRings);
+                            const PatchTarget& target, int levels, int candidate_rings = kExactRings);
 
 // Step 4: the nodes of the selected groups, ascending by their entry in
 // the whole array (`node_entry`, the patch's entry of each), their tree

@@ -13,8 +13,13 @@
 #include "isowave/core/error.h"
 #include "isowave/transform/adaptive_mesh.h"
 #include "isowave/transform/wavelet_transform.h"
+#include "patch_mesh.h"
 
 namespace isowave {
+
+using detail::BaseCorners;
+using detail::PatchDomain;
+using detail::patch_mesh;
 
 namespace {
 
@@ -98,21 +103,8 @@ std::vector<std::uint8_t> entries_for_points(const SubdivisionHierarchy& hierarc
 
 namespace {
 
-// Where a region is reconstructed: the whole hierarchy, or a patch of it
-// (transform/patch_hierarchy.h) whose faces flagged `exact` hold the
-// complete decode's fine control points.
-struct RegionDomain {
-  const SubdivisionHierarchy& h;
-  const std::vector<std::uint32_t>* entries = nullptr;  // patch entry -> whole entry (null: the same)
-  const std::vector<std::uint32_t>* faces = nullptr;    // patch base face -> base face (null: the same)
-  const std::vector<std::uint8_t>* exact = nullptr;     // per patch base face (null: every face)
-  std::uint32_t entry(std::size_t k) const { return entries ? (*entries)[k] : static_cast<std::uint32_t>(k); }
-  std::uint32_t face(std::size_t f) const { return faces ? (*faces)[f] : static_cast<std::uint32_t>(f); }
-  bool is_exact(std::size_t f) const { return !exact || (*exact)[f]; }
-};
-
 // Flags the fine control points (of the exact faces) inside the region.
-std::vector<std::uint8_t> points_inside(const RegionDomain& d, const std::vector<Vec3>& fine,
+std::vector<std::uint8_t> points_inside(const PatchDomain& d, const std::vector<Vec3>& fine,
                                         const RegionOfInterest& region) {
   std::vector<std::uint8_t> inside(d.h.fine_vertex_count(), 0);
   if (!d.exact) {
@@ -127,7 +119,7 @@ std::vector<std::uint8_t> points_inside(const RegionDomain& d, const std::vector
 // reconstruct_region() over `d`; `keep_more` flags what is kept besides
 // what the region needs, given the complete decode's fine points.
 template <class KeepMore>
-RegionReconstruction reconstruct(const RegionDomain& d, const std::vector<Vec3>& coefficients,
+RegionReconstruction reconstruct(const PatchDomain& d, const std::vector<Vec3>& coefficients,
                                  const RegionOfInterest& region, const KeepMore& keep_more) {
   const SubdivisionHierarchy& h = d.h;
   const std::size_t n = h.fine_vertex_count(), base = h.vertex_count(0);
@@ -155,7 +147,7 @@ RegionReconstruction reconstruct(const RegionDomain& d, const std::vector<Vec3>&
 
 // Per face of `d`: the finest level where one of its (exact) fine control
 // points lies inside the region, else 0.
-std::vector<int> inside_levels(const RegionDomain& d, const std::vector<Vec3>& fine, const RegionOfInterest& region) {
+std::vector<int> inside_levels(const PatchDomain& d, const std::vector<Vec3>& fine, const RegionOfInterest& region) {
   std::vector<int> levels(d.h.base().face_count(), 0);
   if (d.h.levels() == 0) return levels;
   for_each_index(levels.size(), [&](std::size_t f) {
@@ -166,80 +158,12 @@ std::vector<int> inside_levels(const RegionDomain& d, const std::vector<Vec3>& f
   return levels;
 }
 
-// Whether patch face f and its edge neighbours are all at level 0.
-bool coarse_with_neighbours(const SubdivisionHierarchy& h, const std::vector<int>& levels, std::size_t f) {
-  if (levels[f] != 0) return false;
-  if (h.levels() == 0) return true;
-  const RefinementStep& s = h.step(1);
-  for (std::uint32_t k = s.face_offsets[f]; k < s.face_offsets[f + 1]; ++k) {
-    const std::uint32_t e = s.face_edges[k] - s.first_edge_vertex();
-    for (int side = 0; side < 2; ++side)
-      if (levels[s.edge_faces[2 * std::size_t{e} + side] - s.first_face_vertex()] != 0) return false;
-  }
-  return true;
-}
-
-// The crack-free mesh over the whole base (`base`, `base_points` its
-// control points; `whole_entries` the whole hierarchy's): the faces of `d`
-// at `levels` (adaptive_patch()), the faces outside `d` whole; vertices
-// keyed by their whole entries (an array over them: a sort of the corners
-// costs more).
-PolygonMesh assemble(const RegionDomain& d, const PolygonMesh& base, const std::vector<Vec3>& base_points,
-                     std::size_t whole_entries, const std::vector<int>& levels, const std::vector<Vec3>& fine) {
-  constexpr std::uint32_t kNone = UINT32_MAX;
-  std::vector<std::uint32_t> local_face(base.face_count(), kNone);
-  for (std::size_t f = 0; f < levels.size(); ++f) local_face[d.face(f)] = static_cast<std::uint32_t>(f);
-  std::vector<std::uint8_t> fine_corner(base.vertex_count(), 0);  // a corner of a refined face
-  for (std::size_t f = 0; f < levels.size(); ++f)
-    if (levels[f] > 0)
-      for (std::uint32_t k = d.h.base().face_offsets[f]; k < d.h.base().face_offsets[f + 1]; ++k)
-        fine_corner[d.entry(d.h.base().face_vertices[k])] = 1;
-  // Faces, their corners keyed by whole entries; per key, its patch entry
-  // (kBase: a corner of whole base faces only).
-  constexpr std::uint32_t kBase = UINT32_MAX - 1;
-  std::vector<std::uint32_t> slot(whole_entries, kNone);
-  PolygonMesh out;
-  std::vector<std::uint32_t> offsets, corners;
-  for (std::size_t g = 0; g < base.face_count(); ++g) {
-    const std::uint32_t f = local_face[g];
-    if (f == kNone || coarse_with_neighbours(d.h, levels, f)) {
-      for (const std::uint32_t* v = base.face_begin(g); v != base.face_begin(g) + base.face_size(g); ++v) {
-        if (slot[*v] == kNone) slot[*v] = kBase;
-        out.face_vertices.push_back(*v);
-      }
-      out.face_offsets.push_back(static_cast<std::uint32_t>(out.face_vertices.size()));
-      continue;
-    }
-    offsets = {0};
-    corners.clear();
-    adaptive_patch(d.h, levels, f, offsets, corners);
-    for (std::size_t p = 0; p + 1 < offsets.size(); ++p) {
-      for (std::uint32_t k = offsets[p]; k < offsets[p + 1]; ++k) {
-        const std::uint32_t key = d.entry(corners[k]);
-        slot[key] = corners[k];
-        out.face_vertices.push_back(key);
-      }
-      out.face_offsets.push_back(static_cast<std::uint32_t>(out.face_vertices.size()));
-    }
-  }
-  // The vertices used, in the order of their entries.
-  std::uint32_t next = 0;
-  for (std::size_t key = 0; key < slot.size(); ++key) {
-    if (slot[key] == kNone) continue;
-    const bool base_only = key < base.vertex_count() && !fine_corner[key];
-    out.positions.push_back(base_only ? base_points[key] : fine[slot[key]]);
-    slot[key] = next++;
-  }
-  for (std::uint32_t& v : out.face_vertices) v = slot[v];
-  return out;
-}
-
 }  // namespace
 
 RegionReconstruction reconstruct_region(const IswDecoded& decoded, const RegionOfInterest& region,
                                         std::size_t outside_keep) {
   if (!decoded.hierarchy) throw Error(ErrorKind::InvalidArgument, "reconstruct needs a complete decode");
-  return reconstruct(RegionDomain{*decoded.hierarchy}, decoded.coefficients, region,
+  return reconstruct(PatchDomain{*decoded.hierarchy}, decoded.coefficients, region,
                      [&](const std::vector<Vec3>& fine, std::vector<std::uint8_t>& keep) {
                        keep_outside(decoded, fine, region, outside_keep, keep);
                      });
@@ -251,8 +175,8 @@ PolygonMesh region_mesh(const IswDecoded& decoded, const RegionOfInterest& regio
     throw Error(ErrorKind::InvalidArgument, "region: a region decode keeps nothing outside the region");
   if (!decoded.patch && !decoded.hierarchy) throw Error(ErrorKind::InvalidArgument, "region: not a decoded file");
   const RegionPatch* p = decoded.patch.get();
-  const RegionDomain d = p ? RegionDomain{p->patch.hierarchy(), &p->patch.entries(), &p->patch.faces(), &p->exact}
-                           : RegionDomain{*decoded.hierarchy};
+  const PatchDomain d = p ? PatchDomain{p->patch.hierarchy(), &p->patch.entries(), &p->patch.faces(), &p->exact}
+                           : PatchDomain{*decoded.hierarchy};
   const std::vector<Vec3>& coefficients = p ? p->coefficients : decoded.coefficients;
   RegionReconstruction r = reconstruct(d, coefficients, region, [&](const std::vector<Vec3>& fine, std::vector<std::uint8_t>& keep) {
     if (outside_keep > 0) keep_outside(decoded, fine, region, outside_keep, keep);
@@ -264,7 +188,8 @@ PolygonMesh region_mesh(const IswDecoded& decoded, const RegionOfInterest& regio
     const PolygonMesh& base = p ? decoded.base : decoded.hierarchy->base();
     const std::vector<Vec3>& base_points = p ? decoded.base.positions : decoded.coefficients;
     const std::size_t whole = p ? decoded.fine_vertices : decoded.hierarchy->fine_vertex_count();
-    mesh = assemble(d, base, base_points, whole, inside_levels(d, r.fine, region), r.fine);
+    mesh = patch_mesh(d, base, base_points, whole, inside_levels(d, r.fine, region), r.fine,
+                              BaseCorners::RefinedFaces);
   }
   if (counts) {
     *counts = std::move(r);

@@ -12,6 +12,8 @@
 #include "isowave/transform/adaptive_mesh.h"
 #include "isowave/transform/hierarchy.h"
 #include "isowave/transform/wavelet_transform.h"
+#include "isowave/codec/region.h"
+#include "patch_mesh.h"
 
 namespace isowave {
 
@@ -19,8 +21,8 @@ namespace {
 
 // Per base face and level m in 1..L (index f (L + 1) + m): the largest class
 // weight times magnitude among the face's level-m coefficients.
-std::vector<double> face_details(const IswDecoded& decoded) {
-  const SubdivisionHierarchy& h = *decoded.hierarchy;
+std::vector<double> face_details(const SubdivisionHierarchy& h, const std::vector<Vec3>& coefficients,
+                                 const std::vector<double>& class_weights) {
   const PolygonMesh& base = h.base();
   const std::size_t stride = static_cast<std::size_t>(h.levels()) + 1;
   std::vector<double> detail(base.face_count() * stride, 0.0);
@@ -32,16 +34,16 @@ std::vector<double> face_details(const IswDecoded& decoded) {
     const RefinementStep& s = h.step(m);
     const int shift = m >= 2 ? 2 * (m - 2) : 0;
     const auto base_face = [&](std::uint32_t p) { return m == 1 ? p : corner_face[p >> shift]; };
-    const double wf = decoded.class_weights[static_cast<std::size_t>(1 + 2 * (m - 1))];
-    const double we = decoded.class_weights[static_cast<std::size_t>(2 + 2 * (m - 1))];
+    const double wf = class_weights[static_cast<std::size_t>(1 + 2 * (m - 1))];
+    const double we = class_weights[static_cast<std::size_t>(2 + 2 * (m - 1))];
     const auto raise = [&](std::uint32_t f, double v) {
       double& d = detail[f * stride + static_cast<std::size_t>(m)];
       d = std::max(d, v);
     };
     for (std::uint32_t p = 0; p < s.parent_face_count; ++p)
-      raise(base_face(p), wf * norm(decoded.coefficients[s.first_face_vertex() + p]));
+      raise(base_face(p), wf * norm(coefficients[s.first_face_vertex() + p]));
     for (std::uint32_t e = 0; e < s.parent_edge_count; ++e) {
-      const double v = we * norm(decoded.coefficients[s.first_edge_vertex() + e]);
+      const double v = we * norm(coefficients[s.first_edge_vertex() + e]);
       for (int side = 0; side < 2; ++side) raise(base_face(s.edge_faces[2 * e + side] - s.first_face_vertex()), v);
     }
   }
@@ -105,12 +107,13 @@ void normal_cone(const SubdivisionHierarchy& h, std::size_t f, const std::vector
   spread = widest;
 }
 
-FaceViewData face_view_data(const IswDecoded& decoded, const std::vector<Vec3>& fine) {
-  const SubdivisionHierarchy& h = *decoded.hierarchy;
+// `coefficients` and `fine` over `h` (the whole hierarchy or a patch's).
+FaceViewData face_view_data(const SubdivisionHierarchy& h, const std::vector<Vec3>& coefficients,
+                            const std::vector<double>& class_weights, const std::vector<Vec3>& fine) {
   FaceViewData data;
   data.levels = h.levels();
   const std::size_t faces = h.base().face_count(), stride = static_cast<std::size_t>(data.levels) + 1;
-  data.omitted = face_details(decoded);
+  data.omitted = face_details(h, coefficients, class_weights);
   data.lo.resize(faces);
   data.hi.resize(faces);
   data.axis.resize(faces);
@@ -169,7 +172,9 @@ int face_level(const FaceViewData& data, std::size_t f, const Camera& camera, do
 }
 
 void check_decode(const IswDecoded& decoded) {
-  if (!decoded.hierarchy) throw Error(ErrorKind::InvalidArgument, "a view decode needs a decoded file");
+  if (!decoded.hierarchy)
+    throw Error(ErrorKind::InvalidArgument, decoded.patch ? "a view refiner needs the whole hierarchy (ViewScope::Whole)"
+                                                          : "a view decode needs a decoded file");
   if (decoded.class_weights.size() != static_cast<std::size_t>(1 + 2 * decoded.hierarchy->levels()) ||
       decoded.coefficients.size() < decoded.hierarchy->fine_vertex_count())
     throw Error(ErrorKind::InvalidArgument, "a view decode needs the file's coefficients and class weights");
@@ -206,7 +211,8 @@ ViewLevels view_face_levels(const IswDecoded& decoded, const std::vector<Vec3>& 
   if (fine.size() < decoded.hierarchy->fine_vertex_count())
     throw Error(ErrorKind::InvalidArgument, "a view decode needs the fine control points");
   ViewLevels out;
-  levels_for(face_view_data(decoded, fine), camera, pixel_error, back_faces, out);
+  levels_for(face_view_data(*decoded.hierarchy, decoded.coefficients, decoded.class_weights, fine), camera,
+             pixel_error, back_faces, out);
   return out;
 }
 
@@ -223,7 +229,7 @@ ViewRefiner::ViewRefiner(const IswDecoded& decoded) : data_(std::make_unique<Dat
   data_->points = decoded.coefficients;
   synthesize(*decoded.hierarchy, data_->points);
   data_->points.resize(decoded.hierarchy->fine_vertex_count());
-  data_->faces = face_view_data(decoded, data_->points);
+  data_->faces = face_view_data(*decoded.hierarchy, decoded.coefficients, decoded.class_weights, data_->points);
   data_->current.levels.assign(decoded.hierarchy->base().face_count(), 0);
 }
 
@@ -271,8 +277,54 @@ PolygonMesh ViewRefiner::mesh() const {
   return adaptive_control_mesh(*data_->hierarchy, data_->current.levels, data_->points);
 }
 
+namespace {
+
+// view_mesh() of a decode over a patch (IswDecodeOptions::ViewScope::Patch):
+// the levels of the patch's exact faces (the others lie outside the
+// frustum: level 0), the faces in view at their fine points, the others at
+// the base control points.
+PolygonMesh patch_view_mesh(const IswDecoded& decoded, const Camera& camera, double pixel_error, ViewLevels* report,
+                            BackFaces back_faces) {
+  const RegionPatch& p = *decoded.patch;
+  const SubdivisionHierarchy& h = p.patch.hierarchy();
+  if (decoded.class_weights.size() != static_cast<std::size_t>(1 + 2 * h.levels()))
+    throw Error(ErrorKind::InvalidArgument, "a view decode needs the file's class weights");
+  std::vector<Vec3> fine = p.coefficients;
+  synthesize(h, fine);
+  const FaceViewData data = face_view_data(h, p.coefficients, decoded.class_weights, fine);
+  ViewLevels levels;
+  levels.levels.assign(h.base().face_count(), 0);
+  std::size_t seeds = 0;
+  for (std::size_t f = 0; f < levels.levels.size(); ++f) {
+    if (!p.exact[f]) continue;
+    ++seeds;
+    const int level = face_level(data, f, camera, pixel_error, back_faces);
+    levels.culled += level == kOutsideFrustum;
+    levels.back_facing += level == kFacingAway;
+    levels.levels[f] = std::max(level, 0);
+  }
+  levels.culled += decoded.base.face_count() - seeds;  // the others lie outside the frustum
+  const detail::PatchDomain d{h, &p.patch.entries(), &p.patch.faces(), &p.exact};
+  PolygonMesh mesh = detail::patch_mesh(d, decoded.base, decoded.base.positions, decoded.fine_vertices, levels.levels,
+                                        fine, detail::BaseCorners::ExactFaces);
+  if (report) {  // per base face of the whole mesh
+    *report = levels;
+    report->levels.assign(decoded.base.face_count(), 0);
+    for (std::size_t f = 0; f < levels.levels.size(); ++f) report->levels[p.patch.faces()[f]] = levels.levels[f];
+  }
+  return mesh;
+}
+
+}  // namespace
+
 PolygonMesh view_mesh(const IswDecoded& decoded, const Camera& camera, double pixel_error, ViewLevels* report,
                       BackFaces back_faces) {
+  if (decoded.patch) {
+    if (!(pixel_error > 0) || !std::isfinite(pixel_error))
+      throw Error(ErrorKind::InvalidArgument, "the pixel error must be a positive number");
+    check_camera(camera);
+    return patch_view_mesh(decoded, camera, pixel_error, report, back_faces);
+  }
   check_view(decoded, camera, pixel_error);
   ViewRefiner refiner(decoded);
   refiner.set_view(camera, pixel_error, back_faces);

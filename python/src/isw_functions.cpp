@@ -228,6 +228,7 @@ py::tuple decode(const fs::path& file, const py::object& percent, const py::obje
   // A region with nothing kept outside, or a view, reads only the groups it needs (2.2).
   if (region && !limited) options.region = region;
   options.frustum = camera;
+  options.view_scope = IswDecodeOptions::ViewScope::Patch;
   const std::size_t outside = coefficients.is_none() ? 0 : coefficients.cast<std::size_t>();
   const int requested_level = level.is_none() ? -1 : level.cast<int>();
   PolygonMesh mesh;

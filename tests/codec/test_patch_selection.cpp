@@ -84,7 +84,7 @@ void expect_matches(const Case& c, const RegionOfInterest& region, int levels, i
   SCOPED_TRACE("L=" + std::to_string(levels) + " candidate rings " + std::to_string(candidate_rings));
   const Reference r = reference(c, region, levels);
   const BaseIncidence incidence = base_incidence(c.base);
-  const PatchSelection s = select_patch(c.base, incidence, c.face_group, c.reach, region, levels, candidate_rings);
+  const PatchSelection s = select_patch(c.base, incidence, c.face_group, c.reach, PatchTarget{&region, nullptr}, levels, candidate_rings);
   EXPECT_EQ(s.selected, r.selected);
   EXPECT_GT(std::count(s.selected.begin(), s.selected.end(), 1), 0);
   EXPECT_LT(std::count(s.selected.begin(), s.selected.end(), 1), static_cast<long>(s.selected.size()));

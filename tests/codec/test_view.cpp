@@ -12,6 +12,7 @@
 #include <numeric>
 
 #include "codec_test_data.h"
+#include "isowave/codec/region.h"
 #include "isowave/codec/view.h"
 #include "isowave/core/error.h"
 #include "isowave/transform/wavelet_transform.h"
@@ -189,16 +190,22 @@ TEST(View, CulledBackFacesFaceAwayAndOnlyThey) {
   }
 }
 
-// A view decode of a 2.2 file reads the groups its frustum needs: every face
-// with a point in the image gets the level and the points of the whole
-// file's decode, from fewer bytes.
-TEST(View, AViewReadsTheGroupsItsFrustumNeedsAndMatchesTheWholeFileInView) {
+// The view case as a 2.2 file of small groups, in the test directory.
+std::string write_view_file(const std::string& name) {
   const ViewCase& c = view_case();
   IswEncodeOptions encode;
   encode.step = 1e-4;
   encode.group_nodes = 2048;
-  const std::string path = ::testing::TempDir() + "view.isw";
+  const std::string path = ::testing::TempDir() + name;
   write_isw(path, encode_isw(*c.surface.hierarchy, c.surface.coefficients, test::sample_metadata(), encode), true);
+  return path;
+}
+
+// A view decode of a 2.2 file reads the groups its frustum needs: every face
+// with a point in the image gets the level and the points of the whole
+// file's decode, from fewer bytes.
+TEST(View, AViewReadsTheGroupsItsFrustumNeedsAndMatchesTheWholeFileInView) {
+  const std::string path = write_view_file("view.isw");
   const Camera camera = camera_at({5, 5, 5}, {5, 5, 0}, 40);
   IswDecodeOptions options;
   options.frustum = camera;
@@ -225,6 +232,42 @@ TEST(View, AViewReadsTheGroupsItsFrustumNeedsAndMatchesTheWholeFileInView) {
     });
   }
   EXPECT_GT(in_view, 10u);
+}
+
+// One camera's mesh decoded over a patch (ViewScope::Patch, decode --view)
+// is the whole hierarchy's: the same faces and levels, the same points in
+// the frustum, from the groups its frustum needs and without the whole
+// hierarchy; a ViewRefiner refuses such a decode.
+TEST(View, AViewOverAPatchGivesTheWholeHierarchysMesh) {
+  const std::string path = write_view_file("view_patch.isw");
+  for (const Camera& camera : {camera_at({5, 5, 5}, {5, 5, 0}, 40), camera_at({2, 3, 1.5}, {6, 6, 0}, 60)}) {
+    IswDecodeOptions options;
+    options.frustum = camera;
+    const IswDecoded whole = read_isw(path, options);
+    options.view_scope = IswDecodeOptions::ViewScope::Patch;
+    const IswDecoded part = read_isw(path, options);
+    ASSERT_TRUE(part.patch);
+    EXPECT_FALSE(part.hierarchy);
+    EXPECT_EQ(part.stream.groups_decoded, whole.stream.groups_decoded);
+    EXPECT_EQ(part.file_bytes_read, part.stream.offset + part.stream.decoded);
+    for (const BackFaces back : {BackFaces::Refine, BackFaces::Cull}) {
+      ViewLevels a, b;
+      const PolygonMesh expected = view_mesh(whole, camera, 0.5, &a, back), mesh = view_mesh(part, camera, 0.5, &b, back);
+      EXPECT_EQ(b.levels, a.levels);
+      EXPECT_EQ(b.culled, a.culled);
+      EXPECT_EQ(b.back_facing, a.back_facing);
+      EXPECT_EQ(mesh.face_vertices, expected.face_vertices);
+      ASSERT_EQ(mesh.positions.size(), expected.positions.size());
+      std::size_t in_view = 0;
+      for (std::size_t v = 0; v < mesh.positions.size(); ++v)
+        if (!camera.box_outside(expected.positions[v], expected.positions[v])) {
+          ++in_view;
+          EXPECT_LT(norm(mesh.positions[v] - expected.positions[v]), 1e-9) << v;
+        }
+      EXPECT_GT(in_view, 100u);
+    }
+    EXPECT_THROW(ViewRefiner{part}, Error);
+  }
 }
 
 // The interactive refiner: its patches make up the mesh, and after a camera

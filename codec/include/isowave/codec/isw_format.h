@@ -357,6 +357,12 @@ struct IswDecodeOptions {
   // Version 2.2, as `region` for the faces that may lie in this camera's
   // view frustum (a view decode); ignored with `region`.
   std::optional<Camera> frustum;
+  // With `frustum`: what a 2.2 file's decode builds.
+  enum class ViewScope {
+    Whole,  // the whole hierarchy (a ViewRefiner, which refines wherever the camera turns)
+    Patch,  // a patch around the frustum's faces, as for `region` (view_mesh() of this camera)
+  };
+  ViewScope view_scope = ViewScope::Whole;
   // A hierarchy the caller already has (convert checking its own output):
   // used when its base topology, sharp flags and level count equal the
   // file's, which saves building one (the hierarchy is the decode's largest
