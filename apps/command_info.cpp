@@ -33,7 +33,7 @@ void print_isw_info(const std::string& input) {
   for (const auto& [key, value] : decoded.metadata.values) std::printf("  %-22s %s\n", key.c_str(), value.c_str());
   std::printf("base mesh:        %zu vertices, %zu faces, %zu sharp vertices\n", decoded.base.vertex_count(),
               decoded.base.face_count(), decoded.base.sharp_count());
-  std::printf("levels:           %d (%zu fine control points)\n", decoded.levels, decoded.hierarchy->fine_vertex_count());
+  std::printf("levels:           %d (%zu fine control points)\n", decoded.levels, decoded.fine_vertices);
   std::printf("coefficients:     %llu non-zero in %zu chunks, quantization step %.6g\n",
               static_cast<unsigned long long>(decoded.coefficients_total), decoded.chunks_total, decoded.step);
   std::printf("\n%-6s %12s %12s %14s\n", "section", "offset", "bytes", "coefficients");

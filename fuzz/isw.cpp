@@ -14,6 +14,7 @@
 #include "isowave/codec/isw_format.h"
 #include "isowave/codec/region.h"
 #include "isowave/codec/region_of_interest.h"
+#include "isowave/codec/view.h"
 
 namespace {
 
@@ -55,6 +56,14 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   isowave::fuzz::expect_clean([&] {
     const isowave::IswDecoded decoded = isowave::decode_isw(bytes, "fuzz.isw", region);
     isowave::region_mesh(decoded, *region.region, 0);
+  });
+  // A view decode over a patch (2.2): the frustum's groups and the mesh.
+  isowave::IswDecodeOptions view;
+  view.frustum = isowave::Camera{{0, 0, -3}, {0, 0, 0}, {0, 1, 0}, 60, 64, 48};
+  view.view_scope = isowave::IswDecodeOptions::ViewScope::Patch;
+  isowave::fuzz::expect_clean([&] {
+    const isowave::IswDecoded decoded = isowave::decode_isw(bytes, "fuzz.isw", view);
+    isowave::view_mesh(decoded, *view.frustum, 1.0);
   });
   // A coefficient limit (2.2): the prefix PCNT's counts choose.
   isowave::IswDecodeOptions percent;

@@ -204,6 +204,16 @@ void decode_quantization_v2(PayloadReader& reader, DecodeState& state) {
   result.stream.frame_step = scales.frame_step;
 }
 
+// Error(Format) headed by `context` unless the hierarchy can take `base`'s
+// topology (as building it would find).
+void require_base_manifold(const PolygonMesh& base, const std::string& context) {
+  try {
+    require_manifold(base, "base mesh");
+  } catch (const Error& error) {
+    throw Error(ErrorKind::Format, context + error.what());
+  }
+}
+
 // After QUAN: lays out the coefficient classes, bounds the hierarchy by the
 // file size and starts building it (or takes options.hierarchy when it is the
 // file's), and sets the coefficient limit.
@@ -226,7 +236,9 @@ void plan_hierarchy(PayloadReader& reader, DecodeState& state) {
   const IswDecodeOptions& o = state.options;
   const bool local = o.region || (o.frustum && o.view_scope == IswDecodeOptions::ViewScope::Patch);
   state.patch = local && state.major == 2 && result.minor_version >= 2 && !reuse;
-  const bool early = !reuse && !state.patch &&
+  // The headers alone need the base mesh's topology checked, not refined.
+  const bool refine = !reuse && !state.patch && !o.headers_only;
+  const bool early = refine &&
                      justified(classes_from_counts(result.base, result.base.face_vertices.size(), result.levels));
   state.build_context = state.name + ": section BASE holds a base mesh the subdivision hierarchy cannot take: ";
   if (early) state.build.start(result.base, result.levels, state.build_context);
@@ -243,7 +255,8 @@ void plan_hierarchy(PayloadReader& reader, DecodeState& state) {
   result.fine_vertices = state.layout->fine();
   result.base_vertices = state.layout->base();
   if (reuse) state.hierarchy = state.options.hierarchy;
-  else if (!early && !state.patch) state.build.start(result.base, result.levels, state.build_context);
+  else if (refine && !early) state.build.start(result.base, result.levels, state.build_context);
+  else if (o.headers_only) require_base_manifold(result.base, state.build_context);
   const std::size_t base_count = state.layout->base();
   state.limit = std::min<std::uint64_t>(
       state.limit, coefficients_for_percent(state.layout->fine(), base_count, state.options.max_percent));

@@ -35,11 +35,17 @@ void fault_in_pages(const void* data, std::size_t bytes) {
 #endif
 }
 
+// glibc's malloc tuning; other C libraries (the browser build's) keep their own.
+#ifdef __GLIBC__
 void keep_freed_memory_for_reuse() {
   mallopt(M_MMAP_MAX, 0);  // every block from the heap, reusable after free
   mallopt(M_TRIM_THRESHOLD, std::numeric_limits<int>::max());  // freed memory stays for reuse
 }
 
 void release_freed_memory() { malloc_trim(0); }
+#else
+void keep_freed_memory_for_reuse() {}
+void release_freed_memory() {}
+#endif
 
 }  // namespace isowave

@@ -218,7 +218,7 @@ TEST_F(CliTest, DecodeSaysWhenAPercentageIsBelowTheBaseMesh) {
   IswDecodeOptions headers;
   headers.headers_only = true;
   const IswDecoded decoded = read_isw(path("s.isw"), headers);
-  const double share = 100.0 * double(decoded.hierarchy->vertex_count(0)) / double(decoded.hierarchy->fine_vertex_count());
+  const double share = 100.0 * double(decoded.base_vertices) / double(decoded.fine_vertices);
   ASSERT_GT(share, 1.0);
   char expected[128];
   std::snprintf(expected, sizeof expected, "1%% is below the base mesh's share (%.2f%% of the fine control points)", share);

@@ -346,7 +346,9 @@ struct IswDecodeOptions {
   // then lists the kept ones by that oracle. Oracle::Greedy costs
   // keep_greedy()'s syntheses on top of the decode.
   Oracle oracle = Oracle::Weighted;
-  // Read only the metadata, base mesh and section table (for `info`).
+  // Read only the metadata, base mesh and section table (for `info`, and a
+  // viewer's first frame): the base mesh's topology is checked, no hierarchy
+  // built (IswDecoded::hierarchy is options.hierarchy when that one is the file's).
   bool headers_only = false;
   // A region decode with nothing kept outside (region_mesh()). Version 2.2:
   // decodes only the plane-stream groups whose coefficients the fine control
