@@ -76,8 +76,9 @@ void compare_with_complete(const std::string& path, const IswDecoded& complete, 
               "decode's, %zu vertices inside, largest distance there %.3g of the box's diagonal\n",
               decode_best, mesh_best, static_cast<unsigned long long>(part.file_bytes_read),
               static_cast<unsigned long long>(part.file_bytes), part.stream.groups_decoded, part.stream.groups,
-              part.patch ? part.patch->patch.faces().size() : 0,
-              part.patch ? part.patch->patch.hierarchy().fine_vertex_count() : 0, part.base.face_count(),
+              part.patch && part.patch->patch ? part.patch->patch->faces().size() : 0,
+              part.patch && part.patch->patch ? part.patch->patch->hierarchy().fine_vertex_count() : 0,
+              part.base.face_count(),
               mesh.positions.size(), mesh.face_count(), same_faces ? "equal" : "DIFFER FROM", inside,
               largest / diagonal);
 }

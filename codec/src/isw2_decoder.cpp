@@ -183,10 +183,10 @@ PlaneStream open_plane_stream(PayloadReader& reader, const Section& section, int
 
 // The packets of the groups `only` flags (all without it), fetched when the
 // file is read in part and checked against GIDX's CRCs (2.2), through
-// `decoder`, and what was read reported.
+// `decoder` (none: no group flagged), and what was read reported.
 void decode_packets(PayloadReader& reader, const Section& section, const PlaneStream& planes,
                     std::uint64_t max_stream_bytes, const StreamAccess& access, std::size_t groups,
-                    const std::vector<std::uint8_t>* only, PlaneDecoder& decoder, IswDecoded& result) {
+                    const std::vector<std::uint8_t>* only, PlaneDecoder* decoder, IswDecoded& result) {
   const bool by_space = result.minor_version >= 2;
   std::string fetched;
   bool last_cut = planes.last_cut;
@@ -197,15 +197,15 @@ void decode_packets(PayloadReader& reader, const Section& section, const PlaneSt
           : planes.packets;
   if (by_space && planes.table && (access.fetch || only))
     check_group_crcs(reader, section, planes, *access.index, packets, last_cut, only);
-  decoder.decode(packets, last_cut, only);
+  if (decoder) decoder->decode(packets, last_cut, only);
   IswStreamInfo& stream = result.stream;
   for (std::size_t j = 0; j < packets.size(); ++j)
     if (!only || (*only)[j % groups]) stream.decoded += packets[j].size();
   stream.groups = groups;
   stream.groups_decoded = only ? static_cast<std::size_t>(std::count(only->begin(), only->end(), 1)) : groups;
   result.file_bytes_read += fetched.size();
-  stream.planes_decoded = decoder.planes_done();
-  result.chunks_decoded = static_cast<std::size_t>(decoder.planes_done());
+  stream.planes_decoded = decoder ? decoder->planes_done() : 0;
+  result.chunks_decoded = static_cast<std::size_t>(stream.planes_decoded);
 }
 
 }  // namespace
@@ -234,7 +234,7 @@ void decode_plane_stream(const Section& section, const SubdivisionHierarchy& hie
   const std::vector<std::uint8_t> classes = node_classes(layout);
   PlaneDecoder decoder(tree, classes, layout.count(), planes.layout.coding_minor(), planes.layout.top_plane, split);
   decode_packets(reader, section, planes, max_stream_bytes, access, split.count(), selected.empty() ? nullptr : &selected,
-                 decoder, result);
+                 &decoder, result);
   result.seconds.chunks = seconds_since(start);
   frames.wait();
   const auto world_start = Clock::now();
@@ -263,12 +263,19 @@ void decode_patch_stream(const Section& section, int levels, const CoefficientCl
     reader.fail(std::string("needs a base mesh the subdivision hierarchy cannot take: ") + error.what());
   }
   result.seconds.hierarchy = seconds_since(start);
+  auto patch = std::make_shared<RegionPatch>();
+  if (!selection.patch) {  // no seed: no group to read, the base mesh alone
+    decode_packets(reader, section, planes, max_stream_bytes, access, access.index->count(), &selection.selected,
+                   nullptr, result);
+    result.patch = std::move(patch);
+    return;
+  }
   const SelectedTree selected = selected_tree(selection, layout);
-  auto patch = std::make_shared<RegionPatch>(RegionPatch{std::move(*selection.patch), {}, {}});
-  const SubdivisionHierarchy& h = patch->patch.hierarchy();
-  const std::vector<std::uint32_t>& entries = patch->patch.entries();
+  patch->patch.emplace(std::move(*selection.patch));
+  const SubdivisionHierarchy& h = patch->patch->hierarchy();
+  const std::vector<std::uint32_t>& entries = patch->patch->entries();
   std::vector<Vec3> frame_base(h.vertex_count(0));
-  for (std::size_t v = 0; v < frame_base.size(); ++v) frame_base[v] = base.positions[patch->patch.base_vertices()[v]];
+  for (std::size_t v = 0; v < frame_base.size(); ++v) frame_base[v] = base.positions[patch->patch->base_vertices()[v]];
   std::vector<Vec3> normals;
   tbb::task_group frames;
   frames.run([&] { normals = frame_normals(h, frame_base); });
@@ -276,7 +283,7 @@ void decode_patch_stream(const Section& section, int levels, const CoefficientCl
   PlaneDecoder decoder(selected.tree, selected.node_class, layout.count(), planes.layout.coding_minor(),
                        planes.layout.top_plane, selected.groups);
   decode_packets(reader, section, planes, max_stream_bytes, access, selected.groups.count(), &selection.selected,
-                 decoder, result);
+                 &decoder, result);
   std::vector<Vec3> values(selected.tree.nodes);
   decoder.values(values);
   result.seconds.chunks = seconds_since(start);
@@ -290,9 +297,9 @@ void decode_patch_stream(const Section& section, int levels, const CoefficientCl
   for (std::size_t k = 0; k < entries.size(); ++k) classes[k] = static_cast<std::uint8_t>(layout.of(entries[k]));
   frames.wait();
   steps_to_world(classes, scales, frame_base, normals, world);
-  for (std::size_t v = 0; v < frame_base.size(); ++v) result.base.positions[patch->patch.base_vertices()[v]] = world[v];
+  for (std::size_t v = 0; v < frame_base.size(); ++v) result.base.positions[patch->patch->base_vertices()[v]] = world[v];
   patch->exact.assign(h.base().face_count(), 0);
-  const std::vector<std::uint32_t>& faces = patch->patch.faces();
+  const std::vector<std::uint32_t>& faces = patch->patch->faces();
   for (const std::uint32_t f : selection.seeds)
     patch->exact[static_cast<std::size_t>(std::lower_bound(faces.begin(), faces.end(), f) - faces.begin())] = 1;
   result.patch = std::move(patch);

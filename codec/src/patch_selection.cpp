@@ -70,6 +70,8 @@ PatchSelection select_patch(const PolygonMesh& base, const BaseIncidence& incide
   const std::vector<std::uint8_t> is_seed = seed_faces(base, face_group, reach, target);
   for (std::size_t f = 0; f < is_seed.size(); ++f)
     if (is_seed[f]) s.seeds.push_back(static_cast<std::uint32_t>(f));
+  s.selected.assign(reach.size(), 0);
+  if (s.seeds.empty()) return s;  // no patch: nothing to decode
   std::vector<std::uint8_t> near = is_seed, candidates(reach.size(), 0);
   for (const std::uint32_t f : grow_patch(base, incidence, near, candidate_rings)) candidates[face_group[f]] = 1;
   std::vector<std::uint8_t> rings = is_seed;

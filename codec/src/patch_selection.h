@@ -42,7 +42,7 @@ struct PatchTarget {
 
 struct PatchSelection {
   std::vector<std::uint32_t> seeds;    // base faces, ascending (step 1)
-  std::optional<PatchHierarchy> patch;  // step 2
+  std::optional<PatchHierarchy> patch;  // step 2; none without seeds
   CoefficientTree tree;                 // the patch's
   std::vector<std::uint32_t> group;     // per patch entry: its group in the whole tree
   std::vector<std::uint8_t> selected;   // per group: decoded (step 3)

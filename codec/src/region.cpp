@@ -175,7 +175,11 @@ PolygonMesh region_mesh(const IswDecoded& decoded, const RegionOfInterest& regio
     throw Error(ErrorKind::InvalidArgument, "region: a region decode keeps nothing outside the region");
   if (!decoded.patch && !decoded.hierarchy) throw Error(ErrorKind::InvalidArgument, "region: not a decoded file");
   const RegionPatch* p = decoded.patch.get();
-  const PatchDomain d = p ? PatchDomain{p->patch.hierarchy(), &p->patch.entries(), &p->patch.faces(), &p->exact}
+  if (p && !p->patch) {  // nothing meets the region: the base mesh
+    if (counts) *counts = RegionReconstruction{};
+    return decoded.base;
+  }
+  const PatchDomain d = p ? PatchDomain{p->patch->hierarchy(), &p->patch->entries(), &p->patch->faces(), &p->exact}
                            : PatchDomain{*decoded.hierarchy};
   const std::vector<Vec3>& coefficients = p ? p->coefficients : decoded.coefficients;
   RegionReconstruction r = reconstruct(d, coefficients, region, [&](const std::vector<Vec3>& fine, std::vector<std::uint8_t>& keep) {

@@ -286,7 +286,15 @@ namespace {
 PolygonMesh patch_view_mesh(const IswDecoded& decoded, const Camera& camera, double pixel_error, ViewLevels* report,
                             BackFaces back_faces) {
   const RegionPatch& p = *decoded.patch;
-  const SubdivisionHierarchy& h = p.patch.hierarchy();
+  if (!p.patch) {  // no face may lie in the frustum: the base mesh
+    if (report) {
+      *report = ViewLevels{};
+      report->levels.assign(decoded.base.face_count(), 0);
+      report->culled = decoded.base.face_count();
+    }
+    return decoded.base;
+  }
+  const SubdivisionHierarchy& h = p.patch->hierarchy();
   if (decoded.class_weights.size() != static_cast<std::size_t>(1 + 2 * h.levels()))
     throw Error(ErrorKind::InvalidArgument, "a view decode needs the file's class weights");
   std::vector<Vec3> fine = p.coefficients;
@@ -304,13 +312,13 @@ PolygonMesh patch_view_mesh(const IswDecoded& decoded, const Camera& camera, dou
     levels.levels[f] = std::max(level, 0);
   }
   levels.culled += decoded.base.face_count() - seeds;  // the others lie outside the frustum
-  const detail::PatchDomain d{h, &p.patch.entries(), &p.patch.faces(), &p.exact};
+  const detail::PatchDomain d{h, &p.patch->entries(), &p.patch->faces(), &p.exact};
   PolygonMesh mesh = detail::patch_mesh(d, decoded.base, decoded.base.positions, decoded.fine_vertices, levels.levels,
                                         fine, detail::BaseCorners::ExactFaces);
   if (report) {  // per base face of the whole mesh
     *report = levels;
     report->levels.assign(decoded.base.face_count(), 0);
-    for (std::size_t f = 0; f < levels.levels.size(); ++f) report->levels[p.patch.faces()[f]] = levels.levels[f];
+    for (std::size_t f = 0; f < levels.levels.size(); ++f) report->levels[p.patch->faces()[f]] = levels.levels[f];
   }
   return mesh;
 }

@@ -140,6 +140,23 @@ TEST(RandomAccess, ARegionReadsItsGroupsOnlyAndEqualsTheCompleteDecodeInside) {
   EXPECT_EQ(memory.stream.decoded, part.stream.decoded);
 }
 
+// A region no base face meets: no group read, the base mesh, nothing inside.
+TEST(RandomAccess, ARegionAwayFromTheSurfaceGivesTheBaseMesh) {
+  const Sample& s = sample();
+  const RegionOfInterest away = parse_region("100,100,100,101,101,101", false, "--roi");
+  const IswDecoded part = read_region(s.path, away);
+  ASSERT_TRUE(part.patch);
+  EXPECT_FALSE(part.patch->patch);
+  EXPECT_EQ(part.stream.groups_decoded, 0u);
+  EXPECT_EQ(part.file_bytes_read, part.stream.offset);
+  RegionReconstruction counts;
+  counts.inside_points = 1;
+  const PolygonMesh mesh = region_mesh(part, away, 0, &counts);
+  EXPECT_EQ(counts.inside_points, 0u);
+  EXPECT_EQ(mesh.face_vertices, part.base.face_vertices);
+  EXPECT_EQ(mesh.positions, part.base.positions);
+}
+
 // Damaging one group's packets at a time: a region decode fails (naming
 // GIDX's CRC) exactly for the groups it reads, and those groups' packets
 // are the stream bytes it reports; for the others it decodes as before.

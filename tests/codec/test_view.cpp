@@ -268,6 +268,15 @@ TEST(View, AViewOverAPatchGivesTheWholeHierarchysMesh) {
     }
     EXPECT_THROW(ViewRefiner{part}, Error);
   }
+  // A camera looking away from the surface: no group read, the base mesh.
+  IswDecodeOptions away;
+  away.frustum = camera_at({5, 5, 5}, {5, 5, 50}, 30);
+  away.view_scope = IswDecodeOptions::ViewScope::Patch;
+  const IswDecoded none = read_isw(path, away);
+  EXPECT_EQ(none.stream.groups_decoded, 0u);
+  ViewLevels levels;
+  EXPECT_EQ(view_mesh(none, *away.frustum, 0.5, &levels).face_vertices, none.base.face_vertices);
+  EXPECT_EQ(levels.culled, none.base.face_count());
 }
 
 // The interactive refiner: its patches make up the mesh, and after a camera

@@ -9,6 +9,7 @@
 // where the region reaches and, where nothing else is kept, the base faces
 // elsewhere, joined crack-free (transform/adaptive_mesh.h).
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -60,7 +61,7 @@ std::vector<int> region_face_levels(const SubdivisionHierarchy& hierarchy, const
 // What a region decode of a 2.2 file holds (IswDecoded::patch, from
 // IswDecodeOptions::region) in place of the whole hierarchy and array.
 struct RegionPatch {
-  PatchHierarchy patch;
+  std::optional<PatchHierarchy> patch;  // none when no base face meets the region (or the frustum)
   std::vector<Vec3> coefficients;  // per patch entry, world units: base control points, then wavelet coefficients
   std::vector<std::uint8_t> exact;  // per patch base face: 1 if its fine control points equal the complete decode's
 };
