@@ -23,12 +23,13 @@ export async function launch() {
   });
 }
 
-// The page's state once it is done loading `file` (served by scripts/view):
+// The page's state once it is done loading `file` (served by scripts/view,
+// at `rate` bytes per second if not 0):
 // window.isowaveViewer's frames, firstFrameMs and error, the error shown,
 // the last frame's points (up to a million vertices), and the size of a
 // screenshot (a blank canvas compresses to little).
-export async function view(browser, file) {
-  const server = spawn(path.join(root, 'scripts', 'view'), [file, '--port', '0'],
+export async function view(browser, file, rate = 0) {
+  const server = spawn(path.join(root, 'scripts', 'view'), [file, '--port', '0', '--rate', String(rate)],
                        { env: { ...process.env, ISOWAVE_WEB_BUILD_DIR: buildDir } });
   try {
     const url = await new Promise((resolve, reject) => {

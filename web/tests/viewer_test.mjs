@@ -1,7 +1,8 @@
 // The browser viewer in headless Chromium (issue #50, item 2; web/README.md),
-// against the native decoder: a page served by scripts/view shows the base
-// mesh first (level 0, as many vertices as `isowave decode --level 0
-// --triangulate`), later frames have more triangles, and the last one has
+// against the native decoder: a page served by scripts/view at 8 kB/s shows
+// the base mesh first, before half the file is in (level 0, as many
+// vertices as `isowave decode --level 0 --triangulate`), later frames decode
+// more bytes and have more triangles, and the last one has
 // the native decode's vertices and triangles at the same float32 points;
 // the canvas is not blank; a truncated and a corrupt file show an error on
 // the page. Prints the time to the first frame and the full decode's time
@@ -50,10 +51,15 @@ const browser = await launch();
 try {
   const base = nativeDecode(file, ['--level', '0'], work);
   const whole = nativeDecode(file, [], work);
-  const state = await view(browser, file);
+  // Served at 8 kB/s, as a slow network would: the page refines as the bytes arrive.
+  const size = readFileSync(file).length;
+  const state = await view(browser, file, 8000);
   const frames = state.frames;
   check(!state.error, `an error on the page: ${state.error}`);
-  check(frames.length >= 2, `${frames.length} frames`);
+  check(frames.length >= 3, `${frames.length} frames`);
+  check(frames.length > 0 && frames[0].bytes < size / 2, 'the base mesh is shown before half the file is in');
+  check(frames.every((f, k) => k === 0 || f.bytes > frames[k - 1].bytes || k === frames.length - 1),
+        'each frame decodes more bytes');
   if (frames.length >= 2) {
     const first = frames[0], last = frames[frames.length - 1];
     check(first.level === 0 && first.vertices === base.vertices, `first frame: level ${first.level}, ${first.vertices} vertices; the base mesh has ${base.vertices}`);

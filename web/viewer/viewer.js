@@ -116,7 +116,7 @@ async function load(stream, total, name) {
   errorBox.textContent = '';
   const decoder = await decoderReady;
   let bytes = new Uint8Array(Math.max(total || 0, 1 << 16));
-  let length = 0, next = Infinity, base = Infinity;
+  let length = 0, next = Infinity, base = Infinity, baseShown = false;
   const reader = stream.getReader();
   for (;;) {
     const { done, value } = await reader.read();
@@ -128,8 +128,10 @@ async function load(stream, total, name) {
     }
     bytes.set(value, length);
     length += value.length;
-    if (base === Infinity && (base = baseEnd(bytes, length)) <= length) {
+    if (base === Infinity) base = baseEnd(bytes, length);
+    if (!baseShown && base <= length) {
       decodeAndShow(decoder, bytes, base, -2, started, name);  // the base mesh, from its own bytes
+      baseShown = true;
       next = 2 * length;
     } else if (length >= next) {
       decodeAndShow(decoder, bytes, length, -1, started, name);
