@@ -1,9 +1,8 @@
 // What the viewer's test and benchmark share (web/README.md): the viewer's
-// build (made by scripts/build-web when missing), headless Chromium, and a
+// build (scripts/build-web), headless Chromium, and a
 // page served by scripts/view loaded until it is done.
 import { spawn, execFileSync } from 'child_process';
 import { createRequire } from 'module';
-import { existsSync } from 'fs';
 import path from 'path';
 import { fileURLToPath } from 'url';
 
@@ -11,10 +10,10 @@ export const root = path.resolve(path.dirname(fileURLToPath(import.meta.url)), '
 export const buildDir = process.env.ISOWAVE_WEB_BUILD_DIR || path.join(root, 'build-web');
 const chromium = process.env.ISOWAVE_CHROMIUM || '/usr/bin/chromium';
 
-// Headless Chromium (software WebGL), with the viewer built.
+// Headless Chromium (software WebGL), with the viewer built (scripts/build-web
+// is incremental: the sources' changes, no download once done).
 export async function launch() {
-  if (!existsSync(path.join(buildDir, 'viewer', 'isowave_decoder.wasm')))
-    execFileSync(path.join(root, 'scripts', 'build-web'), { stdio: 'inherit', env: { ...process.env, ISOWAVE_WEB_BUILD_DIR: buildDir } });
+  execFileSync(path.join(root, 'scripts', 'build-web'), { stdio: 'inherit', env: { ...process.env, ISOWAVE_WEB_BUILD_DIR: buildDir } });
   const puppeteer = createRequire(path.join(buildDir, 'npm', 'package.json'))('puppeteer-core');
   return puppeteer.launch({
     executablePath: chromium, headless: true,

@@ -9,8 +9,8 @@
 // in the page, and the native decode's.
 //
 // usage: node web/tests/viewer_test.mjs   (ISOWAVE_CLI: the isowave binary;
-// ISOWAVE_WEB_BUILD_DIR: the viewer's build, made by scripts/build-web when
-// missing; ISOWAVE_CHROMIUM: the browser, default /usr/bin/chromium)
+// ISOWAVE_WEB_BUILD_DIR: the viewer's build, made or updated by
+// scripts/build-web; ISOWAVE_CHROMIUM: the browser, default /usr/bin/chromium)
 import { execFileSync } from 'child_process';
 import { mkdtempSync, readFileSync, writeFileSync } from 'fs';
 import { tmpdir } from 'os';
