@@ -204,11 +204,13 @@ void decode_quantization_v2(PayloadReader& reader, DecodeState& state) {
   result.stream.frame_step = scales.frame_step;
 }
 
-// Error(Format) headed by `context` unless the hierarchy can take `base`'s
-// topology (as building it would find).
-void require_base_manifold(const PolygonMesh& base, const std::string& context) {
+// Runs `work` on the base mesh (a check of its topology, or its
+// incidences); an Error it throws becomes Error(Format) headed by `context`,
+// as the hierarchy's build reports a base it cannot take.
+template <class Work>
+void on_base(const std::string& context, Work&& work) {
   try {
-    require_manifold(base, "base mesh");
+    work();
   } catch (const Error& error) {
     throw Error(ErrorKind::Format, context + error.what());
   }
@@ -242,13 +244,7 @@ void plan_hierarchy(PayloadReader& reader, DecodeState& state) {
                      justified(classes_from_counts(result.base, result.base.face_vertices.size(), result.levels));
   state.build_context = state.name + ": section BASE holds a base mesh the subdivision hierarchy cannot take: ";
   if (early) state.build.start(result.base, result.levels, state.build_context);
-  if (state.patch) {
-    try {
-      state.incidence = base_incidence(result.base);
-    } catch (const Error& error) {
-      throw Error(ErrorKind::Format, state.build_context + error.what());
-    }
-  }
+  if (state.patch) on_base(state.build_context, [&] { state.incidence = base_incidence(result.base); });
   const std::size_t edges = state.patch ? state.incidence->edge_count() : summarize_topology(result.base).edges;
   state.layout.emplace(classes_from_counts(result.base, edges, result.levels));
   if (!justified(*state.layout)) reader.fail("describes a hierarchy larger than the file can justify");
@@ -256,7 +252,7 @@ void plan_hierarchy(PayloadReader& reader, DecodeState& state) {
   result.base_vertices = state.layout->base();
   if (reuse) state.hierarchy = state.options.hierarchy;
   else if (refine && !early) state.build.start(result.base, result.levels, state.build_context);
-  else if (o.headers_only) require_base_manifold(result.base, state.build_context);
+  else if (o.headers_only) on_base(state.build_context, [&] { require_manifold(result.base, "base mesh"); });
   const std::size_t base_count = state.layout->base();
   state.limit = std::min<std::uint64_t>(
       state.limit, coefficients_for_percent(state.layout->fine(), base_count, state.options.max_percent));

@@ -180,11 +180,15 @@ void check_decode(const IswDecoded& decoded) {
     throw Error(ErrorKind::InvalidArgument, "a view decode needs the file's coefficients and class weights");
 }
 
-void check_view(const IswDecoded& decoded, const Camera& camera, double pixel_error) {
-  check_decode(decoded);
+void check_camera_and_error(const Camera& camera, double pixel_error) {
   if (!(pixel_error > 0) || !std::isfinite(pixel_error))
     throw Error(ErrorKind::InvalidArgument, "the pixel error must be a positive number");
   check_camera(camera);
+}
+
+void check_view(const IswDecoded& decoded, const Camera& camera, double pixel_error) {
+  check_decode(decoded);
+  check_camera_and_error(camera, pixel_error);
 }
 
 // Every base face's level into `out` (culled faces at 0, counted).
@@ -238,9 +242,7 @@ ViewRefiner::ViewRefiner(ViewRefiner&&) noexcept = default;
 ViewRefiner& ViewRefiner::operator=(ViewRefiner&&) noexcept = default;
 
 std::vector<std::uint32_t> ViewRefiner::set_view(const Camera& camera, double pixel_error, BackFaces back_faces) {
-  if (!(pixel_error > 0) || !std::isfinite(pixel_error))
-    throw Error(ErrorKind::InvalidArgument, "the pixel error must be a positive number");
-  check_camera(camera);
+  check_camera_and_error(camera, pixel_error);
   ViewLevels next;
   levels_for(data_->faces, camera, pixel_error, back_faces, next);
   // The faces whose level changed, and their neighbours across base edges
@@ -328,9 +330,7 @@ PolygonMesh patch_view_mesh(const IswDecoded& decoded, const Camera& camera, dou
 PolygonMesh view_mesh(const IswDecoded& decoded, const Camera& camera, double pixel_error, ViewLevels* report,
                       BackFaces back_faces) {
   if (decoded.patch) {
-    if (!(pixel_error > 0) || !std::isfinite(pixel_error))
-      throw Error(ErrorKind::InvalidArgument, "the pixel error must be a positive number");
-    check_camera(camera);
+    check_camera_and_error(camera, pixel_error);
     return patch_view_mesh(decoded, camera, pixel_error, report, back_faces);
   }
   check_view(decoded, camera, pixel_error);
